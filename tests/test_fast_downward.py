@@ -1,0 +1,326 @@
+"""Tests of utamp_gym.planning.fast_downward on a small typed blocksworld.
+
+Plans are checked by applying them with a tiny STRIPS simulator of the same domain,
+and optimal lengths are computed by breadth-first search over that simulator.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import itertools
+import os
+import re
+import subprocess
+import sys
+from collections import deque
+from pathlib import Path
+
+import pytest
+
+from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
+from utamp_gym.planning import fast_downward as fd
+
+DOMAIN = """
+(define (domain blocks)
+  (:requirements :strips :typing :negative-preconditions :equality)
+  (:types block)
+  (:predicates (on ?x - block ?y - block) (ontable ?x - block) (clear ?x - block)
+               (holding ?x - block) (busy) (glued ?x - block))
+  (:action pick-up
+    :parameters (?x - block)
+    :precondition (and (clear ?x) (ontable ?x) (not (busy)))
+    :effect (and (not (ontable ?x)) (not (clear ?x)) (busy) (holding ?x)))
+  (:action put-down
+    :parameters (?x - block)
+    :precondition (holding ?x)
+    :effect (and (not (holding ?x)) (clear ?x) (not (busy)) (ontable ?x)))
+  (:action stack
+    :parameters (?x - block ?y - block)
+    :precondition (and (holding ?x) (clear ?y) (not (= ?x ?y)))
+    :effect (and (not (holding ?x)) (not (clear ?y)) (clear ?x) (not (busy)) (on ?x ?y)))
+  (:action unstack
+    :parameters (?x - block ?y - block)
+    :precondition (and (on ?x ?y) (clear ?x) (not (busy)))
+    :effect (and (holding ?x) (clear ?y) (not (clear ?x)) (busy) (not (on ?x ?y)))))
+"""
+
+
+def problem(towers: list[list[str]], goal: str, name: str = "p") -> str:
+    """A problem whose initial state is ``towers`` (each listed bottom to top)."""
+    objects = " ".join(b for t in towers for b in t)
+    return f"""(define (problem {name}) (:domain blocks)
+  (:objects {objects} - block)
+  (:init {" ".join(f"({a})" for a in sorted(init_atoms(towers)))})
+  (:goal (and {goal})))"""
+
+
+def init_atoms(towers: list[list[str]]) -> frozenset[str]:
+    atoms = set()
+    for tower in towers:
+        atoms.add(f"ontable {tower[0]}")
+        atoms.update(f"on {top} {below}" for below, top in itertools.pairwise(tower))
+        atoms.add(f"clear {tower[-1]}")
+    return frozenset(atoms)
+
+
+SUSSMAN = [["a", "c"], ["b"]]  # c on a; goal: a on b on c (optimal length 6)
+SUSSMAN_GOAL = {"on a b", "on b c"}
+SUSSMAN_PROBLEM = problem(SUSSMAN, "(on a b) (on b c)", "sussman")
+
+
+def successors(state: frozenset[str], blocks: list[str]):
+    """Yield (action, next state) of the test domain, mirroring the PDDL above."""
+
+    def step(delete: set[str], add: set[str]) -> frozenset[str]:
+        return state - delete | add
+
+    busy = "busy" in state
+    for x in blocks:
+        if not busy and f"clear {x}" in state and f"ontable {x}" in state:
+            yield f"(pick-up {x})", step({f"ontable {x}", f"clear {x}"}, {"busy", f"holding {x}"})
+        if f"holding {x}" in state:
+            yield f"(put-down {x})", step({f"holding {x}", "busy"}, {f"clear {x}", f"ontable {x}"})
+        for y in blocks:
+            if x == y:
+                continue
+            if f"holding {x}" in state and f"clear {y}" in state:
+                yield (
+                    f"(stack {x} {y})",
+                    step({f"holding {x}", f"clear {y}", "busy"}, {f"clear {x}", f"on {x} {y}"}),
+                )
+            if not busy and f"on {x} {y}" in state and f"clear {x}" in state:
+                yield (
+                    f"(unstack {x} {y})",
+                    step({f"clear {x}", f"on {x} {y}"}, {"busy", f"holding {x}", f"clear {y}"}),
+                )
+
+
+def simulate(plan: tuple[str, ...], towers: list[list[str]]) -> frozenset[str]:
+    """Apply ``plan`` from the initial state; fail if an action is not applicable."""
+    blocks = [b for t in towers for b in t]
+    state = init_atoms(towers)
+    for step in plan:
+        moves = dict(successors(state, blocks))
+        assert step in moves, f"inapplicable action {step} in {sorted(state)}"
+        state = moves[step]
+    return state
+
+
+def optimal_length(towers: list[list[str]], goal: set[str]) -> int:
+    blocks = [b for t in towers for b in t]
+    start = init_atoms(towers)
+    frontier, seen = deque([(start, 0)]), {start}
+    while frontier:
+        state, depth = frontier.popleft()
+        if goal <= state:
+            return depth
+        for _, nxt in successors(state, blocks):
+            if nxt not in seen:
+                seen.add(nxt)
+                frontier.append((nxt, depth + 1))
+    raise AssertionError("goal unreachable")
+
+
+def downward_children() -> list[int]:
+    """Pids of live (non-zombie) ``downward`` processes whose parent is this process."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        comm = stat[stat.index("(") + 1 : stat.rindex(")")]
+        state, ppid = stat[stat.rindex(")") + 2 :].split()[:2]
+        if comm == "downward" and int(ppid) == os.getpid() and state != "Z":
+            found.append(int(entry.name))
+    return found
+
+
+def process_alive(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rindex(")") + 2] != "Z"
+
+
+@pytest.mark.parametrize("search", fd.SEARCH_CONFIGS)
+def test_plan_reaches_goal(search):
+    result = fd.solve(DOMAIN, SUSSMAN_PROBLEM, search=search)
+    assert result.solved and result.reason is None
+    assert simulate(result.plan, SUSSMAN) >= SUSSMAN_GOAL
+    assert len(result.plan) == result.cost >= 6  # unit costs; 6 is optimal
+    assert all(step == step.lower() and step.startswith("(") for step in result.plan)
+    assert result.expanded is not None and result.expanded >= 0
+    assert result.planning_time_s >= result.translate_time_s > 0
+    assert result.search_time_s > 0
+
+
+def test_astar_lmcut_is_optimal():
+    towers = [["d", "c", "b", "a"]]  # a on b on c on d; goal: the reversed tower
+    goal = {"on d c", "on c b", "on b a"}
+    text = problem(towers, " ".join(f"({g})" for g in sorted(goal)))
+    result = fd.solve(DOMAIN, text, search="astar-lmcut")
+    assert result.solved
+    assert simulate(result.plan, towers) >= goal
+    assert len(result.plan) == result.cost == optimal_length(towers, goal)
+    assert fd.solve(DOMAIN, SUSSMAN_PROBLEM, search="astar-lmcut").cost == 6
+
+
+@pytest.mark.parametrize("search", fd.SEARCH_CONFIGS)
+def test_search_proves_unsolvable(search):
+    cyclic = problem(SUSSMAN, "(on a b) (on b a)")
+    result = fd.solve(DOMAIN, cyclic, search=search)
+    assert not result.solved
+    assert result.plan == () and result.cost is None
+    assert result.reason == "search space exhausted: task unsolvable"
+
+
+def test_translator_proves_unsolvable():
+    result = fd.solve(DOMAIN, problem(SUSSMAN, "(on a b) (glued c)"))
+    assert not result.solved and result.plan == ()
+    assert "proved unsolvable by translator" in result.reason
+
+
+def test_empty_goal_gives_empty_plan():
+    result = fd.solve(DOMAIN, problem(SUSSMAN, "(on c a)"))
+    assert result.solved and result.plan == () and result.cost == 0
+
+
+def test_driver_gives_valid_plan(tmp_path):
+    (tmp_path / "domain.pddl").write_text(DOMAIN)
+    (tmp_path / "problem.pddl").write_text(SUSSMAN_PROBLEM)
+    (tmp_path / "cyclic.pddl").write_text(problem(SUSSMAN, "(on a b) (on b a)"))
+    result = fd.solve_with_driver(tmp_path / "domain.pddl", tmp_path / "problem.pddl")
+    assert result.solved
+    assert simulate(result.plan, SUSSMAN) >= SUSSMAN_GOAL
+    assert len(result.plan) == result.cost
+    assert result.plan == fd.solve(DOMAIN, SUSSMAN_PROBLEM).plan  # same deterministic search
+    unsolvable = fd.solve_with_driver(tmp_path / "domain.pddl", tmp_path / "cyclic.pddl")
+    assert not unsolvable.solved and "unsolvable" in unsolvable.reason
+
+
+def test_lama_first_matches_installed_driver_alias():
+    root = Path(next(iter(importlib.util.find_spec("up_fast_downward").submodule_search_locations)))
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1]); from driver.aliases import ALIASES; "
+        "print(repr([a.replace(' ', '').replace('\\n', '') for a in ALIASES['lama-first']]))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(root / "downward")],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert out.strip() == repr(list(fd._SEARCH_ARGS["lama-first"]))
+
+
+def test_unknown_search_name():
+    with pytest.raises(UnknownNameError) as info:
+        fd.solve(DOMAIN, SUSSMAN_PROBLEM, search="gbfs-magic")
+    message = str(info.value)
+    assert "gbfs-magic" in message
+    assert all(name in message for name in fd.SEARCH_CONFIGS)
+    assert isinstance(info.value, KeyError)
+
+
+@pytest.mark.parametrize(
+    ("domain", "prob"),
+    [
+        (DOMAIN, "(define (problem broken"),
+        (DOMAIN, problem(SUSSMAN, "(on a zz)")),
+        (
+            DOMAIN.replace("(:predicates", "(:functions (f ?x - block) - block) (:predicates"),
+            SUSSMAN_PROBLEM,
+        ),  # object fluents: the translator calls SystemExit
+    ],
+)
+def test_bad_pddl_raises_pddl_error(domain, prob):
+    with pytest.raises(PddlError):
+        fd.solve(domain, prob)
+    assert fd.solve(DOMAIN, SUSSMAN_PROBLEM).solved  # translator state intact afterwards
+
+
+# 12 blocks in three towers, goal one tower in a scrambled order: seconds even for lmcut.
+BIG_PROBLEM = problem(
+    [[f"b{i}" for i in range(start, 12, 3)] for start in range(3)],
+    " ".join(f"(on b{i * 5 % 12} b{(i * 5 + 5) % 12})" for i in range(11)),
+    "big",
+)
+
+
+def test_timeout_kills_search_process():
+    with pytest.raises(PlanningTimeout) as info:
+        fd.solve(DOMAIN, BIG_PROBLEM, search="astar-blind", timeout=0.3)
+    message = str(info.value)
+    assert "0.3 s" in message and "killed" in message
+    pid = int(re.search(r"pid (\d+)", message).group(1))
+    assert not process_alive(pid)
+    assert downward_children() == []
+
+
+def test_timeout_kills_driver_process_group(tmp_path):
+    (tmp_path / "domain.pddl").write_text(DOMAIN)
+    (tmp_path / "big.pddl").write_text(BIG_PROBLEM)
+    with pytest.raises(PlanningTimeout) as info:
+        fd.solve_with_driver(
+            tmp_path / "domain.pddl", tmp_path / "big.pddl", alias="seq-opt-lmcut", timeout=0.5
+        )
+    pgid = int(re.search(r"pid (\d+)", str(info.value)).group(1))
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            assert not (int(fields[2]) == pgid and fields[0] != "Z"), "driver group survived"
+
+
+def test_interrupt_kills_search_process(monkeypatch):
+    real_wait = subprocess.Popen.wait
+
+    def interrupted_wait(self, timeout=None):
+        if timeout is not None:  # the planner's bounded wait: simulate Ctrl-C
+            raise KeyboardInterrupt
+        return real_wait(self)
+
+    monkeypatch.setattr(subprocess.Popen, "wait", interrupted_wait)
+    with pytest.raises(KeyboardInterrupt):
+        fd.solve(DOMAIN, BIG_PROBLEM, search="astar-blind", timeout=30)
+    assert downward_children() == []
+
+
+def test_tiny_budget_is_used_up_by_translation():
+    with pytest.raises(PlanningTimeout, match="time limit"):
+        fd.solve(DOMAIN, BIG_PROBLEM, timeout=1e-6)
+
+
+def test_repeated_in_process_solves_are_reentrant():
+    from fast_downward.translate import options
+
+    before = options.options
+    cyclic = problem(SUSSMAN, "(on a b) (on b a)")
+    for i in range(50):
+        if i % 10 == 9:
+            result = fd.solve(DOMAIN, cyclic)
+            assert not result.solved and "unsolvable" in result.reason
+            continue
+        result = fd.solve(DOMAIN, SUSSMAN_PROBLEM, search=fd.SEARCH_CONFIGS[i % 3])
+        assert result.solved
+        assert simulate(result.plan, SUSSMAN) >= SUSSMAN_GOAL
+    assert options.options is before
+    assert downward_children() == []
+
+
+def test_missing_planner_raises_planning_error(monkeypatch):
+    fd.downward_paths.cache_clear()
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None)
+    try:
+        with pytest.raises(PlanningError, match="up-fast-downward"):
+            fd.solve(DOMAIN, SUSSMAN_PROBLEM)
+    finally:
+        monkeypatch.undo()
+        fd.downward_paths.cache_clear()
+    assert fd.solve(DOMAIN, SUSSMAN_PROBLEM).solved

@@ -1,0 +1,146 @@
+"""Rule-based parser: physical attributes -> inter-object affordances.
+
+The rules are the paper's assumptions made explicit (Sections IV and VI):
+
+* a part an object can rest on must be flat (or an open rim) and not a food surface
+  (food surfaces are never put face-down);
+* a part supports others only if it is flat (or a concave dish spanned by the object
+  on it) and the object can rest with that part facing up; fixed furniture supports
+  on its top only;
+* small objects do not support larger ones: on a flat surface the footprint of the
+  supported object must fit the surface; a concave surface (a pan) only supports
+  objects that span its opening; the supporter's robustness bounds the load;
+* the gripper approaches from above (palm on a part that can face up), its fingers
+  close across a member no wider than the 8 cm opening and are not blocked by a
+  sibling member;
+* an object can be lifted by a member if it is well below the Panda's 3 kg payload
+  (edge grasps carry much less); an edge grasp is only useful when it can lift the
+  object or when the object cannot be lifted at all (then it is slid);
+* an object that cannot be lifted but rests flat on a fixed surface can be slid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+
+from utamp_gym.affordances.facts import Fact
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.geometry import OPPOSITE, SIDES, axis_of, sorted_pair
+
+GRIPPER_OPENING = 0.08  # m, Franka Hand
+MIN_GRASP_WIDTH = 0.005  # m
+PAYLOAD = 3.0  # kg, Franka Panda
+LIFT_FRACTION = 0.5  # "significantly lighter than the payload"
+EDGE_LIFT_LIMIT = 0.5  # kg an edge (pinch) grasp can carry
+BLOCKING_GAP = 0.005  # m: a sibling member this close blocks a finger
+LOAD_CAPACITY = {"fragile": 0.5, "sturdy": 3.0, "solid": 100.0}  # kg
+FINGER_PAIRS = (("left", "right"), ("front", "back"))
+PALM_PARTS = ("on", "under")
+
+
+def can_rest_on(t: ObjectType, part: str) -> bool:
+    attrs = t.parts[part]
+    return attrs.shape in ("flat", "open") and not attrs.food_surface
+
+
+def is_supportable(t: ObjectType, part: str) -> bool:
+    return t.movable and can_rest_on(t, part)
+
+
+def is_supportive(t: ObjectType, part: str) -> bool:
+    shape = t.parts[part].shape
+    if not t.movable:
+        return part == "on" and shape == "flat"
+    return shape in ("flat", "concave") and can_rest_on(t, OPPOSITE[part])
+
+
+def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
+    """Can part p2 of t2 stably support t1 resting on its part p1?"""
+    if t1.name == t2.name or not (is_supportive(t2, p2) and is_supportable(t1, p1)):
+        return False
+    footprint = np.asarray(sorted_pair(t1.bbox.face_size(p1)))
+    surface = np.asarray(sorted_pair(t2.surface_size(p2)))
+    fits = bool(np.all(footprint <= surface + 1e-9)) if t2.parts[p2].shape == "flat" else bool(
+        np.all(footprint >= surface - 1e-9)
+    )
+    return fits and t1.mass <= LOAD_CAPACITY[t2.robustness]
+
+
+def _blocked(t: ObjectType, member: str, side: str) -> bool:
+    box = t.members[member].box
+    return any(
+        box.touches_side(m.box, side, BLOCKING_GAP) for n, m in t.members.items() if n != member
+    )
+
+
+def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
+    """(member, palm, finger1, finger2) grasps the gripper can physically close on."""
+    if not t.movable:
+        return []
+    out = []
+    for mname, m in t.members.items():
+        for palm in PALM_PARTS:
+            if not can_rest_on(t, OPPOSITE[palm]):
+                continue  # that part never faces up: no top-down approach
+            for f1, f2 in FINGER_PAIRS:
+                width = float(m.box.size[axis_of(f1)])
+                if not MIN_GRASP_WIDTH <= width <= GRIPPER_OPENING:
+                    continue
+                if _blocked(t, mname, f1) or _blocked(t, mname, f2):
+                    continue
+                out.append((mname, palm, f1, f2))
+    return out
+
+
+def liftable_via(t: ObjectType, member: str) -> bool:
+    limit = EDGE_LIFT_LIMIT if t.members[member].kind == "edge" else PAYLOAD * LIFT_FRACTION
+    return t.mass <= limit
+
+
+def object_facts(t: ObjectType) -> set[Fact]:
+    """Unary facts of one type: supportive/supportable parts, grasps, lifting."""
+    facts: set[Fact] = set()
+    for part in SIDES:
+        if is_supportive(t, part):
+            facts.add(("isSupportive", t.name, part))
+        if is_supportable(t, part):
+            facts.add(("isSupportable", t.name, part))
+    grasps = geometric_grasps(t)
+    any_liftable = any(liftable_via(t, m) for m, *_ in grasps if t.members[m].kind != "edge")
+    for member, palm, f1, f2 in grasps:
+        if t.members[member].kind == "edge" and not liftable_via(t, member) and any_liftable:
+            continue  # an edge grasp that cannot carry the object is never useful
+        facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
+        if liftable_via(t, member):
+            facts.add(("canLift", t.name, member))
+    return facts
+
+
+def derive_affordances(types: Iterable[ObjectType]) -> frozenset[Fact]:
+    """All affordance facts among the given object types."""
+    types = list(types)
+    facts: set[Fact] = set()
+    for t in types:
+        facts |= object_facts(t)
+    for t2 in types:
+        for p2 in SIDES:
+            for t1 in types:
+                for p1 in SIDES:
+                    if p2p_supportive(t2, p2, t1, p1):
+                        facts.add(("isP2PSupportive", p2, t2.name, p1, t1.name))
+    for t1 in types:
+        graspable = any(f[0] == "canGraspFrom" and f[1] == t1.name for f in facts)
+        liftable = any(f[0] == "canLift" and f[1] == t1.name for f in facts)
+        if not t1.movable or liftable or not graspable:
+            continue
+        for t2 in types:
+            if t2.movable:
+                continue
+            for p1 in SIDES:
+                for p2 in SIDES:
+                    flat = t1.parts[p1].shape == "flat" and t2.parts[p2].shape == "flat"
+                    if flat and ("isP2PSupportive", p2, t2.name, p1, t1.name) in facts:
+                        facts.add(("canSlide", t1.name, t2.name, p1, p2))
+    return frozenset(facts)

@@ -1,0 +1,117 @@
+"""Parts of a bounding box and axis-aligned boxes: the geometric vocabulary of U-TAMP.
+
+An object's *parts* are the six sides of its bounding box plus its inside (`in`).
+Frames: +x = front, +y = left, +z = on (up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+PARTS: tuple[str, ...] = ("on", "under", "left", "right", "front", "back", "in")
+SIDES: tuple[str, ...] = PARTS[:6]
+
+#: outward unit normal of each side in the object frame
+NORMALS: dict[str, tuple[int, int, int]] = {
+    "on": (0, 0, 1),
+    "under": (0, 0, -1),
+    "left": (0, 1, 0),
+    "right": (0, -1, 0),
+    "front": (1, 0, 0),
+    "back": (-1, 0, 0),
+}
+OPPOSITE: dict[str, str] = {
+    "on": "under",
+    "under": "on",
+    "left": "right",
+    "right": "left",
+    "front": "back",
+    "back": "front",
+}
+#: finger pairs considered for a grasp (one canonical order per axis)
+FINGER_PAIRS: tuple[tuple[str, str], ...] = (("left", "right"), ("front", "back"), ("on", "under"))
+
+
+def axis_of(side: str) -> int:
+    """Index (0, 1, 2) of the axis a side's normal lies on."""
+    return int(np.flatnonzero(NORMALS[side])[0])
+
+
+def is_opposite(a: str, b: str) -> bool:
+    """True if `a` and `b` are opposite sides of a box."""
+    return OPPOSITE.get(a) == b
+
+
+def is_adjacent(a: str, b: str) -> bool:
+    """True if `a` and `b` are sides sharing an edge (perpendicular sides)."""
+    return a in NORMALS and b in NORMALS and axis_of(a) != axis_of(b)
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box given by its min and max corners (metres)."""
+
+    min: tuple[float, float, float]
+    max: tuple[float, float, float]
+
+    @property
+    def size(self) -> np.ndarray:
+        return np.asarray(self.max) - np.asarray(self.min)
+
+    @property
+    def center(self) -> np.ndarray:
+        return (np.asarray(self.max) + np.asarray(self.min)) / 2.0
+
+    def union(self, other: Box) -> Box:
+        return Box(
+            tuple(np.minimum(self.min, other.min).tolist()),
+            tuple(np.maximum(self.max, other.max).tolist()),
+        )
+
+    def translated(self, offset: np.ndarray) -> Box:
+        o = np.asarray(offset, dtype=float)
+        return Box(tuple((np.asarray(self.min) + o).tolist()), tuple((np.asarray(self.max) + o).tolist()))
+
+    def flipped(self) -> Box:
+        """The box after a half turn about the x axis through the origin (y -> -y, z -> -z)."""
+        lo, hi = np.asarray(self.min), np.asarray(self.max)
+        new_lo = np.array([lo[0], -hi[1], -hi[2]])
+        new_hi = np.array([hi[0], -lo[1], -lo[2]])
+        return Box(tuple(new_lo.tolist()), tuple(new_hi.tolist()))
+
+    def face_size(self, side: str) -> tuple[float, float]:
+        """Extents of the face `side` (the two axes orthogonal to its normal)."""
+        keep = [i for i in range(3) if i != axis_of(side)]
+        s = self.size
+        return float(s[keep[0]]), float(s[keep[1]])
+
+    def contains_xy(self, other: Box, tol: float = 1e-9) -> bool:
+        """True if `other`'s footprint lies inside this box's footprint."""
+        return all(self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol for i in (0, 1))
+
+    def contains(self, other: Box, tol: float = 1e-9) -> bool:
+        return all(self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol for i in range(3))
+
+    def overlaps_xy(self, other: Box, tol: float = 1e-9) -> bool:
+        return all(self.min[i] < other.max[i] - tol and other.min[i] < self.max[i] - tol for i in (0, 1))
+
+    def touches_side(self, other: Box, side: str, gap: float) -> bool:
+        """True if `other` lies beyond this box's `side`, within `gap`, overlapping it across."""
+        ax = axis_of(side)
+        sign = NORMALS[side][ax]
+        if sign > 0:
+            distance = other.min[ax] - self.max[ax]
+        else:
+            distance = self.min[ax] - other.max[ax]
+        if not -1e-9 <= distance <= gap:
+            return False
+        return all(
+            self.min[i] < other.max[i] and other.min[i] < self.max[i] for i in range(3) if i != ax
+        )
+
+
+def sorted_pair(size: tuple[float, float]) -> tuple[float, float]:
+    a, b = size
+    return (a, b) if a <= b else (b, a)

@@ -1,0 +1,199 @@
+"""The scene model: the one source of truth for symbols, physics, envs and evaluation.
+
+A scene names the objects present, what each initially stands on (a table slot or
+another object), the table's slots, free spaces for sliding and the robot's
+reachable workspace. Poses follow from the data: objects are axis-aligned with the
+table and stand at the centroid of their support; an `inverted` object is turned a
+half turn about its x axis.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from utamp_gym.errors import SceneError, UnknownNameError
+from utamp_gym.scene.catalogue import Catalogue, ObjectType
+from utamp_gym.scene.geometry import Box
+
+ORIENTATIONS = ("upright", "inverted")
+#: quaternion (w, x, y, z) of each orientation
+ORIENTATION_QUAT: dict[str, tuple[float, float, float, float]] = {
+    "upright": (1.0, 0.0, 0.0, 0.0),
+    "inverted": (0.0, 1.0, 0.0, 0.0),
+}
+#: the part an object stands on / faces up with, per orientation
+STANDING_PART = {"upright": "under", "inverted": "on"}
+UP_PART = {"upright": "on", "inverted": "under"}
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A region of the table top where a stack may stand; stacks stand at `position`."""
+
+    name: str
+    position: tuple[float, float]
+    region: Box
+
+    @property
+    def box(self) -> Box:
+        return self.region
+
+
+@dataclass(frozen=True)
+class Space:
+    """A free region inside a slot into which an object may be slid."""
+
+    name: str
+    slot: str
+    position: tuple[float, float]
+    size: tuple[float, float]
+
+    @property
+    def box(self) -> Box:
+        c, h = np.asarray(self.position), np.asarray(self.size) / 2
+        return Box((*(c - h).tolist(), 0.0), (*(c + h).tolist(), 0.0))
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """An object instance: its type, its initial support and orientation."""
+
+    name: str
+    type: str
+    on: str
+    orientation: str = "upright"
+    position: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Position (m) and orientation quaternion (w, x, y, z) in the world frame."""
+
+    position: tuple[float, float, float]
+    quat: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A kitchen-table scene. Build with `load_scene` or `scene_from_dict` (they validate)."""
+
+    name: str
+    catalogue: Catalogue
+    table_type: str
+    workspace: Box
+    slots: tuple[Slot, ...]
+    spaces: tuple[Space, ...]
+    objects: tuple[SceneObject, ...]
+    custom_types: Mapping[str, ObjectType] = field(default_factory=dict)
+    description: str = ""
+    source: str = "<scene>"
+    goal_base: str | None = None
+
+    @property
+    def tower_base(self) -> str:
+        """The object the goal tower stands on: `goal_base`, else the scene's wooden tray."""
+        if self.goal_base is not None:
+            return self.goal_base
+        trays = [o.name for o in self.objects if o.type == "wooden-tray"]
+        if len(trays) != 1:
+            raise SceneError(
+                f"{self.source}: set 'goal_base' (the object to stack everything on); "
+                f"valid: {', '.join(self.object_names)}"
+            )
+        return trays[0]
+
+    # ----------------------------------------------------------------- lookup
+    def object(self, name: str) -> SceneObject:
+        for o in self.objects:
+            if o.name == name:
+                return o
+        raise UnknownNameError("object", name, self.object_names)
+
+    @property
+    def object_names(self) -> tuple[str, ...]:
+        return tuple(o.name for o in self.objects)
+
+    def type_of(self, name: str) -> ObjectType:
+        return self.catalogue[self.object(name).type]
+
+    def slot(self, name: str) -> Slot:
+        for s in self.slots:
+            if s.name == name:
+                return s
+        raise UnknownNameError("slot", name, [s.name for s in self.slots])
+
+    @property
+    def table(self) -> ObjectType:
+        return self.catalogue[self.table_type]
+
+    @property
+    def n_objects(self) -> int:
+        return len(self.objects)
+
+    # ----------------------------------------------------------------- stacks
+    @cached_property
+    def stacks(self) -> dict[str, tuple[str, ...]]:
+        """Slot name -> object names standing there, bottom to top."""
+        above = {o.on: o.name for o in self.objects}
+        out: dict[str, tuple[str, ...]] = {}
+        for s in self.slots:
+            chain, cur = [], s.name
+            while cur in above:
+                cur = above[cur]
+                chain.append(cur)
+            if chain:
+                out[s.name] = tuple(chain)
+        return out
+
+    def slot_of(self, name: str) -> str:
+        for slot, chain in self.stacks.items():
+            if name in chain:
+                return slot
+        raise UnknownNameError("object", name, self.object_names)
+
+    def support_of(self, name: str) -> str:
+        return self.object(name).on
+
+    # ----------------------------------------------------------------- poses
+    def oriented_bbox(self, name: str) -> Box:
+        """The object's bounding box in its own frame after applying its orientation."""
+        box = self.type_of(name).bbox
+        return box.flipped() if self.object(name).orientation == "inverted" else box
+
+    @cached_property
+    def poses(self) -> dict[str, Pose]:
+        """Initial pose of every object (frame origin), derived from the stacking."""
+        out: dict[str, Pose] = {}
+        for slot_name, chain in self.stacks.items():
+            slot = self.slot(slot_name)
+            bottom = self.object(chain[0])
+            xy = np.asarray(bottom.position if bottom.position is not None else slot.position)
+            z = 0.0
+            for name in chain:
+                box = self.oriented_bbox(name)
+                origin_z = z - box.min[2]
+                out[name] = Pose(
+                    (float(xy[0]), float(xy[1]), float(origin_z)),
+                    ORIENTATION_QUAT[self.object(name).orientation],
+                )
+                z = origin_z + box.max[2]
+        return out
+
+    def world_box(self, name: str, member: str | None = None) -> Box:
+        """World-frame box of an object (or one of its members) at its initial pose."""
+        t = self.type_of(name)
+        box = t.bbox if member is None else t.members[member].box
+        if self.object(name).orientation == "inverted":
+            box = box.flipped()
+        return box.translated(np.asarray(self.poses[name].position))
+
+    def in_workspace(self, box: Box) -> bool:
+        return self.workspace.contains(box, tol=1e-6)
+
+
+__all__ = ["ORIENTATIONS", "ORIENTATION_QUAT", "STANDING_PART", "UP_PART", "Pose", "Scene",
+           "SceneObject", "Slot", "Space"]

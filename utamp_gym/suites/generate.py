@@ -1,0 +1,217 @@
+"""The paper's two benchmark suites, enumerated deterministically.
+
+**pick-place**: the tray plus a non-empty subset of {salt, mug, board, pan}
+(2 <= n <= 5). For every allowed orientation of each object (upright if it can rest
+on its bottom, inverted if it can rest on its top) and every partition of the objects
+into stacks in which each object can stand on the one below under the ground-truth
+affordances (the tray only on the table), the stacks are put in table slots: the
+tray's stack in slot1, the others in slots 2-5 in catalogue order of their bottom
+object. A configuration is kept if
+
+* it is not already the goal (all objects in one tower on the tray), and
+* the goal tower is achievable: some order of the non-tray objects exists in which
+  each, in its fixed orientation, can stand on the one below, starting on the tray.
+  This is a combinatorial check on the affordance facts; the planner is never run.
+
+**sliding**: the pick-place configurations whose tray starts empty, with the tray moved
+to the far end of slot1 (partly outside the workspace) and a free space in front of
+it, so `slide-support` is needed before anything can be stacked on it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+from utamp_gym.affordances.facts import Fact, load_ground_truth
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.resources import asset_path
+from utamp_gym.scene.catalogue import load_catalogue
+from utamp_gym.scene.io import scene_from_dict
+from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
+
+SUITES = ("pick-place", "sliding")
+#: instance name -> catalogue type, in catalogue order
+MOVABLES: tuple[tuple[str, str], ...] = (
+    ("salt", "salt-shaker"),
+    ("mug", "glass-mug"),
+    ("board", "cutting-board"),
+    ("pan", "frying-pan"),
+)
+TRAY = ("tray", "wooden-tray")
+TABLE_TYPE = "kitchen-table"
+
+
+@dataclass(frozen=True)
+class SuiteStats:
+    """How many configurations were enumerated, dropped and kept."""
+
+    suite: str
+    enumerated: int
+    trivial: int
+    unachievable: int
+    kept: int
+    kept_by_n: dict[int, int]
+
+
+def _supports(facts: frozenset[Fact], lower: tuple[str, str] | None, upper: tuple[str, str]) -> bool:
+    """Can `upper` (type, orientation) stand on `lower` (None = the table)?"""
+    utype, uori = upper
+    if lower is None:
+        return ("isP2PSupportive", "on", TABLE_TYPE, STANDING_PART[uori], utype) in facts
+    ltype, lori = lower
+    return ("isP2PSupportive", UP_PART[lori], ltype, STANDING_PART[uori], utype) in facts
+
+
+def _orientations(facts: frozenset[Fact], tname: str) -> list[str]:
+    out = []
+    if ("isSupportable", tname, "under") in facts:
+        out.append("upright")
+    if ("isSupportable", tname, "on") in facts:
+        out.append("inverted")
+    return out
+
+
+def _partitions(items: Sequence[str]) -> Iterator[list[list[str]]]:
+    """All set partitions of `items` (each block unordered, in a canonical order)."""
+    if not items:
+        yield []
+        return
+    first, rest = items[0], items[1:]
+    for part in _partitions(rest):
+        yield [[first], *part]
+        for i in range(len(part)):
+            yield [*part[:i], [first, *part[i]], *part[i + 1 :]]
+
+
+def tower_achievable(facts: frozenset[Fact], base: tuple[str, str], others: Sequence[tuple[str, str]]) -> bool:
+    """Is there an order of `others` (type, orientation) stacking each on the one below, on `base`?"""
+    return any(
+        all(_supports(facts, lower, upper) for lower, upper in zip((base, *order[:-1]), order, strict=True))
+        for order in itertools.permutations(others)
+    )
+
+
+def _layout() -> dict[str, Any]:
+    return tomllib.loads(asset_path("scenes", "layout.toml").read_text())
+
+
+def _configurations(facts: frozenset[Fact]) -> Iterator[tuple[dict[str, str], list[list[str]]]]:
+    """(orientation per object, stacks bottom->top) for every physically valid stacking."""
+    types = dict((*MOVABLES, TRAY))
+    for n_movable in range(1, len(MOVABLES) + 1):
+        for subset in itertools.combinations([m for m, _ in MOVABLES], n_movable):
+            options = [_orientations(facts, types[m]) for m in subset]
+            for choice in itertools.product(*options):
+                orient = dict(zip(subset, choice, strict=True)) | {TRAY[0]: "upright"}
+                names = [TRAY[0], *subset]
+                for blocks in _partitions(names):
+                    stacks_per_block = []
+                    for block in blocks:
+                        valid = [
+                            list(order)
+                            for order in itertools.permutations(block)
+                            if _supports(facts, None, (types[order[0]], orient[order[0]]))
+                            and all(
+                                _supports(facts, (types[a], orient[a]), (types[b], orient[b]))
+                                for a, b in itertools.pairwise(order)
+                            )
+                        ]
+                        stacks_per_block.append(valid)
+                    for stacks in itertools.product(*stacks_per_block):
+                        yield orient, list(stacks)
+
+
+def _scene_dict(name: str, orient: dict[str, str], stacks: list[list[str]], sliding: bool) -> dict[str, Any]:
+    layout = _layout()
+    suite = layout["suite"]
+    types = dict((*MOVABLES, TRAY))
+    order = {m: i for i, (m, _) in enumerate(MOVABLES)}
+    tray_stack = next(s for s in stacks if s[0] == TRAY[0])
+    others = sorted((s for s in stacks if s[0] != TRAY[0]), key=lambda s: order[s[0]])
+    free_slots = [s["name"] for s in layout["slots"] if s["name"] != suite["tray_slot"]]
+    objects = []
+    for slot, stack in [(suite["tray_slot"], tray_stack), *zip(free_slots, others, strict=False)]:
+        below = slot
+        for obj in stack:
+            entry: dict[str, Any] = {"name": obj, "type": types[obj], "on": below, "orientation": orient[obj]}
+            if obj == TRAY[0]:
+                key = "sliding_tray_position" if sliding else "pick_place_tray_position"
+                entry["position"] = suite[key]
+            objects.append(entry)
+            below = obj
+    data: dict[str, Any] = {
+        "name": name,
+        "description": " | ".join("/".join(f"{o}{'(inv)' if orient[o] == 'inverted' else ''}" for o in s)
+                                  for s in [tray_stack, *others]),
+        "workspace": layout["workspace"],
+        "table": layout["table"],
+        "slots": layout["slots"],
+        "objects": objects,
+    }
+    if sliding:
+        data["spaces"] = layout["spaces"]
+    return data
+
+
+@cache
+def _suite_cached(suite: str) -> tuple[tuple[Scene, ...], SuiteStats]:
+    facts = load_ground_truth()
+    catalogue = load_catalogue()
+    types = dict((*MOVABLES, TRAY))
+    kept: list[tuple[dict[str, str], list[list[str]]]] = []
+    enumerated = trivial = unachievable = 0
+    for orient, stacks in _configurations(facts):
+        if suite == "sliding" and next(s for s in stacks if s[0] == TRAY[0]) != [TRAY[0]]:
+            continue
+        enumerated += 1
+        if len(stacks) == 1:
+            trivial += 1
+            continue
+        others = [(types[o], orient[o]) for o in orient if o != TRAY[0]]
+        if not tower_achievable(facts, (TRAY[1], "upright"), others):
+            unachievable += 1
+            continue
+        kept.append((orient, stacks))
+    kept.sort(key=lambda c: (len(c[0]), sorted(c[0].items()), [s for s in c[1]]))
+    scenes = tuple(
+        scene_from_dict(_scene_dict(f"{suite}/{i:03d}", orient, stacks, suite == "sliding"),
+                        file=f"<suite {suite}>", catalogue=catalogue)
+        for i, (orient, stacks) in enumerate(kept)
+    )
+    by_n: dict[int, int] = {}
+    for s in scenes:
+        by_n[s.n_objects] = by_n.get(s.n_objects, 0) + 1
+    return scenes, SuiteStats(suite, enumerated, trivial, unachievable, len(scenes), dict(sorted(by_n.items())))
+
+
+def suite_scenes(suite: str) -> tuple[Scene, ...]:
+    """All scenes of a suite, in their stable order."""
+    if suite not in SUITES:
+        raise UnknownNameError("suite", suite, SUITES)
+    return _suite_cached(suite)[0]
+
+
+def suite_stats(suite: str) -> SuiteStats:
+    if suite not in SUITES:
+        raise UnknownNameError("suite", suite, SUITES)
+    return _suite_cached(suite)[1]
+
+
+def all_scene_names(suite: str | None = None) -> list[str]:
+    suites = SUITES if suite is None else (suite,)
+    return [s.name for name in suites for s in suite_scenes(name)]
+
+
+def get_scene(name: str) -> Scene:
+    """A suite scene by its stable name, e.g. ``pick-place/017``."""
+    suite = name.split("/", 1)[0]
+    if suite in SUITES:
+        for s in suite_scenes(suite):
+            if s.name == name:
+                return s
+    raise UnknownNameError("scene", name, all_scene_names())

@@ -1,0 +1,213 @@
+"""Symbolic state abstraction of a scene: the PDDL problem of U-TAMP-1 / U-TAMP-2.
+
+Objects: the scene's objects, their members (``<object>-<member>``), the table slots
+(each slot stands for the table top in its region), free spaces for sliding, and
+the domain constants hand, air and workspace. The goal is the paper's: the hand is
+empty and every slot except the tower base's is clear, so all objects form one
+tower on the base, each standing directly on the one below.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from utamp_gym.affordances.facts import Fact
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.resources import asset_path
+from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, Box, is_adjacent
+from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
+
+DOMAINS = ("utamp2", "utamp1")
+AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False}
+SPACE_CONTACT_GAP = 0.01  # m
+
+
+def domain_text(domain: str) -> str:
+    """PDDL text of a packaged domain."""
+    if domain not in DOMAINS:
+        raise UnknownNameError("domain", domain, DOMAINS)
+    return asset_path("pddl", f"{domain}.pddl").read_text()
+
+
+def member_symbol(obj: str, member: str) -> str:
+    return f"{obj}-{member}"
+
+
+def _base_part(inverted: bool) -> str:
+    """The side facing the robot's edge of the table (-x): `back` for our yaw-0 objects.
+
+    `base` is static in the domains, so it is defined by orientation, which pick and
+    place preserve, rather than by the (changing) position; a half turn about x keeps it.
+    """
+    to_robot = np.array([-1.0, 0.0])
+    best, best_dot = "back", -np.inf
+    for side in ("front", "back", "left", "right"):
+        n = np.asarray(NORMALS[side][:2], dtype=float)
+        if inverted:
+            n[1] = -n[1]  # a half turn about x mirrors y
+        d = float(n @ to_robot)
+        if d > best_dot + 1e-12:
+            best, best_dot = side, d
+    return best
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A generated problem: its PDDL text and the symbols it uses."""
+
+    name: str
+    domain: str
+    text: str
+    objects: tuple[str, ...]
+    init: frozenset[str]
+    goal: tuple[str, ...]
+
+
+def _atom(*args: str) -> str:
+    return "(" + " ".join(args) + ")"
+
+
+def scene_facts(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2") -> set[str]:
+    """Initial-state atoms of a scene."""
+    if domain not in DOMAINS:
+        raise UnknownNameError("domain", domain, DOMAINS)
+    facts: set[str] = set()
+    parts = (*SIDES, "in")
+    for p in parts:
+        facts.add(_atom("isPartEqual", p, p))
+    for a in SIDES:
+        facts.add(_atom("isOpposite", a, OPPOSITE[a]))
+        for b in SIDES:
+            if is_adjacent(a, b):
+                facts.add(_atom("isAdjacent", a, b))
+    symbols = ["hand", "air", "workspace"]
+    facts.add(_atom("oc", "in", "hand", "air"))
+
+    on_top: dict[str, str] = {o.on: o.name for o in scene.objects}
+    for slot in scene.slots:
+        symbols.append(slot.name)
+        facts.add(_atom("force", slot.name, "on"))
+        facts.add(_atom("base", slot.name, "back"))
+        facts.add(_atom("oc", "on", slot.name, on_top.get(slot.name, "air")))
+        region = Box(slot.region.min, (slot.region.max[0], slot.region.max[1], 0.0))
+        if scene.workspace.contains_xy(region, tol=1e-6):
+            facts.add(_atom("oc", "in", "workspace", slot.name))
+
+    for o in scene.objects:
+        symbols.append(o.name)
+        t = scene.type_of(o.name)
+        inverted = o.orientation == "inverted"
+        stand, up = STANDING_PART[o.orientation], UP_PART[o.orientation]
+        facts.add(_atom("force", o.name, up))
+        facts.add(_atom("base", o.name, _base_part(inverted)))
+        for side in SIDES:
+            if side == stand:
+                facts.add(_atom("oc", side, o.name, o.on))
+            elif side == up:
+                facts.add(_atom("oc", side, o.name, on_top.get(o.name, "air")))
+            else:
+                facts.add(_atom("oc", side, o.name, "air"))
+        support_up = "on" if o.on in {s.name for s in scene.slots} else UP_PART[scene.object(o.on).orientation]
+        facts.add(_atom("oc", support_up, o.on, o.name))
+        if scene.in_workspace(scene.world_box(o.name)):
+            facts.add(_atom("oc", "in", "workspace", o.name))
+        for mname in t.members:
+            m = member_symbol(o.name, mname)
+            symbols.append(m)
+            facts.add(_atom("isMember", o.name, m))
+            if scene.in_workspace(scene.world_box(o.name, mname)):
+                facts.add(_atom("oc", "in", "workspace", m))
+
+    for space in scene.spaces:
+        symbols.append(space.name)
+        facts.add(_atom("oc", "on", space.slot, space.name))
+        facts.add(_atom("oc", "under", space.name, space.slot))
+        box = space.box
+        occupied = False
+        for name in scene.stacks.get(space.slot, ()):
+            obox = scene.world_box(name)
+            if box.overlaps_xy(obox, tol=1e-6):
+                occupied = True
+            for side in ("front", "back", "left", "right"):
+                flat_obj = Box((*obox.min[:2], 0.0), (*obox.max[:2], 0.0))
+                if flat_obj.touches_side(Box(box.min, box.max), side, SPACE_CONTACT_GAP):
+                    facts.add(_atom("oc", side, name, space.name))
+                    facts.add(_atom("oc", OPPOSITE[side], space.name, name))
+        if not occupied:
+            facts.add(_atom("oc", "in", space.name, "air"))
+        ws_box = Box(box.min, (box.max[0], box.max[1], 0.0))
+        if scene.workspace.contains_xy(ws_box, tol=1e-6):
+            facts.add(_atom("oc", "in", "workspace", space.name))
+
+    for s in symbols:
+        facts.add(_atom("isObjEqual", s, s))
+    if AFFORDANCE_PREDICATES[domain]:
+        facts |= instantiate_affordances(scene, affordances)
+    return facts
+
+
+def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[str]:
+    """Type-level facts -> atoms over the scene's objects; slots inherit the table's facts."""
+    by_type: dict[str, list[str]] = {}
+    for o in scene.objects:
+        by_type.setdefault(o.type, []).append(o.name)
+    by_type.setdefault(scene.table_type, []).extend(s.name for s in scene.slots)
+    out: set[str] = set()
+    for f in affordances:
+        pred = f[0]
+        if pred in ("isSupportive", "isSupportable"):
+            for inst in by_type.get(f[1], []):
+                out.add(_atom(pred, inst, f[2]))
+        elif pred == "isP2PSupportive":
+            p2, t2, p1, t1 = f[1:]
+            for i2 in by_type.get(t2, []):
+                for i1 in by_type.get(t1, []):
+                    if i1 != i2:
+                        out.add(_atom(pred, p2, i2, p1, i1))
+        elif pred == "canGraspFrom":
+            t, member, hp, hf1, hf2 = f[1:]
+            for inst in by_type.get(t, []):
+                if member in scene.type_of(inst).members:
+                    out.add(_atom(pred, inst, member_symbol(inst, member), hp, hf1, hf2))
+        elif pred == "canLift":
+            for inst in by_type.get(f[1], []):
+                if f[2] in scene.type_of(inst).members:
+                    out.add(_atom(pred, inst, member_symbol(inst, f[2])))
+        elif pred == "canSlide":
+            t1, t2, p1, p2 = f[1:]
+            for i1 in by_type.get(t1, []):
+                for i2 in by_type.get(t2, []):
+                    out.add(_atom(pred, i1, i2, p1, p2))
+    return out
+
+
+def goal_atoms(scene: Scene) -> tuple[str, ...]:
+    """Hand empty; every slot except the tower base's is clear."""
+    base_slot = scene.slot_of(scene.tower_base)
+    return (_atom("oc", "in", "hand", "air"),) + tuple(
+        _atom("oc", "on", s.name, "air") for s in scene.slots if s.name != base_slot
+    )
+
+
+def build_problem(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2") -> Problem:
+    """The PDDL problem for `scene` under `domain` with the given affordance facts."""
+    init = frozenset(scene_facts(scene, affordances, domain))
+    goal = goal_atoms(scene)
+    objects = [s.name for s in scene.slots] + [s.name for s in scene.spaces]
+    for o in scene.objects:
+        objects.append(o.name)
+        objects.extend(member_symbol(o.name, m) for m in scene.type_of(o.name).members)
+    pname = "utamp-" + scene.name.replace("/", "-")
+    lines = [f"(define (problem {pname})", f"  (:domain {domain})", "  (:objects"]
+    lines.append("    " + " ".join(objects) + " - obj)")
+    lines.append("  (:init")
+    lines.extend(f"    {a}" for a in sorted(init))
+    lines.append("  )")
+    lines.append("  (:goal (and")
+    lines.extend(f"    {g}" for g in goal)
+    lines.append("  ))")
+    lines.append(")")
+    return Problem(pname, domain, "\n".join(lines) + "\n", tuple(objects), init, goal)
