@@ -21,7 +21,14 @@ from utamp_gym.errors import SceneError
 from utamp_gym.resources import asset_path
 
 Fact = tuple[str, ...]
-PREDICATES = ("isSupportive", "isSupportable", "isP2PSupportive", "canGraspFrom", "canLift", "canSlide")
+PREDICATES = (
+    "isSupportive",
+    "isSupportable",
+    "isP2PSupportive",
+    "canGraspFrom",
+    "canLift",
+    "canSlide",
+)
 
 
 def fact_types(fact: Fact) -> tuple[str, ...]:
@@ -76,21 +83,30 @@ def load_ground_truth(path: str | Path | None = None) -> frozenset[Fact]:
             facts.add(("isSupportable", tname, part))
         for i, entry in enumerate(d.get("supports", [])):
             if len(entry) != 3:
-                raise SceneError("expected [my part, other type, other part]", file=str(file),
-                                 field=f"{tname}.supports[{i}]")
+                raise SceneError(
+                    "expected [my part, other type, other part]",
+                    file=str(file),
+                    field=f"{tname}.supports[{i}]",
+                )
             p2, t1, p1 = entry
             facts.add(("isP2PSupportive", p2, tname, p1, t1))
         for i, entry in enumerate(d.get("grasps", [])):
             if len(entry) != 4:
-                raise SceneError("expected [member, palm, finger1, finger2]", file=str(file),
-                                 field=f"{tname}.grasps[{i}]")
+                raise SceneError(
+                    "expected [member, palm, finger1, finger2]",
+                    file=str(file),
+                    field=f"{tname}.grasps[{i}]",
+                )
             facts.add(("canGraspFrom", tname, *entry))
         for member in d.get("lift", []):
             facts.add(("canLift", tname, member))
         for i, entry in enumerate(d.get("slide", [])):
             if len(entry) != 3:
-                raise SceneError("expected [support type, my part, support part]", file=str(file),
-                                 field=f"{tname}.slide[{i}]")
+                raise SceneError(
+                    "expected [support type, my part, support part]",
+                    file=str(file),
+                    field=f"{tname}.slide[{i}]",
+                )
             t2, p1, p2 = entry
             facts.add(("canSlide", tname, t2, p1, p2))
     return frozenset(facts)

@@ -62,8 +62,10 @@ def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
         return False
     footprint = np.asarray(sorted_pair(t1.bbox.face_size(p1)))
     surface = np.asarray(sorted_pair(t2.surface_size(p2)))
-    fits = bool(np.all(footprint <= surface + 1e-9)) if t2.parts[p2].shape == "flat" else bool(
-        np.all(footprint >= surface - 1e-9)
+    fits = (
+        bool(np.all(footprint <= surface + 1e-9))
+        if t2.parts[p2].shape == "flat"
+        else bool(np.all(footprint >= surface - 1e-9))
     )
     return fits and t1.mass <= LOAD_CAPACITY[t2.robustness]
 

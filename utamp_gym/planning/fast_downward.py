@@ -34,7 +34,14 @@ from types import ModuleType
 
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
 
-__all__ = ["SEARCH_CONFIGS", "PlanResult", "downward_paths", "solve", "solve_with_driver"]
+__all__ = [
+    "SEARCH_CONFIGS",
+    "TRANSLATORS",
+    "PlanResult",
+    "downward_paths",
+    "solve",
+    "solve_with_driver",
+]
 
 # "lama-first" is the driver alias from up_fast_downward/downward/driver/aliases.py
 # (Fast Downward 26.6), with spaces and newlines stripped exactly as the driver does.
@@ -277,24 +284,65 @@ def _check_timeout(timeout: float) -> None:
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
 
 
-def solve(
-    domain: str, problem: str, *, search: str = "lama-first", timeout: float = 30.0
-) -> PlanResult:
-    """Plan for PDDL ``domain``/``problem`` texts: in-process translate, then the binary.
+TRANSLATORS = ("utamp", "fd")
+"""``utamp``: our relaxed-reachability grounder + SAS writer (fast path, default);
+``fd``: Fast Downward's own Python translator, run in-process."""
 
-    ``search`` is one of :data:`SEARCH_CONFIGS`. ``timeout`` (s) bounds translation plus
-    search; exceeding it raises :class:`PlanningTimeout`. An unsolvable task returns
-    ``solved=False`` with a ``reason``; bad PDDL raises :class:`PddlError`.
+
+def solve(
+    domain: str,
+    problem: str,
+    *,
+    search: str = "lama-first",
+    timeout: float = 30.0,
+    translator: str = "utamp",
+) -> PlanResult:
+    """Plan for PDDL ``domain``/``problem`` texts: in-process translation, then the binary.
+
+    ``search`` is one of :data:`SEARCH_CONFIGS`, ``translator`` one of :data:`TRANSLATORS`.
+    ``timeout`` (s) bounds translation plus search; exceeding it raises
+    :class:`PlanningTimeout`. An unsolvable task returns ``solved=False`` with a ``reason``;
+    bad PDDL raises :class:`PddlError`.
     """
     if search not in _SEARCH_ARGS:
         raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
+    if translator not in TRANSLATORS:
+        raise UnknownNameError("translator", translator, TRANSLATORS)
     _check_timeout(timeout)
-    binary, _ = downward_paths()
     start = time.perf_counter()
-    sas, reason = _translate(domain, problem, timeout)
+    if translator == "fd":
+        sas, reason = _translate(domain, problem, timeout)
+    else:
+        sas, reason = _ground_to_sas(domain, problem)
     translate_time = time.perf_counter() - start
     if reason is not None:
         return PlanResult(False, (), None, translate_time, translate_time, 0.0, reason, None)
+    assert sas is not None
+    return _search_sas(
+        sas, search=search, timeout=timeout, start=start, translate_time=translate_time
+    )
+
+
+def _ground_to_sas(domain: str, problem: str) -> tuple[str | None, str | None]:
+    """Our translator: parse, ground by relaxed reachability, write SAS."""
+    from utamp_gym.planning.sas import to_sas
+    from utamp_gym.symbolic.pddl import parse_domain, parse_problem
+    from utamp_gym.symbolic.reach import reachable_ops
+
+    dom = parse_domain(domain, source="domain")
+    prob = parse_problem(problem, source="problem")
+    ops, _, _ = reachable_ops(dom, prob)
+    sas = to_sas(ops, prob.init, prob.goal)
+    if sas is None:
+        return None, "goal unreachable (proved unsolvable by relaxed reachability)"
+    return sas, None
+
+
+def _search_sas(
+    sas: str, *, search: str, timeout: float, start: float, translate_time: float
+) -> PlanResult:
+    """Run the search binary on a SAS task within what is left of ``timeout``."""
+    binary, _ = downward_paths()
     remaining = timeout - translate_time
     if remaining <= 0:
         raise PlanningTimeout(

@@ -7,6 +7,7 @@ through the distribution's record. Nothing is downloaded.
 from __future__ import annotations
 
 import functools
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -80,13 +81,9 @@ def panda_assets() -> PandaAssets:
 
 def srdf_disabled_collisions(assets: PandaAssets | None = None) -> tuple[tuple[str, str], ...]:
     """Link pairs the SRDF marks as never/adjacent/default-colliding (URDF link names)."""
-    import xml.etree.ElementTree as ET
-
     assets = assets or panda_assets()
     try:
         root = ET.parse(assets.srdf).getroot()
     except (OSError, ET.ParseError) as exc:
         raise AssetError(f"cannot read Panda SRDF {assets.srdf}: {exc}") from exc
-    return tuple(
-        (el.attrib["link1"], el.attrib["link2"]) for el in root.iter("disable_collisions")
-    )
+    return tuple((el.attrib["link1"], el.attrib["link2"]) for el in root.iter("disable_collisions"))

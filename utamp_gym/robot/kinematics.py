@@ -160,9 +160,15 @@ class PandaKinematics:
                 continue
             if converged:
                 return IKResult(
-                    q, True, pos_err, rot_err, iterations, attempts, rejected,
+                    q,
+                    True,
+                    pos_err,
+                    rot_err,
+                    iterations,
+                    attempts,
+                    rejected,
                     time.perf_counter() - t0,
-                )  # fmt: skip
+                )
             score = pos_err + 0.1 * rot_err
             if score < best[0]:
                 best = (score, q, pos_err, rot_err)

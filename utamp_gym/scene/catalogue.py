@@ -107,14 +107,18 @@ def _choice(value: Any, valid: tuple[str, ...], file: str, path: str) -> str:
     return str(value)
 
 
-def parse_type(name: str, data: Mapping[str, Any], file: str, path: str | None = None) -> ObjectType:
+def parse_type(
+    name: str, data: Mapping[str, Any], file: str, path: str | None = None
+) -> ObjectType:
     """Build an ObjectType from its TOML table; errors name the file and the field."""
     path = path or f"types.{name}"
     if not isinstance(data, Mapping):
         raise SceneError("expected a table", file=file, field=path)
     members_raw = _need(data, "members", file, path)
     if not isinstance(members_raw, Mapping) or not members_raw:
-        raise SceneError("expected a non-empty table of members", file=file, field=f"{path}.members")
+        raise SceneError(
+            "expected a non-empty table of members", file=file, field=f"{path}.members"
+        )
     members: dict[str, Member] = {}
     for mname, m in members_raw.items():
         mpath = f"{path}.members.{mname}"
@@ -131,7 +135,9 @@ def parse_type(name: str, data: Mapping[str, Any], file: str, path: str | None =
             geom=_choice(m.get("geom", "box"), GEOMS, file, f"{mpath}.geom"),
         )
     if sum(m.kind == "body" for m in members.values()) != 1:
-        raise SceneError("exactly one member must have kind 'body'", file=file, field=f"{path}.members")
+        raise SceneError(
+            "exactly one member must have kind 'body'", file=file, field=f"{path}.members"
+        )
     parts_raw = _need(data, "parts", file, path)
     parts: dict[str, PartAttrs] = {}
     for pname, p in parts_raw.items():
@@ -153,7 +159,9 @@ def parse_type(name: str, data: Mapping[str, Any], file: str, path: str | None =
         name=name,
         mass=_number(_need(data, "mass", file, path), file, f"{path}.mass", positive=True),
         material=str(_need(data, "material", file, path)),
-        robustness=_choice(_need(data, "robustness", file, path), ROBUSTNESS, file, f"{path}.robustness"),
+        robustness=_choice(
+            _need(data, "robustness", file, path), ROBUSTNESS, file, f"{path}.robustness"
+        ),
         members=members,
         parts=parts,
         movable=bool(data.get("movable", True)),
@@ -216,5 +224,17 @@ def load_catalogue(path: str | Path | None = None) -> Catalogue:
     return Catalogue({n: parse_type(n, d, str(file)) for n, d in types_raw.items()})
 
 
-__all__ = ["GEOMS", "MEMBER_KINDS", "PARTS", "ROBUSTNESS", "SHAPES", "Catalogue", "Member",
-           "ObjectType", "PartAttrs", "load_catalogue", "parse_type", "type_to_dict"]
+__all__ = [
+    "GEOMS",
+    "MEMBER_KINDS",
+    "PARTS",
+    "ROBUSTNESS",
+    "SHAPES",
+    "Catalogue",
+    "Member",
+    "ObjectType",
+    "PartAttrs",
+    "load_catalogue",
+    "parse_type",
+    "type_to_dict",
+]

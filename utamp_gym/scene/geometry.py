@@ -72,7 +72,9 @@ class Box:
 
     def translated(self, offset: np.ndarray) -> Box:
         o = np.asarray(offset, dtype=float)
-        return Box(tuple((np.asarray(self.min) + o).tolist()), tuple((np.asarray(self.max) + o).tolist()))
+        return Box(
+            tuple((np.asarray(self.min) + o).tolist()), tuple((np.asarray(self.max) + o).tolist())
+        )
 
     def flipped(self) -> Box:
         """The box after a half turn about the x axis through the origin (y -> -y, z -> -z)."""
@@ -89,22 +91,26 @@ class Box:
 
     def contains_xy(self, other: Box, tol: float = 1e-9) -> bool:
         """True if `other`'s footprint lies inside this box's footprint."""
-        return all(self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol for i in (0, 1))
+        return all(
+            self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol for i in (0, 1)
+        )
 
     def contains(self, other: Box, tol: float = 1e-9) -> bool:
-        return all(self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol for i in range(3))
+        return all(
+            self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol
+            for i in range(3)
+        )
 
     def overlaps_xy(self, other: Box, tol: float = 1e-9) -> bool:
-        return all(self.min[i] < other.max[i] - tol and other.min[i] < self.max[i] - tol for i in (0, 1))
+        return all(
+            self.min[i] < other.max[i] - tol and other.min[i] < self.max[i] - tol for i in (0, 1)
+        )
 
     def touches_side(self, other: Box, side: str, gap: float) -> bool:
         """True if `other` lies beyond this box's `side`, within `gap`, overlapping it across."""
         ax = axis_of(side)
         sign = NORMALS[side][ax]
-        if sign > 0:
-            distance = other.min[ax] - self.max[ax]
-        else:
-            distance = self.min[ax] - other.max[ax]
+        distance = other.min[ax] - self.max[ax] if sign > 0 else self.min[ax] - other.max[ax]
         if not -1e-9 <= distance <= gap:
             return False
         return all(

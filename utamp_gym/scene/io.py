@@ -27,18 +27,23 @@ _NAME = re.compile(r"^[a-z][a-z0-9-]*$")
 def _name(value: Any, file: str, path: str) -> str:
     if not isinstance(value, str) or not _NAME.match(value):
         raise SceneError(
-            f"{value!r} is not a valid name (lower-case letters, digits and '-', starting with a letter)",
+            f"{value!r} is not a valid name "
+            "(lower-case letters, digits and '-', starting with a letter)",
             file=file,
             field=path,
         )
     if value in RESERVED:
-        raise SceneError(f"'{value}' is reserved ({', '.join(sorted(RESERVED))})", file=file, field=path)
+        raise SceneError(
+            f"'{value}' is reserved ({', '.join(sorted(RESERVED))})", file=file, field=path
+        )
     return value
 
 
 def _vec(value: Any, n: int, file: str, path: str, *, positive: bool = False) -> tuple[float, ...]:
-    if not isinstance(value, list) or len(value) != n or not all(
-        isinstance(v, int | float) and not isinstance(v, bool) for v in value
+    if (
+        not isinstance(value, list)
+        or len(value) != n
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
     ):
         raise SceneError(f"expected a list of {n} numbers, got {value!r}", file=file, field=path)
     if positive and any(v <= 0 for v in value):
@@ -58,10 +63,22 @@ def scene_from_dict(
 ) -> Scene:
     """Validate a parsed scene table and build a `Scene`."""
     base = catalogue if catalogue is not None else load_catalogue()
-    known = {"name", "description", "workspace", "table", "slots", "spaces", "objects", "types", "goal_base"}
+    known = {
+        "name",
+        "description",
+        "workspace",
+        "table",
+        "slots",
+        "spaces",
+        "objects",
+        "types",
+        "goal_base",
+    }
     unknown = sorted(set(data) - known)
     if unknown:
-        raise SceneError(f"unknown field(s); valid: {', '.join(sorted(known))}", file=file, field=unknown[0])
+        raise SceneError(
+            f"unknown field(s); valid: {', '.join(sorted(known))}", file=file, field=unknown[0]
+        )
     name = data.get("name")
     if not isinstance(name, str) or not name:
         raise SceneError("expected a non-empty string", file=file, field="name")
@@ -89,7 +106,9 @@ def scene_from_dict(
             field="table.type",
         )
     if cat[table_type].movable:
-        raise SceneError(f"table type '{table_type}' must have movable = false", file=file, field="table.type")
+        raise SceneError(
+            f"table type '{table_type}' must have movable = false", file=file, field="table.type"
+        )
     top = cat[table_type].bbox
 
     slots: list[Slot] = []
@@ -107,7 +126,9 @@ def scene_from_dict(
         region = Box((*lo.tolist(), 0.0), (*hi.tolist(), 0.0))
         slot = Slot(_name(s.get("name"), file, f"{p}.name"), pos, region)  # type: ignore[arg-type]
         if not region.contains_xy(Box((*pos, 0.0), (*pos, 0.0))):
-            raise SceneError("position lies outside the slot region", file=file, field=f"{p}.position")
+            raise SceneError(
+                "position lies outside the slot region", file=file, field=f"{p}.position"
+            )
         if not top.contains_xy(slot.box):
             raise SceneError("slot region lies outside the table top", file=file, field=p)
         for other in slots:
@@ -124,7 +145,9 @@ def scene_from_dict(
         slot_name = s.get("slot")
         if slot_name not in slot_names:
             raise SceneError(
-                f"unknown slot {slot_name!r}; valid: {', '.join(sorted(slot_names))}", file=file, field=f"{p}.slot"
+                f"unknown slot {slot_name!r}; valid: {', '.join(sorted(slot_names))}",
+                file=file,
+                field=f"{p}.slot",
             )
         space = Space(
             _name(s.get("name"), file, f"{p}.name"),
@@ -150,35 +173,55 @@ def scene_from_dict(
         otype = o.get("type")
         if otype not in cat:
             raise SceneError(
-                f"unknown object type {otype!r}; valid: {', '.join(sorted(cat.types))}", file=file, field=f"{p}.type"
+                f"unknown object type {otype!r}; valid: {', '.join(sorted(cat.types))}",
+                file=file,
+                field=f"{p}.type",
             )
         if not cat[otype].movable:
-            raise SceneError(f"type '{otype}' is not movable (a table?)", file=file, field=f"{p}.type")
+            raise SceneError(
+                f"type '{otype}' is not movable (a table?)", file=file, field=f"{p}.type"
+            )
         on = o.get("on")
-        supports = sorted(slot_names | {n for n in object_names if isinstance(n, str) and n != oname})
+        supports = sorted(
+            slot_names | {n for n in object_names if isinstance(n, str) and n != oname}
+        )
         if on not in supports:
-            raise SceneError(f"unknown support {on!r}; valid: {', '.join(supports)}", file=file, field=f"{p}.on")
+            raise SceneError(
+                f"unknown support {on!r}; valid: {', '.join(supports)}", file=file, field=f"{p}.on"
+            )
         orientation = o.get("orientation", "upright")
         if orientation not in ORIENTATIONS:
-            raise SceneError(f"{orientation!r} is not one of {', '.join(ORIENTATIONS)}", file=file,
-                             field=f"{p}.orientation")
+            raise SceneError(
+                f"{orientation!r} is not one of {', '.join(ORIENTATIONS)}",
+                file=file,
+                field=f"{p}.orientation",
+            )
         position = o.get("position")
         if position is not None:
             if on not in slot_names:
-                raise SceneError("position is only allowed for objects standing on a slot", file=file,
-                                 field=f"{p}.position")
+                raise SceneError(
+                    "position is only allowed for objects standing on a slot",
+                    file=file,
+                    field=f"{p}.position",
+                )
             position = _vec(position, 2, file, f"{p}.position")
         unknown = sorted(set(o) - {"name", "type", "on", "orientation", "position"})
         if unknown:
-            raise SceneError("unknown field; valid: name, type, on, orientation, position", file=file,
-                             field=f"{p}.{unknown[0]}")
+            raise SceneError(
+                "unknown field; valid: name, type, on, orientation, position",
+                file=file,
+                field=f"{p}.{unknown[0]}",
+            )
         objects.append(SceneObject(oname, otype, on, orientation, position))  # type: ignore[arg-type]
 
     _check_supports(objects, slot_names, file)
     goal_base = data.get("goal_base")
     if goal_base is not None and goal_base not in {o.name for o in objects}:
-        raise SceneError(f"unknown object {goal_base!r}; valid: {', '.join(o.name for o in objects)}",
-                         file=file, field="goal_base")
+        raise SceneError(
+            f"unknown object {goal_base!r}; valid: {', '.join(o.name for o in objects)}",
+            file=file,
+            field="goal_base",
+        )
     scene = Scene(
         name=name,
         catalogue=cat,
@@ -200,15 +243,20 @@ def _check_supports(objects: list[SceneObject], slots: set[str], file: str) -> N
     holder: dict[str, str] = {}
     for i, o in enumerate(objects):
         if o.on in holder:
-            raise SceneError(f"'{o.on}' already supports '{holder[o.on]}'; one object per support",
-                             file=file, field=f"objects[{i}].on")
+            raise SceneError(
+                f"'{o.on}' already supports '{holder[o.on]}'; one object per support",
+                file=file,
+                field=f"objects[{i}].on",
+            )
         holder[o.on] = o.name
     by_name = {o.name: o for o in objects}
     for i, o in enumerate(objects):
         seen, cur = {o.name}, o.on
         while cur not in slots:
             if cur in seen:
-                raise SceneError(f"support cycle through '{cur}'", file=file, field=f"objects[{i}].on")
+                raise SceneError(
+                    f"support cycle through '{cur}'", file=file, field=f"objects[{i}].on"
+                )
             seen.add(cur)
             cur = by_name[cur].on
 
@@ -219,8 +267,11 @@ def _check_footprints(scene: Scene, file: str) -> None:
         for name in chain:
             if not slot_box.contains_xy(scene.world_box(name), tol=1e-6):
                 idx = scene.object_names.index(name)
-                raise SceneError(f"'{name}' does not fit inside slot '{slot_name}'", file=file,
-                                 field=f"objects[{idx}]")
+                raise SceneError(
+                    f"'{name}' does not fit inside slot '{slot_name}'",
+                    file=file,
+                    field=f"objects[{idx}]",
+                )
 
 
 def load_scene(path: str | Path, *, catalogue: Catalogue | None = None) -> Scene:
@@ -247,7 +298,12 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     out["workspace"] = {"min": list(scene.workspace.min), "max": list(scene.workspace.max)}
     out["table"] = {"type": scene.table_type}
     out["slots"] = [
-        {"name": s.name, "position": list(s.position), "min": list(s.region.min[:2]), "max": list(s.region.max[:2])}
+        {
+            "name": s.name,
+            "position": list(s.position),
+            "min": list(s.region.min[:2]),
+            "max": list(s.region.max[:2]),
+        }
         for s in scene.slots
     ]
     if scene.spaces:
@@ -257,7 +313,12 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         ]
     objs = []
     for o in scene.objects:
-        entry: dict[str, Any] = {"name": o.name, "type": o.type, "on": o.on, "orientation": o.orientation}
+        entry: dict[str, Any] = {
+            "name": o.name,
+            "type": o.type,
+            "on": o.on,
+            "orientation": o.orientation,
+        }
         if o.position is not None:
             entry["position"] = list(o.position)
         objs.append(entry)

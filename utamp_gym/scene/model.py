@@ -195,5 +195,14 @@ class Scene:
         return self.workspace.contains(box, tol=1e-6)
 
 
-__all__ = ["ORIENTATIONS", "ORIENTATION_QUAT", "STANDING_PART", "UP_PART", "Pose", "Scene",
-           "SceneObject", "Slot", "Space"]
+__all__ = [
+    "ORIENTATIONS",
+    "ORIENTATION_QUAT",
+    "STANDING_PART",
+    "UP_PART",
+    "Pose",
+    "Scene",
+    "SceneObject",
+    "Slot",
+    "Space",
+]

@@ -1,0 +1,43 @@
+"""Benchmark suites and scene lookup by name or path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.resources import assets_dir
+from utamp_gym.scene.io import load_scene
+from utamp_gym.scene.model import Scene
+from utamp_gym.suites.generate import SUITES, all_scene_names, get_scene, suite_scenes, suite_stats
+
+
+def packaged_scene_names() -> list[str]:
+    """Scene files shipped in `assets/scenes/` (by stem), e.g. ``kitchen-demo``."""
+    return sorted(p.stem for p in (assets_dir() / "scenes").glob("*.toml") if p.stem != "layout")
+
+
+def resolve_scene(ref: str) -> Scene:
+    """A scene from a suite name (``pick-place/017``), a packaged name or a file path."""
+    valid = [*packaged_scene_names(), *all_scene_names()]
+    if ref.split("/", 1)[0] in SUITES and not Path(ref).exists():
+        try:
+            return get_scene(ref)
+        except UnknownNameError:
+            raise UnknownNameError("scene", ref, valid) from None
+    if ref in packaged_scene_names():
+        return load_scene(assets_dir() / "scenes" / f"{ref}.toml")
+    path = Path(ref)
+    if path.suffix == ".toml" or path.exists():
+        return load_scene(path)
+    raise UnknownNameError("scene", ref, valid)
+
+
+__all__ = [
+    "SUITES",
+    "all_scene_names",
+    "get_scene",
+    "packaged_scene_names",
+    "resolve_scene",
+    "suite_scenes",
+    "suite_stats",
+]

@@ -58,7 +58,9 @@ class SuiteStats:
     kept_by_n: dict[int, int]
 
 
-def _supports(facts: frozenset[Fact], lower: tuple[str, str] | None, upper: tuple[str, str]) -> bool:
+def _supports(
+    facts: frozenset[Fact], lower: tuple[str, str] | None, upper: tuple[str, str]
+) -> bool:
     """Can `upper` (type, orientation) stand on `lower` (None = the table)?"""
     utype, uori = upper
     if lower is None:
@@ -88,10 +90,15 @@ def _partitions(items: Sequence[str]) -> Iterator[list[list[str]]]:
             yield [*part[:i], [first, *part[i]], *part[i + 1 :]]
 
 
-def tower_achievable(facts: frozenset[Fact], base: tuple[str, str], others: Sequence[tuple[str, str]]) -> bool:
-    """Is there an order of `others` (type, orientation) stacking each on the one below, on `base`?"""
+def tower_achievable(
+    facts: frozenset[Fact], base: tuple[str, str], others: Sequence[tuple[str, str]]
+) -> bool:
+    """Can `others` (type, orientation) be ordered so that each stands on the one below?"""
     return any(
-        all(_supports(facts, lower, upper) for lower, upper in zip((base, *order[:-1]), order, strict=True))
+        all(
+            _supports(facts, lower, upper)
+            for lower, upper in zip((base, *order[:-1]), order, strict=True)
+        )
         for order in itertools.permutations(others)
     )
 
@@ -126,7 +133,9 @@ def _configurations(facts: frozenset[Fact]) -> Iterator[tuple[dict[str, str], li
                         yield orient, list(stacks)
 
 
-def _scene_dict(name: str, orient: dict[str, str], stacks: list[list[str]], sliding: bool) -> dict[str, Any]:
+def _scene_dict(
+    name: str, orient: dict[str, str], stacks: list[list[str]], sliding: bool
+) -> dict[str, Any]:
     layout = _layout()
     suite = layout["suite"]
     types = dict((*MOVABLES, TRAY))
@@ -138,7 +147,12 @@ def _scene_dict(name: str, orient: dict[str, str], stacks: list[list[str]], slid
     for slot, stack in [(suite["tray_slot"], tray_stack), *zip(free_slots, others, strict=False)]:
         below = slot
         for obj in stack:
-            entry: dict[str, Any] = {"name": obj, "type": types[obj], "on": below, "orientation": orient[obj]}
+            entry: dict[str, Any] = {
+                "name": obj,
+                "type": types[obj],
+                "on": below,
+                "orientation": orient[obj],
+            }
             if obj == TRAY[0]:
                 key = "sliding_tray_position" if sliding else "pick_place_tray_position"
                 entry["position"] = suite[key]
@@ -146,8 +160,10 @@ def _scene_dict(name: str, orient: dict[str, str], stacks: list[list[str]], slid
             below = obj
     data: dict[str, Any] = {
         "name": name,
-        "description": " | ".join("/".join(f"{o}{'(inv)' if orient[o] == 'inverted' else ''}" for o in s)
-                                  for s in [tray_stack, *others]),
+        "description": " | ".join(
+            "/".join(f"{o}{'(inv)' if orient[o] == 'inverted' else ''}" for o in s)
+            for s in [tray_stack, *others]
+        ),
         "workspace": layout["workspace"],
         "table": layout["table"],
         "slots": layout["slots"],
@@ -179,14 +195,19 @@ def _suite_cached(suite: str) -> tuple[tuple[Scene, ...], SuiteStats]:
         kept.append((orient, stacks))
     kept.sort(key=lambda c: (len(c[0]), sorted(c[0].items()), [s for s in c[1]]))
     scenes = tuple(
-        scene_from_dict(_scene_dict(f"{suite}/{i:03d}", orient, stacks, suite == "sliding"),
-                        file=f"<suite {suite}>", catalogue=catalogue)
+        scene_from_dict(
+            _scene_dict(f"{suite}/{i:03d}", orient, stacks, suite == "sliding"),
+            file=f"<suite {suite}>",
+            catalogue=catalogue,
+        )
         for i, (orient, stacks) in enumerate(kept)
     )
     by_n: dict[int, int] = {}
     for s in scenes:
         by_n[s.n_objects] = by_n.get(s.n_objects, 0) + 1
-    return scenes, SuiteStats(suite, enumerated, trivial, unachievable, len(scenes), dict(sorted(by_n.items())))
+    return scenes, SuiteStats(
+        suite, enumerated, trivial, unachievable, len(scenes), dict(sorted(by_n.items()))
+    )
 
 
 def suite_scenes(suite: str) -> tuple[Scene, ...]:

@@ -110,7 +110,11 @@ def scene_facts(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2
                 facts.add(_atom("oc", side, o.name, on_top.get(o.name, "air")))
             else:
                 facts.add(_atom("oc", side, o.name, "air"))
-        support_up = "on" if o.on in {s.name for s in scene.slots} else UP_PART[scene.object(o.on).orientation]
+        support_up = (
+            "on"
+            if o.on in {s.name for s in scene.slots}
+            else UP_PART[scene.object(o.on).orientation]
+        )
         facts.add(_atom("oc", support_up, o.on, o.name))
         if scene.in_workspace(scene.world_box(o.name)):
             facts.add(_atom("oc", "in", "workspace", o.name))
@@ -131,9 +135,11 @@ def scene_facts(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2
             obox = scene.world_box(name)
             if box.overlaps_xy(obox, tol=1e-6):
                 occupied = True
+            # compare footprints only: give both the same unit height
+            foot = Box((*obox.min[:2], 0.0), (*obox.max[:2], 1.0))
+            space_foot = Box((*box.min[:2], 0.0), (*box.max[:2], 1.0))
             for side in ("front", "back", "left", "right"):
-                flat_obj = Box((*obox.min[:2], 0.0), (*obox.max[:2], 0.0))
-                if flat_obj.touches_side(Box(box.min, box.max), side, SPACE_CONTACT_GAP):
+                if foot.touches_side(space_foot, side, SPACE_CONTACT_GAP):
                     facts.add(_atom("oc", side, name, space.name))
                     facts.add(_atom("oc", OPPOSITE[side], space.name, name))
         if not occupied:
@@ -187,9 +193,8 @@ def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[st
 def goal_atoms(scene: Scene) -> tuple[str, ...]:
     """Hand empty; every slot except the tower base's is clear."""
     base_slot = scene.slot_of(scene.tower_base)
-    return (_atom("oc", "in", "hand", "air"),) + tuple(
-        _atom("oc", "on", s.name, "air") for s in scene.slots if s.name != base_slot
-    )
+    clear = [_atom("oc", "on", s.name, "air") for s in scene.slots if s.name != base_slot]
+    return (_atom("oc", "in", "hand", "air"), *clear)
 
 
 def build_problem(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2") -> Problem:

@@ -1,0 +1,19 @@
+"""Shared fixtures."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import pytest
+import tomllib
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from utamp_gym.resources import asset_path
+
+
+@pytest.fixture
+def demo_dict() -> dict[str, Any]:
+    """The demo scene file as plain data (tests mutate their own copy)."""
+    return tomllib.loads(asset_path("scenes", "kitchen-demo.toml").read_text())

@@ -1,0 +1,93 @@
+"""Planning: every suite scene solved by UTAMP-2-GT with valid plans; methods; bad input."""
+
+from __future__ import annotations
+
+import pytest
+
+from utamp_gym.errors import PlanningTimeout, UnknownNameError
+from utamp_gym.planning import fast_downward
+from utamp_gym.planning.crosscheck import check_against_ground_truth
+from utamp_gym.planning.methods import plan_scene
+from utamp_gym.scene import scene_from_dict
+from utamp_gym.suites import resolve_scene, suite_scenes
+from utamp_gym.symbolic.pddl import parse_domain, parse_plan, parse_problem
+from utamp_gym.symbolic.validate import validate_plan
+
+
+@pytest.mark.parametrize("suite", ["pick-place", "sliding"])
+def test_utamp2_gt_solves_every_scene_with_valid_plans(suite: str) -> None:
+    for scene in suite_scenes(suite):
+        out = plan_scene(scene, "utamp2-gt", timeout=60)
+        assert out.solved, (scene.name, out.reason)
+        result = validate_plan(
+            parse_domain(out.domain), parse_problem(out.problem), parse_plan("\n".join(out.plan))
+        )
+        assert result.valid, (scene.name, result.message)
+        assert check_against_ground_truth(scene, out.plan).valid
+        if suite == "sliding":  # the tray is slid in before anything is put on it
+            slide = next(i for i, a in enumerate(out.plan) if a.startswith("(slide-support tray "))
+            onto_tray = [
+                i
+                for i, a in enumerate(out.plan)
+                if a.startswith("(place-support") and " tray " in a
+            ]
+            assert onto_tray and slide < onto_tray[0]
+
+
+def test_both_translators_give_valid_plans() -> None:
+    scene = resolve_scene("kitchen-demo")
+    out = plan_scene(scene)
+    for translator in fast_downward.TRANSLATORS:
+        res = fast_downward.solve(out.domain, out.problem, translator=translator)
+        assert res.solved
+        check = validate_plan(
+            parse_domain(out.domain), parse_problem(out.problem), parse_plan("\n".join(res.plan))
+        )
+        assert check.valid, (translator, check.message)
+
+
+def test_rules_match_gt_and_noise_is_seeded() -> None:
+    scene = suite_scenes("pick-place")[-1]
+    gt, rules = plan_scene(scene, "utamp2-gt"), plan_scene(scene, "utamp2-rules")
+    assert rules.facts == gt.facts and rules.affordance_scores.f1 == 1.0
+    a = plan_scene(scene, "utamp2-noisy", seed=4, noise=0.2)
+    b = plan_scene(scene, "utamp2-noisy", seed=4, noise=0.2)
+    assert a.facts == b.facts and a.plan == b.plan
+    assert a.affordance_scores.f1 < 1.0
+
+
+def test_utamp1_plans_violate_ground_truth_where_they_ignore_affordances() -> None:
+    scene = resolve_scene("kitchen-demo")
+    out = plan_scene(scene, "utamp1", timeout=60)
+    assert out.solved
+    check = check_against_ground_truth(scene, out.plan)
+    assert not check.valid
+    assert check.failed_precondition is not None
+    assert any(
+        p in check.failed_precondition
+        for p in ("canGraspFrom", "canLift", "isSupportive", "isSupportable", "isP2PSupportive")
+    )
+
+
+def test_unsolvable_scene_is_reported_not_raised(demo_dict) -> None:
+    # pan and upright mug: nothing can stand on the pan but the board, the mug carries nothing
+    demo_dict["objects"] = [o for o in demo_dict["objects"] if o["name"] in ("tray", "pan", "mug")]
+    demo_dict["objects"][2]["orientation"] = "upright"
+    out = plan_scene(scene_from_dict(demo_dict), "utamp2-gt")
+    assert not out.solved and out.plan == ()
+    assert "unsolvable" in out.reason
+
+
+def test_timeout_is_reported_and_no_planner_survives() -> None:
+    scene = suite_scenes("pick-place")[-1]
+    out = plan_scene(scene, "utamp1", timeout=0.05)
+    assert out.timed_out and not out.solved and "timed out" in out.reason
+    with pytest.raises(PlanningTimeout):
+        fast_downward.solve(out.domain, out.problem, timeout=0.05)
+
+
+def test_unknown_method_lists_valid_ones() -> None:
+    with pytest.raises(
+        UnknownNameError, match="valid: utamp1, utamp2-gt, utamp2-noisy, utamp2-rules"
+    ):
+        plan_scene(resolve_scene("kitchen-demo"), "magic")
