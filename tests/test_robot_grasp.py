@@ -8,7 +8,12 @@ import pytest
 
 from utamp_gym.robot.collision import CollisionChecker
 from utamp_gym.robot.kinematics import HOME_Q, PandaKinematics
-from utamp_gym.robot.motion import PANDA_ACC_LIMITS, PANDA_VEL_LIMITS, plan_motion, time_parameterize
+from utamp_gym.robot.motion import (
+    PANDA_ACC_LIMITS,
+    PANDA_VEL_LIMITS,
+    plan_motion,
+    time_parameterize,
+)
 from utamp_gym.robot.panda_mjcf import (
     ARM_KP,
     ARM_KV,
@@ -34,15 +39,20 @@ def _build(recommended: bool):
         world.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     world.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[2, 2, 0.1])
     world.worldbody.add_geom(
-        name="table", type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[0.3, 0.4, TABLE_TOP / 2], pos=[0.55, 0, TABLE_TOP / 2],
-    )  # fmt: skip
+        name="table",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.3, 0.4, TABLE_TOP / 2],
+        pos=[0.55, 0, TABLE_TOP / 2],
+    )
     body = world.worldbody.add_body(name="box", pos=[0.5, 0.05, TABLE_TOP + HALF])
     body.add_freejoint()
     body.add_geom(
-        name="box_geom", type=mujoco.mjtGeom.mjGEOM_BOX, size=[HALF] * 3, mass=0.3,
+        name="box_geom",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[HALF] * 3,
+        mass=0.3,
         friction=[0.8, 0.005, 0.0001],
-    )  # fmt: skip
+    )
     handles = add_panda(world)
     model = world.compile()
     return model, handles.bind(model)
@@ -86,9 +96,9 @@ def test_gripper_lifts_box_by_friction(recommended):
 
     settle(100)
     centre = data.xpos[box].copy()
-    q_pre = kin.ik(_top_down(centre + [0, 0, 0.12]), np.array(HOME_Q), rng).q
+    q_pre = kin.ik(_top_down(centre + np.array([0, 0, 0.12])), np.array(HOME_Q), rng).q
     q_grasp = kin.ik(_top_down(centre), q_pre, rng).q
-    q_lift = kin.ik(_top_down(centre + [0, 0, 0.15]), q_grasp, rng).q
+    q_lift = kin.ik(_top_down(centre + np.array([0, 0, 0.15])), q_grasp, rng).q
     move_to(q_pre)
     move_to(q_grasp)
     np.testing.assert_allclose(data.site_xpos[ids.tcp_site_id], centre, atol=3e-3)

@@ -34,7 +34,9 @@ def test_structure(panda):
     handles, model, ids = panda
     assert model.nu == 8 and len(ids.arm_actuator_ids) == 7
     assert model.neq == 1 and model.eq_type[0] == mujoco.mjtEq.mjEQ_JOINT  # fingers, no weld
-    np.testing.assert_allclose(model.actuator_forcerange[ids.arm_actuator_ids, 1], [87] * 4 + [12] * 3)
+    np.testing.assert_allclose(
+        model.actuator_forcerange[ids.arm_actuator_ids, 1], [87] * 4 + [12] * 3
+    )
     assert model.actuator_forcerange[ids.gripper_actuator_id, 1] == GRIPPER_FORCE
     assert model.nexclude > 0
     geoms = robot_geom_ids(model, handles.prefix)

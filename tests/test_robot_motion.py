@@ -39,9 +39,11 @@ def scene():
     apply_recommended_options(world)
     world.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[2, 2, 0.1])
     world.worldbody.add_geom(
-        name="table", type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[0.3, 0.5, TABLE_TOP / 2], pos=[0.55, 0, TABLE_TOP / 2],
-    )  # fmt: skip
+        name="table",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.3, 0.5, TABLE_TOP / 2],
+        pos=[0.55, 0, TABLE_TOP / 2],
+    )
     world.worldbody.add_geom(
         name="wall", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.15, 0.02, 0.2], pos=[0.5, 0, 0.5]
     )
@@ -106,9 +108,11 @@ def test_free_straight_line_skips_the_sampler(scene):
 
 
 def test_held_object_counts_in_collision_checks(scene):
-    model, data, ids, kin, checker, *_ = scene
+    model, _, _, kin, checker, *_ = scene
     box = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box")
-    q = kin.ik(_top_down([0.45, -0.3, TABLE_TOP + 0.1]), np.array(HOME_Q), np.random.default_rng(1)).q
+    q = kin.ik(
+        _top_down([0.45, -0.3, TABLE_TOP + 0.1]), np.array(HOME_Q), np.random.default_rng(1)
+    ).q
     assert checker.is_valid(q)  # bare arm: TCP 10 cm above the table
     tcp_t_box = np.eye(4)
     tcp_t_box[2, 3] = 0.076  # box centre 7.6 cm below the TCP: its bottom 6 mm into the table
@@ -128,7 +132,7 @@ def test_held_object_counts_in_collision_checks(scene):
 
 def test_start_inside_margin_is_tolerated(scene):
     """A held box resting on the table (inside the margin) can still be lifted away."""
-    model, data, ids, kin, checker, *_ = scene
+    model, _, _, kin, checker, *_ = scene
     box = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box")
     rng = np.random.default_rng(3)
     q_rest = kin.ik(_top_down([0.45, -0.3, TABLE_TOP + 0.03]), np.array(HOME_Q), rng).q

@@ -22,6 +22,34 @@ from utamp_gym.robot.panda_mjcf import PandaIds
 
 Pair = tuple[int, int]
 
+# Geom classes and what a contact between two classes means (0: ignored, 1: world, 2: self).
+_WORLD, _ROBOT, _HAND, _HELD = 0, 1, 2, 3
+_K_WORLD, _K_SELF = 1, 2
+_KIND = np.array(
+    [
+        [0, 1, 1, 1],  # world vs world / robot / hand / held
+        [1, 2, 2, 2],  # robot
+        [1, 2, 2, 0],  # hand (touching the held object is expected)
+        [1, 2, 0, 0],  # held
+    ],
+    dtype=np.int8,
+)
+_KIND.flags.writeable = False
+_BIT_WORLD, _BIT_ROBOT = 1 << 30, 1 << 29  # private collision bits of the checker's model copy
+
+
+def _empty(shape: tuple[int, ...], dtype: type) -> np.ndarray:
+    out = np.zeros(shape, dtype=dtype)
+    out.flags.writeable = False
+    return out
+
+
+_NO_PAIRS, _NO_FLOATS, _NO_KINDS = (
+    _empty((0, 2), np.int32),
+    _empty((0,), float),
+    _empty((0,), np.int8),
+)
+
 
 @dataclass(frozen=True)
 class Contact:
@@ -56,11 +84,11 @@ class CollisionChecker:
         self.model.geom_margin[ids.geom_ids] = np.maximum(
             self._base_margin[ids.geom_ids], self._gen_margin
         )
-        ng = self.model.ngeom
-        self._robot = np.zeros(ng, dtype=bool)
-        self._robot[ids.geom_ids] = True
-        self._hand = np.isin(self.model.geom_bodyid, ids.hand_body_ids)
-        self._held = np.zeros(ng, dtype=bool)
+        self._cls = np.full(self.model.ngeom, _WORLD, dtype=np.int8)
+        self._cls[ids.geom_ids] = _ROBOT
+        self._cls[np.isin(self.model.geom_bodyid, ids.hand_body_ids)] = _HAND
+        self._base_bits = (self.model.geom_contype.copy(), self.model.geom_conaffinity.copy())
+        self._use_check_bits(ids.geom_ids)
         self._held_geoms = np.zeros(0, dtype=int)
         self.held_body: int | None = None
         self.detach()
@@ -80,7 +108,11 @@ class CollisionChecker:
         mocap_pos: np.ndarray | None = None,
         mocap_quat: np.ndarray | None = None,
     ) -> None:
+        """Set the world state (full qpos and mocap poses) the checks are made against."""
         self.data.qpos[:] = qpos
+        if self.held_body is not None:  # detach() will restore the newly synced pose
+            adr = self._held_qpos_adr
+            self._held_qpos0 = self.data.qpos[adr : adr + 7].copy()
         if mocap_pos is not None and self.model.nmocap:
             self.data.mocap_pos[:] = mocap_pos
         if mocap_quat is not None and self.model.nmocap:
@@ -129,7 +161,8 @@ class CollisionChecker:
         self._held_qpos0 = self.data.qpos[self._held_qpos_adr : self._held_qpos_adr + 7].copy()
         self._held_tcp_T_obj = np.array(tcp_T_obj, dtype=float)
         self.held_body = body_id
-        self._held[geoms] = True
+        self._cls[geoms] = _HELD
+        self._set_bits(geoms, robot=True)
         m.geom_margin[geoms] = np.maximum(self._base_margin[geoms], self._gen_margin)
 
     def detach(self) -> None:
@@ -139,7 +172,8 @@ class CollisionChecker:
             self.data.qpos[adr : adr + 7] = self._held_qpos0
         g = self._held_geoms
         self.model.geom_margin[g] = self._base_margin[g]
-        self._held[g] = False
+        self._cls[g] = _WORLD
+        self._set_bits(g, robot=False)
         self._held_geoms = np.zeros(0, dtype=int)
         self._held_qpos_adr = -1
         self._held_tcp_T_obj = np.eye(4)
@@ -161,39 +195,69 @@ class CollisionChecker:
         mujoco.mj_collision(m, d)
         self.checks += 1
 
-    def contacts(self, q: np.ndarray, *, tolerate: bool = True) -> list[Contact]:
-        """Counted contacts at `q` (those within the margins and not tolerated)."""
-        self._collide(np.asarray(q, dtype=float))
+    def _counted(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Contacts at `q` that count: (geom pairs, distances, kinds), before tolerance."""
+        self._collide(q)
         n = self.data.ncon
         if n == 0:
-            return []
+            return _NO_PAIRS, _NO_FLOATS, _NO_KINDS
         geom = self.data.contact.geom[:n]
         dist = self.data.contact.dist[:n]
-        mine = self._robot | self._held
-        m1, m2 = mine[geom[:, 0]], mine[geom[:, 1]]
-        world = (m1 ^ m2) & (dist < self.margin)
-        # Self: robot-robot, or held-vs-robot except the hand holding it.
-        h1, h2 = self._held[geom[:, 0]], self._held[geom[:, 1]]
-        hand1, hand2 = self._hand[geom[:, 0]], self._hand[geom[:, 1]]
-        ignored = (h1 & hand2) | (h2 & hand1) | (h1 & h2)
-        selfc = m1 & m2 & ~ignored & (dist < self.self_margin)
+        kind = _KIND[self._cls[geom[:, 0]], self._cls[geom[:, 1]]]
+        keep = np.where(
+            kind == _K_WORLD, dist < self.margin, (kind == _K_SELF) & (dist < self.self_margin)
+        )
+        return geom[keep], dist[keep], kind[keep]
+
+    def _tolerated(self, g1: int, g2: int, dist: float) -> bool:
+        return dist >= self.tolerance.get((min(g1, g2), max(g1, g2)), np.inf)
+
+    def contacts(self, q: np.ndarray, *, tolerate: bool = True) -> list[Contact]:
+        """Counted contacts at `q` (within the margins and, if `tolerate`, not tolerated)."""
+        geom, dist, kind = self._counted(np.asarray(q, dtype=float))
         out = []
-        for i in np.flatnonzero(world | selfc):
-            g1, g2 = int(geom[i, 0]), int(geom[i, 1])
-            if not mine[g1]:
-                g1, g2 = g2, g1
-            pair = (min(g1, g2), max(g1, g2))
-            if tolerate and dist[i] >= self.tolerance.get(pair, np.inf):
+        for (g1, g2), d, k in zip(geom.tolist(), dist.tolist(), kind.tolist(), strict=True):
+            if tolerate and self._tolerated(g1, g2, d):
                 continue
-            out.append(Contact(g1, g2, float(dist[i]), "world" if world[i] else "self"))
+            if self._cls[g1] == _WORLD:
+                g1, g2 = g2, g1
+            out.append(Contact(g1, g2, d, "world" if k == _K_WORLD else "self"))
         return out
 
     def is_valid(self, q: np.ndarray) -> bool:
         """True if `q` is inside the joint limits and has no counted contact."""
         q = np.asarray(q, dtype=float)
-        if np.any(q < self.lower - 1e-9) or np.any(q > self.upper + 1e-9):
+        if ((q < self.lower - 1e-9) | (q > self.upper + 1e-9)).any():
             return False
-        return not self.contacts(q)
+        geom, dist, _ = self._counted(q)
+        if not len(dist):
+            return True
+        if not self.tolerance:
+            return False
+        return all(
+            self._tolerated(g1, g2, d)
+            for (g1, g2), d in zip(geom.tolist(), dist.tolist(), strict=True)
+        )
+
+    def _use_check_bits(self, robot_geoms: np.ndarray) -> None:
+        """Collision bits so only robot-vs-world and robot-vs-robot pairs are generated."""
+        contype, conaff = self._base_bits
+        rtype = int(np.bitwise_or.reduce(contype[robot_geoms]))
+        raff = int(np.bitwise_or.reduce(conaff[robot_geoms]))
+        # A world geom stays checkable iff it could collide with the robot in the scene.
+        self._world_collides = ((contype & raff) | (conaff & rtype)) != 0
+        self._set_bits(np.flatnonzero(self._cls == _WORLD), robot=False)
+        self._set_bits(robot_geoms, robot=True)
+
+    def _set_bits(self, geoms: np.ndarray, *, robot: bool) -> None:
+        m = self.model
+        if robot:
+            m.geom_contype[geoms] = _BIT_WORLD | _BIT_ROBOT
+            m.geom_conaffinity[geoms] = _BIT_ROBOT
+        else:
+            on = self._world_collides[geoms]
+            m.geom_contype[geoms] = 0
+            m.geom_conaffinity[geoms] = np.where(on, _BIT_WORLD, 0)
 
     def describe(self, contacts: list[Contact]) -> str:
         """Human-readable list of contacts, by geom (or body) name."""

