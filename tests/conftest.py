@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import os
+import tomllib
 from typing import Any
 
 import pytest
-import tomllib
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 

@@ -178,10 +178,11 @@ def test_search_proves_unsolvable(search):
     assert result.reason == "search space exhausted: task unsolvable"
 
 
-def test_translator_proves_unsolvable():
-    result = fd.solve(DOMAIN, problem(SUSSMAN, "(on a b) (glued c)"))
+@pytest.mark.parametrize("translator", fd.TRANSLATORS)
+def test_translator_proves_unsolvable(translator):
+    result = fd.solve(DOMAIN, problem(SUSSMAN, "(on a b) (glued c)"), translator=translator)
     assert not result.solved and result.plan == ()
-    assert "proved unsolvable by translator" in result.reason
+    assert "proved unsolvable by" in result.reason
 
 
 def test_empty_goal_gives_empty_plan():
@@ -237,9 +238,10 @@ def test_unknown_search_name():
         ),  # object fluents: the translator calls SystemExit
     ],
 )
-def test_bad_pddl_raises_pddl_error(domain, prob):
+@pytest.mark.parametrize("translator", fd.TRANSLATORS)
+def test_bad_pddl_raises_pddl_error(domain, prob, translator):
     with pytest.raises(PddlError):
-        fd.solve(domain, prob)
+        fd.solve(domain, prob, translator=translator)
     assert fd.solve(DOMAIN, SUSSMAN_PROBLEM).solved  # translator state intact afterwards
 
 

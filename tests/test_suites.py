@@ -31,7 +31,7 @@ def test_sliding_scenes_need_the_slide_first() -> None:
     for scene in suite_scenes("sliding"):
         assert scene.stacks["slot1"] == ("tray",)
         assert not scene.in_workspace(scene.world_box("tray"))
-        assert scene.in_workspace(scene.world_box("tray", "edge-back"))
+        assert scene.in_workspace(scene.world_box("tray", "handle-back"))
         assert scene.spaces and scene.spaces[0].slot == "slot1"
 
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.scene.catalogue import ObjectType
-from utamp_gym.scene.geometry import OPPOSITE, SIDES, axis_of, sorted_pair
+from utamp_gym.scene.geometry import OPPOSITE, SIDES, axis_of
 
 GRIPPER_OPENING = 0.08  # m, Franka Hand
 MIN_GRASP_WIDTH = 0.005  # m
@@ -60,8 +60,9 @@ def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Can part p2 of t2 stably support t1 resting on its part p1?"""
     if t1.name == t2.name or not (is_supportive(t2, p2) and is_supportable(t1, p1)):
         return False
-    footprint = np.asarray(sorted_pair(t1.bbox.face_size(p1)))
-    surface = np.asarray(sorted_pair(t2.surface_size(p2)))
+    # objects keep their yaw (all x-aligned), so extents are compared axis by axis
+    footprint = np.asarray(t1.bbox.face_size(p1))
+    surface = np.asarray(t2.surface_size(p2))
     fits = (
         bool(np.all(footprint <= surface + 1e-9))
         if t2.parts[p2].shape == "flat"

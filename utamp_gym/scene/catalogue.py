@@ -40,6 +40,8 @@ class PartAttrs:
     shape: str
     size: tuple[float, float] | None = None
     food_surface: bool = False
+    height: float | None = None  # z of the usable surface (object frame), e.g. a tray's floor
+    center: tuple[float, float] | None = None  # xy centre of the usable surface (object frame)
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,21 @@ class ObjectType:
         """Usable extent of a face: the declared size, else the bounding-box face."""
         attrs = self.parts[part]
         return attrs.size if attrs.size is not None else self.bbox.face_size(part)
+
+    def surface_height(self, part: str) -> float:
+        """Height of a part's usable surface above (on) or below (under) the origin."""
+        attrs = self.parts[part]
+        if attrs.height is not None:
+            return attrs.height
+        return self.bbox.max[2] if part == "on" else self.bbox.min[2]
+
+    def surface_center(self, part: str) -> tuple[float, float]:
+        """xy centre of a part's usable surface in the object frame."""
+        attrs = self.parts[part]
+        if attrs.center is not None:
+            return attrs.center
+        c = self.bbox.center
+        return float(c[0]), float(c[1])
 
     def with_parts(self, parts: Mapping[str, PartAttrs]) -> ObjectType:
         return replace(self, parts=dict(parts))
@@ -145,11 +162,20 @@ def parse_type(
         _choice(pname, SIDES, file, ppath)
         if not isinstance(p, Mapping):
             raise SceneError("expected a table", file=file, field=ppath)
-        size = p.get("size")
+        size, center, height = p.get("size"), p.get("center"), p.get("height")
+        unknown = sorted(set(p) - {"shape", "size", "food_surface", "height", "center"})
+        if unknown:
+            raise SceneError(
+                "unknown field; valid: shape, size, food_surface, height, center",
+                file=file,
+                field=f"{ppath}.{unknown[0]}",
+            )
         parts[pname] = PartAttrs(
             shape=_choice(_need(p, "shape", file, ppath), SHAPES, file, f"{ppath}.shape"),
             size=None if size is None else _vec(size, 2, file, f"{ppath}.size"),  # type: ignore[arg-type]
             food_surface=bool(p.get("food_surface", False)),
+            height=None if height is None else _number(height, file, f"{ppath}.height"),
+            center=None if center is None else _vec(center, 2, file, f"{ppath}.center"),  # type: ignore[arg-type]
         )
     missing = [s for s in SIDES if s not in parts]
     if missing:
@@ -190,6 +216,10 @@ def type_to_dict(t: ObjectType) -> dict[str, Any]:
             entry["size"] = list(p.size)
         if p.food_surface:
             entry["food_surface"] = True
+        if p.height is not None:
+            entry["height"] = p.height
+        if p.center is not None:
+            entry["center"] = list(p.center)
         out["parts"][pname] = entry
     return out
 

@@ -116,8 +116,3 @@ class Box:
         return all(
             self.min[i] < other.max[i] and other.min[i] < self.max[i] for i in range(3) if i != ax
         )
-
-
-def sorted_pair(size: tuple[float, float]) -> tuple[float, float]:
-    a, b = size
-    return (a, b) if a <= b else (b, a)

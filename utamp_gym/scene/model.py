@@ -164,23 +164,38 @@ class Scene:
         box = self.type_of(name).bbox
         return box.flipped() if self.object(name).orientation == "inverted" else box
 
+    def support_surface(self, name: str, origin: np.ndarray) -> tuple[np.ndarray, float]:
+        """World xy centre and height of the up-facing surface of `name` with origin `origin`."""
+        t, inverted = self.type_of(name), self.object(name).orientation == "inverted"
+        part = UP_PART[self.object(name).orientation]
+        cx, cy = t.surface_center(part)
+        h = t.surface_height(part)
+        centre = origin[:2] + (np.array([cx, -cy]) if inverted else np.array([cx, cy]))
+        return centre, float(origin[2] - h if inverted else origin[2] + h)
+
     @cached_property
     def poses(self) -> dict[str, Pose]:
-        """Initial pose of every object (frame origin), derived from the stacking."""
+        """Initial pose of every object (frame origin), derived from the stacking.
+
+        A stack's bottom object is centred (by its footprint) on the slot position, or on
+        its own `position`; each object above is centred on its support's usable surface
+        and rests at that surface's height: "place at the support's centroid".
+        """
         out: dict[str, Pose] = {}
         for slot_name, chain in self.stacks.items():
-            slot = self.slot(slot_name)
             bottom = self.object(chain[0])
-            xy = np.asarray(bottom.position if bottom.position is not None else slot.position)
+            centre = np.asarray(
+                bottom.position if bottom.position is not None else self.slot(slot_name).position
+            )
             z = 0.0
             for name in chain:
                 box = self.oriented_bbox(name)
-                origin_z = z - box.min[2]
+                origin = np.array([*(centre - box.center[:2]), z - box.min[2]])
                 out[name] = Pose(
-                    (float(xy[0]), float(xy[1]), float(origin_z)),
+                    (float(origin[0]), float(origin[1]), float(origin[2])),
                     ORIENTATION_QUAT[self.object(name).orientation],
                 )
-                z = origin_z + box.max[2]
+                centre, z = self.support_surface(name, origin)
         return out
 
     def world_box(self, name: str, member: str | None = None) -> Box:

@@ -1,4 +1,4 @@
-"""Collision primitives of an object type, derived from its catalogue members and part shapes.
+"""Object bodies from the catalogue: collision primitives, mass, friction, colour, start pose.
 
 The same catalogue data the symbolic layer reads decides the physical shape:
 
@@ -7,37 +7,62 @@ The same catalogue data the symbolic layer reads decides the physical shape:
 * an ``open`` top makes the body hollow: a ring of thin wall boxes on a flat floor;
 * a ``concave`` top gives a flat bottom (the ``under`` part's size) and a low flared rim;
 * a ``flat`` top smaller than the body's face becomes a plate with a raised rim around it;
+  the plate's top is the part's declared surface ``height`` (scene poses put objects
+  there), the rim rises to the body's full height;
 * a handle big enough to leave a finger-sized opening becomes a loop of three bars, a
   handle separated from the body by a gap is held by two posts, other members are solid;
 * edge members inside the body box are realised by the body itself.
 
-Everything is expressed in the object frame (origin at the bottom centre of the body).
+Primitives are in the object frame (origin at the bottom centre of the body). Each body
+weighs its catalogue mass (uniform density over its primitives).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import mujoco
 import numpy as np
+from numpy.typing import ArrayLike
 
 from utamp_gym.scene.catalogue import Member, ObjectType
 from utamp_gym.scene.geometry import Box
+from utamp_gym.scene.model import Pose, Scene
 
 WALL = 0.004  # m, wall thickness of hollow (open-top) bodies
 FLOOR = 0.008  # m, floor thickness of hollow bodies
 RIM_WALL = 0.003  # m, flared rim thickness of concave bodies
 CONCAVE_FLOOR = 0.005  # m, floor thickness of concave bodies
-RING_SEGMENTS = 12  # wall boxes of a hollow cylinder
-RIM_SEGMENTS = 16  # rim boxes of a concave cylinder
-PLATE_RIM = 0.003  # m, how far a raised rim stands above its plate (see module notes)
+RING_SEGMENTS = 8  # wall boxes of a hollow cylinder
+RIM_SEGMENTS = 12  # rim boxes of a concave cylinder
+PLATE_RIM = 0.003  # m, rim above the plate when the part declares no surface height
 CAP_FRACTION = 0.4  # a round head is at most this fraction of the body height
 BAR = 0.008  # m, bar thickness of a loop handle
 LOOP_OPENING = (0.015, 0.03)  # m, smallest (outward, vertical) opening of a loop handle
 POST = 0.01  # m, width of the posts holding a detached handle bar
 EMBED = 0.003  # m, an attached handle reaches this far into the body (no seam)
-GRASP_WIDTH = 0.08  # m, members narrower than the open gripper get torsional friction
+
+BODY_PREFIX = "obj/"  # MuJoCo name prefix of object bodies and their geoms
+#: sliding friction per material (unknown materials: "default"); torsional and rolling below
+FRICTION: Mapping[str, float] = MappingProxyType(
+    {"wood": 0.5, "glass": 0.45, "steel": 0.4, "default": 0.5}
+)
+TORSIONAL, ROLLING = 0.005, 0.0001  # m; torsional acts on handles and edges (condim 4)
+SOLREF = (0.01, 1.0)  # 5 dt at dt = 0.002: stiff, still well resolved
+SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
+#: colours (hex RGBA) per material, each used once per scene, then a generic palette
+COLOURS: Mapping[str, tuple[str, ...]] = MappingProxyType(
+    {
+        "wood": ("8c572bff", "dbb073ff", "b3804dff"),
+        "glass": ("9ed1f2cc", "b8f2cccc"),
+        "steel": ("38383fff", "9e9eadff"),
+        "default": ("d94040ff", "408cd9ff", "f2bf33ff", "804db3ff", "4db366ff", "e680b3ff"),
+    }
+)
+ACCENT = "bfbfc7ff"  # metal parts such as a shaker's head
 
 
 @dataclass(frozen=True)
@@ -69,105 +94,123 @@ class Prim:
             "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
         }[self.shape]
 
-    def aabb(self) -> Box:
-        """Axis-aligned bounds in the object frame (exact for boxes, tight for the rest)."""
-        rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, np.asarray(self.quat, dtype=float))
-        half = np.asarray(self.size)
-        if self.shape == "cylinder":
-            half = np.array([half[0], half[0], half[1]])
-        ext = np.abs(rot.reshape(3, 3)) @ half
-        c = np.asarray(self.pos)
-        return Box(tuple((c - ext).tolist()), tuple((c + ext).tolist()))
+
+def _prim(
+    name: str,
+    member: str,
+    shape: str,
+    size: ArrayLike,
+    pos: ArrayLike,
+    quat: ArrayLike = (1.0, 0.0, 0.0, 0.0),
+    accent: bool = False,
+) -> Prim:
+    def f(v: ArrayLike) -> tuple[float, ...]:
+        return tuple(float(x) for x in np.asarray(v, dtype=float))
+
+    return Prim(name, member, shape, f(size), f(pos), f(quat), accent)  # type: ignore[arg-type]
 
 
-def _box(name: str, member: str, lo: np.ndarray, hi: np.ndarray, **kw: object) -> Prim:
+def _box(name: str, member: str, lo: np.ndarray, hi: np.ndarray) -> Prim:
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    half = tuple(((hi - lo) / 2).tolist())
-    return Prim(name, member, "box", half, tuple(((hi + lo) / 2).tolist()), **kw)  # type: ignore[arg-type]
+    return _prim(name, member, "box", (hi - lo) / 2, (hi + lo) / 2)
 
 
-def _cylinder(name: str, member: str, xy: np.ndarray, radius: float, z0: float, z1: float) -> Prim:
-    return Prim(name, member, "cylinder", (radius, (z1 - z0) / 2, 0.0),
-                (float(xy[0]), float(xy[1]), (z0 + z1) / 2))
+def _cylinder(name: str, member: str, xy: np.ndarray, r: float, z0: float, z1: float) -> Prim:
+    return _prim(name, member, "cylinder", (r, (z1 - z0) / 2, 0.0), (*xy, (z0 + z1) / 2))
 
 
-def _ring(member: str, xy: np.ndarray, r0: float, r1: float, z0: float, z1: float,
-          thick: float, n: int) -> list[Prim]:
-    """Wall boxes whose outer polygon runs from radius r0 at z0 to r1 at z1 (r1 > r0 flares)."""
-    half_t = math.sin(math.pi / n)  # tangential half-width per unit radius
+def _cap(name: str, xy: np.ndarray, half: tuple[float, float, float], z: float) -> Prim:
+    """Upper half of an ellipsoid centred at height z: a rounded head."""
+    return _prim(f"{name}/head", name, "ellipsoid", half, (*xy, z), accent=True)
+
+
+def _ring(
+    member: str,
+    xy: np.ndarray,
+    bottom: tuple[float, float],
+    top: tuple[float, float],
+    thick: float,
+    n: int,
+) -> list[Prim]:
+    """Wall boxes whose outer polygon runs from (radius, z) `bottom` to `top` (wider: flared)."""
+    (r0, z0), (r1, z1) = bottom, top
     dr, dz = (r1 - r0) * math.cos(math.pi / n), z1 - z0
     length = math.hypot(dr, dz)
-    nz = thick / 2 * abs(dr) / length  # a tilted box's corners reach this far past its ends
-    z0, z1 = z0 + nz, z1 - nz
+    shift = thick * dr / length  # a flared wall's inner face rises this far above its outer
+    z0, z1 = (z0, z1 - shift) if shift > 0 else (z0 - shift, z1)
+    size = (thick / 2, math.sin(math.pi / n) * max(r0, r1), (z1 - z0) / 2 * length / dz)
     out = []
     for k in range(n):
         phi = 2 * math.pi * k / n
         e = np.array([math.cos(phi), math.sin(phi), 0.0])
         t = np.array([-math.sin(phi), math.cos(phi), 0.0])
-        u = (dr * e + dz * np.array([0.0, 0.0, 1.0])) / length
+        u = (dr * e + np.array([0.0, 0.0, dz])) / length
         normal = np.cross(t, u)  # outward, perpendicular to the wall
         r_mid = (r0 + r1) / 2 * math.cos(math.pi / n)
-        centre = np.array([xy[0], xy[1], (z0 + z1) / 2]) + r_mid * e - thick / 2 * normal
+        centre = np.array([*xy, (z0 + z1) / 2]) + r_mid * e - thick / 2 * normal
         quat = np.zeros(4)
         mujoco.mju_mat2Quat(quat, np.column_stack([normal, t, u]).ravel())
-        size = (thick / 2, half_t * max(r0, r1), (z1 - z0) / 2 * length / dz)
-        out.append(Prim(f"{member}/wall{k:02d}", member, "box", size, tuple(centre.tolist()),
-                        tuple(quat.tolist())))
+        out.append(_prim(f"{member}/wall{k:02d}", member, "box", size, centre, quat))
     return out
 
 
 def _body_prims(t: ObjectType) -> list[Prim]:
-    m = t.body
+    m, name = t.body, t.body.name
     lo, hi = np.asarray(m.box.min), np.asarray(m.box.max)
     xy, size = (lo[:2] + hi[:2]) / 2, hi - lo
     top, bottom = t.parts["on"], t.parts["under"]
-    cap = min(size[0], size[1], CAP_FRACTION * size[2] * 2) / 2
     if m.geom == "cylinder":
         r = float(min(size[0], size[1])) / 2
         if top.shape == "round":
             cap = min(r, CAP_FRACTION * size[2])
-            return [_cylinder(f"{m.name}/base", m.name, xy, r, lo[2], hi[2] - cap),
-                    Prim(f"{m.name}/head", m.name, "ellipsoid", (r, r, cap),
-                         (float(xy[0]), float(xy[1]), float(hi[2] - cap)), accent=True)]
+            return [
+                _cylinder(f"{name}/base", name, xy, r, lo[2], hi[2] - cap),
+                _cap(name, xy, (r, r, cap), hi[2] - cap),
+            ]
         if top.shape == "open":
-            floor = min(FLOOR, size[2] / 4)
-            return [_cylinder(f"{m.name}/floor", m.name, xy, r * math.cos(math.pi / RING_SEGMENTS),
-                              lo[2], lo[2] + floor),
-                    *_ring(m.name, xy, r, r, lo[2] + floor, hi[2], WALL, RING_SEGMENTS)]
+            z = lo[2] + min(FLOOR, size[2] / 4)
+            r_in = r * math.cos(math.pi / RING_SEGMENTS)
+            return [
+                _cylinder(f"{name}/floor", name, xy, r_in, lo[2], z),
+                *_ring(name, xy, (r, z), (r, hi[2]), WALL, RING_SEGMENTS),
+            ]
         if top.shape == "concave":
-            rb = bottom.size[0] / 2 if bottom.size is not None else 0.8 * r
-            floor = min(CONCAVE_FLOOR, size[2] / 4)
-            return [_cylinder(f"{m.name}/floor", m.name, xy, min(rb, r), lo[2], lo[2] + floor),
-                    *_ring(m.name, xy, min(rb, r) + RIM_WALL, r, lo[2] + floor / 2, hi[2],
-                           RIM_WALL, RIM_SEGMENTS)]
-        return [_cylinder(m.name, m.name, xy, r, lo[2], hi[2])]
+            rb = min(r, bottom.size[0] / 2 if bottom.size is not None else 0.8 * r)
+            z = lo[2] + min(CONCAVE_FLOOR, size[2] / 4)
+            return [
+                _cylinder(f"{name}/floor", name, xy, rb, lo[2], z),
+                *_ring(
+                    name, xy, (rb + RIM_WALL, (lo[2] + z) / 2), (r, hi[2]), RIM_WALL, RIM_SEGMENTS
+                ),
+            ]
+        return [_cylinder(name, name, xy, r, lo[2], hi[2])]
     if top.shape == "round":
         cap = min(size[0], size[1], 2 * CAP_FRACTION * size[2]) / 2
-        return [_box(f"{m.name}/base", m.name, lo, np.array([*hi[:2], hi[2] - cap])),
-                Prim(f"{m.name}/head", m.name, "ellipsoid", (size[0] / 2, size[1] / 2, cap),
-                     (float(xy[0]), float(xy[1]), float(hi[2] - cap)), accent=True)]
-    usable = np.asarray(top.size if top.size is not None else size[:2])
-    hollow = top.shape in ("open", "concave")
-    if hollow or np.any(usable < size[:2] - 1e-6):
-        rim = size[2] - min(FLOOR, size[2] / 4) if hollow else min(PLATE_RIM, size[2] / 2)
-        if hollow:  # walls as thick as the margin the usable size leaves, else WALL
-            usable = np.minimum(usable, size[:2] - 2 * WALL)
-        ilo, ihi = xy - usable / 2, xy + usable / 2
-        z = hi[2] - rim
-        walls = [  # front/back span the full width, left/right fit between them
-            (np.array([ihi[0], lo[1], z]), hi),
-            (lo, np.array([ilo[0], hi[1], hi[2]])),
-            (np.array([ilo[0], ihi[1], z]), np.array([ihi[0], hi[1], hi[2]])),
-            (np.array([ilo[0], lo[1], z]), np.array([ihi[0], ilo[1], hi[2]])),
+        return [
+            _box(f"{name}/base", name, lo, np.array([*hi[:2], hi[2] - cap])),
+            _cap(name, xy, (size[0] / 2, size[1] / 2, cap), hi[2] - cap),
         ]
-        walls[1][0][2] = z
-        out = [_box(f"{m.name}/plate", m.name, lo, np.array([*hi[:2], z]))]
-        for i, (a, b) in enumerate(walls):
-            if np.all(b - a > 1e-6):
-                out.append(_box(f"{m.name}/rim{i}", m.name, a, b))
-        return out
-    return [_box(m.name, m.name, lo, hi)]
+    usable = np.asarray(top.size if top.size is not None else size[:2], dtype=float)
+    hollow = top.shape in ("open", "concave")
+    if not hollow and np.all(usable >= size[:2] - 1e-6):
+        return [_box(name, name, lo, hi)]
+    if hollow:  # an open box: walls (at least WALL thick) on a floor
+        usable = np.minimum(usable, size[:2] - 2 * WALL)
+        z = lo[2] + min(FLOOR, size[2] / 4)
+    else:  # a plate at the usable surface's height, a raised rim around it
+        z = top.height if top.height is not None else hi[2] - min(PLATE_RIM, size[2] / 2)
+    ilo, ihi = xy - usable / 2, xy + usable / 2
+    walls = (  # front/back span the full width, left/right fit between them
+        ((ihi[0], lo[1]), (hi[0], hi[1])),
+        ((lo[0], lo[1]), (ilo[0], hi[1])),
+        ((ilo[0], ihi[1]), (ihi[0], hi[1])),
+        ((ilo[0], lo[1]), (ihi[0], ilo[1])),
+    )
+    out = [_box(f"{name}/plate", name, lo, np.array([hi[0], hi[1], z]))]
+    for i, (a, b) in enumerate(walls):
+        if b[0] - a[0] > 1e-6 and b[1] - a[1] > 1e-6:
+            out.append(_box(f"{name}/rim{i}", name, np.array([*a, z]), np.array([*b, hi[2]])))
+    return out
 
 
 def _touch_axis(a: Box, b: Box, tol: float = 1e-6) -> tuple[int, int] | None:
@@ -208,14 +251,15 @@ def _member_prims(t: ObjectType, m: Member) -> list[Prim]:
     inner = 0 if sign > 0 else 1  # the face that touches the body: reach into it
     (lo if inner == 0 else hi)[ax] -= sign * EMBED
     out_len = hi[ax] - lo[ax] - EMBED
-    if m.kind == "handle" and out_len - BAR >= LOOP_OPENING[0] and hi[2] - lo[2] - 2 * BAR >= (
-        LOOP_OPENING[1]
-    ):
+    opening = (out_len - BAR, hi[2] - lo[2] - 2 * BAR)
+    if m.kind == "handle" and opening[0] >= LOOP_OPENING[0] and opening[1] >= LOOP_OPENING[1]:
         outer = hi[ax] - BAR if sign > 0 else lo[ax]
         bars = []
-        for name, z0, z1, a0, a1 in (("top", hi[2] - BAR, hi[2], lo[ax], hi[ax]),
-                                     ("bottom", lo[2], lo[2] + BAR, lo[ax], hi[ax]),
-                                     ("grip", lo[2], hi[2], outer, outer + BAR)):
+        for name, z0, z1, a0, a1 in (
+            ("top", hi[2] - BAR, hi[2], lo[ax], hi[ax]),
+            ("bottom", lo[2], lo[2] + BAR, lo[ax], hi[ax]),
+            ("grip", lo[2], hi[2], outer, outer + BAR),
+        ):
             blo, bhi = lo.copy(), hi.copy()
             blo[2], bhi[2], blo[ax], bhi[ax] = z0, z1, a0, a1
             bars.append(_box(f"{m.name}/{name}", m.name, blo, bhi))
@@ -232,10 +276,92 @@ def object_prims(t: ObjectType) -> list[Prim]:
     return out
 
 
-def member_is_graspable(t: ObjectType, member: str) -> bool:
-    """Members a closed gripper can span (handles, edges, slim bodies) need torsional friction."""
-    m = t.members[member]
-    return m.kind != "body" or float(min(m.box.size[:2])) <= GRASP_WIDTH
+def _rgba(hex_colour: str) -> tuple[float, ...]:
+    return tuple(int(hex_colour[i : i + 2], 16) / 255 for i in range(0, 8, 2))
 
 
-__all__ = ["Prim", "member_is_graspable", "object_prims"]
+def object_colours(scene: Scene) -> dict[str, tuple[float, ...]]:
+    """One colour per object: `rgba` from its type if given, else by material, all distinct."""
+    used: set[tuple[float, ...]] = set()
+    out = {}
+    for o in scene.objects:
+        t = scene.type_of(o.name)
+        rgba = t.extra.get("rgba")
+        if rgba is None:
+            options = [_rgba(c) for c in (*COLOURS.get(t.material, ()), *COLOURS["default"])]
+            rgba = next((c for c in options if c not in used), options[len(out) % len(options)])
+        out[o.name] = tuple(float(v) for v in rgba)
+        used.add(out[o.name])
+    return out
+
+
+def add_object_body(
+    spec: mujoco.MjSpec, scene: Scene, name: str, pose: Pose, rgba: tuple[float, ...]
+) -> tuple[str, ...]:
+    """Add object `name` as one free body ``obj/<name>`` at `pose`; return its geom names."""
+    t = scene.type_of(name)
+    prims = object_prims(t)
+    volume = sum(p.volume for p in prims)
+    friction = [FRICTION.get(t.material, FRICTION["default"]), TORSIONAL, ROLLING]
+    body = spec.worldbody.add_body(
+        name=BODY_PREFIX + name, pos=list(pose.position), quat=list(pose.quat)
+    )
+    body.add_freejoint(name=f"{BODY_PREFIX}{name}/free")
+    names = []
+    for p in prims:
+        geom = body.add_geom(
+            name=f"{BODY_PREFIX}{name}/{p.name}",
+            type=p.geom_type,
+            size=list(p.size),
+            pos=list(p.pos),
+            quat=list(p.quat),
+            rgba=list(_rgba(ACCENT) if p.accent else rgba),
+            friction=friction,
+            condim=3 if t.members[p.member].kind == "body" else 4,  # see TORSIONAL
+            solref=list(SOLREF),
+            solimp=list(SOLIMP),
+        )
+        geom.mass = t.mass * p.volume / volume  # uniform density; the body weighs `t.mass`
+        names.append(geom.name)
+    return tuple(names)
+
+
+def _yaw_quat(yaw: float) -> np.ndarray:
+    return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+
+
+def initial_poses(
+    scene: Scene,
+    rng: np.random.Generator | None = None,
+    pos_noise: float = 0.003,
+    yaw_noise_deg: float = 2.0,
+) -> dict[str, Pose]:
+    """Scene poses plus seeded noise: xy uniform in ±pos_noise, yaw uniform in ±yaw_noise_deg."""
+    out = {}
+    for o in scene.objects:
+        pose = scene.poses[o.name]
+        pos, quat = np.asarray(pose.position, dtype=float), np.asarray(pose.quat, dtype=float)
+        if rng is not None:
+            dx, dy = rng.uniform(-pos_noise, pos_noise, size=2)
+            yaw = math.radians(float(rng.uniform(-yaw_noise_deg, yaw_noise_deg)))
+            pos = pos + np.array([dx, dy, 0.0])
+            q = np.zeros(4)
+            mujoco.mju_mulQuat(q, _yaw_quat(yaw), quat)
+            quat = q
+        out[o.name] = Pose(tuple(pos.tolist()), tuple(quat.tolist()))  # type: ignore[arg-type]
+    return out
+
+
+__all__ = [
+    "BODY_PREFIX",
+    "FRICTION",
+    "ROLLING",
+    "SOLIMP",
+    "SOLREF",
+    "TORSIONAL",
+    "Prim",
+    "add_object_body",
+    "initial_poses",
+    "object_colours",
+    "object_prims",
+]

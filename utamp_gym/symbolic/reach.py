@@ -15,6 +15,7 @@ from collections import defaultdict
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
+from utamp_gym.errors import PddlError
 from utamp_gym.symbolic.pddl import Action, Atom, Domain, Literal, Problem
 
 Tuple = tuple[str, ...]
@@ -195,10 +196,27 @@ def _join(
     yield from rec(0)
 
 
+def check_problem_atoms(domain: Domain, problem: Problem) -> None:
+    """Reject init/goal atoms with an unknown predicate or object, or a wrong arity."""
+    known = {*domain.constants, *problem.objects}
+    atoms = [("init", a) for a in problem.init] + [("goal", lit.atom) for lit in problem.goal]
+    for where, a in atoms:
+        if a.predicate == "=":
+            continue
+        if a.predicate not in domain.predicates:
+            raise PddlError(f"{problem.source}: {where} uses unknown predicate '{a.predicate}'")
+        if len(a.args) != len(domain.predicates[a.predicate]):
+            raise PddlError(f"{problem.source}: {where} atom {a} has the wrong number of arguments")
+        unknown = [x for x in a.args if x not in known]
+        if unknown:
+            raise PddlError(f"{problem.source}: {where} atom {a} uses unknown object {unknown[0]!r}")
+
+
 def reachable_ops(
     domain: Domain, problem: Problem
 ) -> tuple[list[GroundOp], set[Atom], frozenset[str]]:
     """Ground actions reachable under delete relaxation, all reachable atoms, static predicates."""
+    check_problem_atoms(domain, problem)
     fluent = domain.fluent_predicates()
     objects_of: dict[str, list[str]] = defaultdict(list)
     for name, typ in (*domain.constants.items(), *problem.objects.items()):
