@@ -1,268 +1,272 @@
-"""Full grounding of a parsed PDDL task into a compact, bit-packed STRIPS task.
+"""Full grounding of a parsed PDDL task into a compact STRIPS task for fast simulation.
 
-Why: the Gymnasium env steps the symbolic task tens of thousands of times per second and
-needs the applicable-action mask at every step. `GroundTask` keeps one uint64 bit row per
-ground action (preconditions, negative preconditions, add and delete effects), so the mask
-over all actions is a few vectorised numpy operations on the packed state.
+Why: the Gymnasium env steps the symbolic task tens of thousands of times per second and needs
+the applicable-action mask at every step. Static predicates (in no effect) are evaluated here
+and dropped. Parameters are bound by a backtracking join ordered by the static preconditions,
+using per-(predicate, position) indices of the static facts, so selective static predicates
+keep even ~11-parameter schemas cheap; parameters no static literal constrains are expanded
+as one numpy cartesian product, and atoms are instantiated vectorised. Atoms and actions are
+sorted by their PDDL text, so ids are stable for a given domain, object set and static facts.
 
-Static predicates (those in no effect) are evaluated here and dropped. Action parameters are
-bound by a backtracking join whose variable order follows the static preconditions, using
-per-(predicate, position) indices of the static facts, so selective static predicates keep
-even ~11-parameter schemas cheap. Atoms and actions are sorted by their PDDL text, so ids are
-stable for a given domain, object set and static facts.
+Preconditions and effects are stored as CSR lists of atom ids (action -> atoms), plus the
+transpose (atom -> actions) for incremental mask updates in `Cursor`. Dense bit-packed uint64
+matrices are available from `GroundTask.bit_matrices` but are not used internally: their size
+(and the cost of a mask from them) grows with actions x atoms, which was measured to be much
+slower than the sparse form for all but the smallest tasks.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import NamedTuple
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
-from utamp_gym.errors import UnknownNameError
-from utamp_gym.symbolic.pddl import Action, Domain, Literal, Problem, check_problem
+from utamp_gym.errors import PddlError, UnknownNameError
+from utamp_gym.symbolic.pddl import Action, Atom, Domain, Literal, Problem, check_problem
 
-_EMPTY: frozenset[str] = frozenset()
-
-
-class _GroundAction(NamedTuple):
-    label: str
-    pre: tuple[str, ...]
-    neg: tuple[str, ...]
-    add: tuple[str, ...]
-    dele: tuple[str, ...]
+_CSR = tuple[np.ndarray, np.ndarray]  # (row pointers, flat column ids)
+_KINDS = ("pre", "neg", "add", "dele")  # dele = delete effects minus add effects
 
 
-def _text(pred: str, args: Sequence[str]) -> str:
-    return "(" + " ".join((pred, *args)) + ")"
+def _ro(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
 
 
-def _csr(rows: list[tuple[str, ...]], ids: Mapping[str, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Row pointers and flat atom ids of per-action atom lists."""
-    ptr = np.zeros(len(rows) + 1, np.int64)
-    ptr[1:] = np.cumsum([len(r) for r in rows])
-    flat = np.fromiter((ids[a] for r in rows for a in r), np.int64, int(ptr[-1]))
-    return ptr, flat
-
-
-def _bits(ptr: np.ndarray, flat: np.ndarray, n_words: int) -> np.ndarray:
-    """(rows, n_words) uint64 matrix with bit `id % 64` of word `id // 64` set per atom id."""
-    out = np.zeros((len(ptr) - 1, n_words), np.uint64)
-    rows = np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))
-    np.bitwise_or.at(out, (rows, flat >> 6), np.left_shift(np.uint64(1), (flat & 63).astype(
-        np.uint64)))
-    out.setflags(write=False)
-    return out
+def _csr(rows: np.ndarray, cols: np.ndarray, n_rows: int, n_cols: int) -> _CSR:
+    """CSR of the (row, col) pairs, duplicates removed, columns sorted within a row."""
+    key = np.unique(rows * n_cols + cols)
+    ptr = np.zeros(n_rows + 1, np.int64)
+    ptr[1:] = np.cumsum(np.bincount(key // n_cols, minlength=n_rows))
+    return _ro(ptr), _ro(key % n_cols)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
 class GroundTask:
-    """A grounded STRIPS task; states are bool vectors over `atoms` (or packed uint64 words).
+    """A grounded STRIPS task; a state is a bool vector over `atoms`.
 
-    `pre`, `neg`, `add`, `dele` are (n_actions, n_words) uint64 bit matrices; bit ``j % 64``
-    of word ``j // 64`` stands for atom ``j``. `goal_pos`/`goal_neg` are packed goal masks;
+    `csr[kind]` for kind in pre, neg, add, dele is (ptr, ids): the atom ids of action ``i`` are
+    ``ids[ptr[i]:ptr[i+1]]``; ``dele`` excludes atoms the action also adds (add wins).
     `goal_possible` is False when a static goal literal is false. Arrays are read-only.
     """
 
     atoms: tuple[str, ...]
     actions: tuple[str, ...]
+    labels: tuple[str, ...]  # atoms with predicates spelled as in the domain
     init: np.ndarray
-    pre: np.ndarray
-    neg: np.ndarray
-    add: np.ndarray
-    dele: np.ndarray
+    csr: Mapping[str, _CSR]
     goal_pos: np.ndarray
     goal_neg: np.ndarray
     goal_possible: bool
-    labels: tuple[str, ...]  # atoms with predicates spelled as in the domain
-    csr: Mapping[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    _index: Mapping[str, int] = field(default_factory=dict)
+    index: Mapping[str, int]
+    literals: _CSR  # per action, ids into [state, ~state, True] of its precondition literals
 
     def __repr__(self) -> str:
         return f"GroundTask(n_atoms={len(self.atoms)}, n_actions={len(self.actions)})"
 
-    @property
-    def n_words(self) -> int:
-        return self.pre.shape[1]
-
-    def _ids(self, kind: str, i: int) -> np.ndarray:
+    def ids(self, kind: str, i: int) -> np.ndarray:
+        """Atom ids of `kind` (pre, neg, add, dele) of action `i`."""
         ptr, flat = self.csr[kind]
         return flat[ptr[i]:ptr[i + 1]]
 
-    def pack(self, state: np.ndarray) -> np.ndarray:
-        """Bool state vector -> packed uint64 words."""
-        buf = np.zeros(self.n_words * 8, np.uint8)
-        packed = np.packbits(state, bitorder="little")
-        buf[: packed.size] = packed
-        return buf.view("<u8").astype(np.uint64, copy=False)
-
-    def unpack(self, words: np.ndarray) -> np.ndarray:
-        """Packed uint64 words -> bool state vector."""
-        raw = np.asarray(words, "<u8").view(np.uint8)
-        return np.unpackbits(raw, count=len(self.atoms), bitorder="little").astype(bool)
-
-    def applicable_packed(self, words: np.ndarray) -> np.ndarray:
-        """Bool mask over all actions for a packed state."""
-        viol = (self.pre & ~words) | (self.neg & words)
-        return ~viol.any(axis=1)
-
     def applicable(self, state: np.ndarray) -> np.ndarray:
         """Bool mask over all actions: every precondition true, every negated one false."""
-        return self.applicable_packed(self.pack(state))
+        n = len(self.atoms)
+        ext = np.ones(2 * n + 1, bool)
+        ext[:n] = state
+        np.logical_not(ext[:n], out=ext[n:2 * n])
+        starts, flat = self.literals
+        return np.logical_and.reduceat(ext[flat], starts) if len(starts) else ext[:0]
 
     def is_applicable(self, state: np.ndarray, i: int) -> bool:
-        """Whether action `i` is applicable in bool `state`."""
-        return bool(state[self._ids("pre", i)].all() and not state[self._ids("neg", i)].any())
+        return bool(state[self.ids("pre", i)].all() and not state[self.ids("neg", i)].any())
 
     def apply(self, state: np.ndarray, i: int) -> np.ndarray:
-        """Successor of bool `state` under action `i` (delete, then add; input untouched).
-
-        Does not check applicability; use `applicable`/`is_applicable` first.
-        """
+        """Successor of `state` under action `i` (input untouched; applicability not checked)."""
         out = np.array(state, dtype=bool)
-        out[self._ids("dele", i)] = False
-        out[self._ids("add", i)] = True
+        out[self.ids("dele", i)] = False
+        out[self.ids("add", i)] = True
         return out
 
-    def apply_packed(self, words: np.ndarray, i: int) -> np.ndarray:
-        """Successor of a packed state under action `i` (no applicability check)."""
-        return (words & ~self.dele[i]) | self.add[i]
-
     def is_goal(self, state: np.ndarray) -> bool:
-        """Whether bool `state` satisfies every goal literal."""
-        return self.is_goal_packed(self.pack(state))
-
-    def is_goal_packed(self, words: np.ndarray) -> bool:
-        return self.goal_possible and not (
-            (self.goal_pos & ~words).any() or (self.goal_neg & words).any())
+        return self.goal_possible and bool(
+            state[self.goal_pos].all() and not state[self.goal_neg].any())
 
     def index_of(self, action: str | Sequence[str]) -> int:
         """Id of a ground action given as ``"(pick a s1)"`` or ``("pick", "a", "s1")``."""
         parts = action.strip().strip("()").split() if isinstance(action, str) else action
         key = "(" + " ".join(str(p).lower() for p in parts) + ")"
-        try:
-            return self._index[key]
-        except KeyError:
-            raise UnknownNameError("ground action", key, self.actions) from None
+        if key not in self.index:
+            raise UnknownNameError("ground action", key, self.actions)
+        return self.index[key]
 
     def failed_preconditions(self, state: np.ndarray, i: int) -> list[str]:
-        """Precondition literals of action `i` that are false in bool `state`, as PDDL."""
-        bad = [self.labels[j] for j in self._ids("pre", i) if not state[j]]
-        return bad + [f"(not {self.labels[j]})" for j in self._ids("neg", i) if state[j]]
+        """Precondition literals of action `i` that are false in `state`, as PDDL text."""
+        bad = [self.labels[j] for j in self.ids("pre", i) if not state[j]]
+        return bad + [f"(not {self.labels[j]})" for j in self.ids("neg", i) if state[j]]
 
     def true_atoms(self, state: np.ndarray) -> list[str]:
-        """The fluent atoms true in bool `state`, in id order."""
         return [self.atoms[j] for j in np.flatnonzero(state)]
 
+    def pack(self, state: np.ndarray) -> np.ndarray:
+        """State -> uint64 words (bit ``j % 64`` of word ``j // 64`` is atom ``j``)."""
+        buf = np.zeros(-(-len(self.atoms) // 64) * 8, np.uint8)
+        packed = np.packbits(state, bitorder="little")
+        buf[: packed.size] = packed
+        return buf.view("<u8").astype(np.uint64)
 
-def ground(domain: Domain, problem: Problem, *, relevant_only: bool = False) -> GroundTask:
-    """Ground `problem` over `domain` into a `GroundTask`.
+    def unpack(self, words: np.ndarray) -> np.ndarray:
+        raw = np.asarray(words, "<u8").view(np.uint8)
+        return np.unpackbits(raw, count=len(self.atoms), bitorder="little").astype(bool)
 
-    By default every ground action whose static preconditions (including types, ``=`` and
-    ``not =``) hold is kept, so the action set depends only on the objects and static facts,
-    not on the fluent initial state. With ``relevant_only=True`` only actions reachable from
-    the initial state under delete relaxation (negative preconditions ignored) are kept:
-    smaller, but the action set, and hence action ids, then change with the initial state.
+    def bit_matrices(self) -> dict[str, np.ndarray]:
+        """Dense (n_actions, n_words) uint64 matrix per kind, rows laid out as `pack`.
+
+        Built on each call (8 x n_actions x n_atoms / 64 bytes each); not used internally
+        because a mask from them costs O(actions x atoms), measured far slower than `applicable`.
+        """
+        out = {}
+        for kind, (ptr, flat) in self.csr.items():
+            rows = np.zeros((len(self.actions), len(self.atoms)), bool)
+            rows[np.repeat(np.arange(len(self.actions)), np.diff(ptr)), flat] = True
+            out[kind] = np.array([self.pack(r) for r in rows], np.uint64).reshape(len(rows), -1)
+        return out
+
+    def cursor(self, state: np.ndarray | None = None) -> Cursor:
+        return Cursor(self, state)
+
+
+class Cursor:
+    """One rollout: the current state and its applicable mask, for fast repeated stepping.
+
+    On large tasks (more than `INCREMENTAL_ABOVE` precondition entries) a step updates only
+    the counts of actions whose preconditions mention a changed atom. Atoms used by very many
+    actions ("hubs", e.g. hand-empty) are instead kept as per-action bit masks compared with
+    one word, so toggling them costs a few elementwise passes rather than a scatter over every
+    pick. Small tasks recompute the mask with `GroundTask.applicable`, which is cheaper there.
+    `state` and `mask` are read-only views overwritten by the next `step`/`reset`.
     """
-    check_problem(domain, problem)
-    objects = {**domain.constants, **problem.objects}
-    by_type = {t: sorted(o for o, ot in objects.items() if domain.is_subtype(ot, t))
-               for t in domain.types}
-    fluent = domain.fluent_predicates()
-    static: dict[str, set[tuple[str, ...]]] = {p: set() for p in domain.predicates
-                                               if p not in fluent}
-    index: dict[tuple[str, int, tuple[str, ...]], set[str]] = {}
-    for atom in problem.init:
-        if atom.predicate in static:
-            static[atom.predicate].add(atom.args)
-            for k, arg in enumerate(atom.args):
-                rest = atom.args[:k] + atom.args[k + 1:]
-                index.setdefault((atom.predicate, k, rest), set()).add(arg)
-    grounded = [g for name in sorted(domain.actions)
-                for g in _ground_action(domain.actions[name], by_type, static, index)]
-    init = {str(a) for a in problem.init if a.predicate in fluent}
-    if relevant_only:
-        grounded = _relaxed_reachable(grounded, init)
-    grounded.sort(key=lambda g: g.label)
-    goal = [lit for lit in problem.goal if lit.atom.predicate in fluent]
-    possible = all((lit.atom.args in static[lit.atom.predicate]) == lit.positive
-                   for lit in problem.goal if lit.atom.predicate not in fluent)
-    atoms = sorted(init.union({str(lit.atom) for lit in goal},
-                              *(g.pre + g.neg + g.add + g.dele for g in grounded)))
-    ids = {a: j for j, a in enumerate(atoms)}
-    n_words = max(1, -(-len(atoms) // 64))
-    csr = {kind: _csr([getattr(g, kind) for g in grounded], ids)
-           for kind in ("pre", "neg", "add", "dele")}
-    goal_csr = {sign: _csr([tuple(str(lit.atom) for lit in goal if lit.positive == sign)], ids)
-                for sign in (True, False)}
-    init_vec = np.zeros(len(atoms), bool)
-    init_vec[[ids[a] for a in init]] = True
-    init_vec.setflags(write=False)
-    labels = tuple("(" + " ".join((domain.spelling.get(a[1:-1].split()[0], a[1:-1].split()[0]),
-                                   *a[1:-1].split()[1:])) + ")" for a in atoms)
-    return GroundTask(
-        atoms=tuple(atoms), actions=tuple(g.label for g in grounded), init=init_vec,
-        pre=_bits(*csr["pre"], n_words), neg=_bits(*csr["neg"], n_words),
-        add=_bits(*csr["add"], n_words), dele=_bits(*csr["dele"], n_words),
-        goal_pos=_bits(*goal_csr[True], n_words)[0], goal_neg=_bits(*goal_csr[False], n_words)[0],
-        goal_possible=possible, labels=labels, csr=csr,
-        _index={g.label: i for i, g in enumerate(grounded)})
+
+    INCREMENTAL_ABOVE = 8000  # precondition entries
+    HUB_MIN_USERS = 64  # an atom is a hub if more than max(this, n_actions / 16) actions use it
+    HUB_DIV = 16
+
+    def __init__(self, task: GroundTask, state: np.ndarray | None = None):
+        self.task = task
+        n_act, n = len(task.actions), len(task.atoms)
+        self._state, self._mask = np.zeros(n, bool), np.zeros(n_act, bool)
+        self.state, self.mask = self._state.view(), self._mask.view()
+        self.state.setflags(write=False)
+        self.mask.setflags(write=False)
+        (pp, pf), (qp, qf) = task.csr["pre"], task.csr["neg"]
+        self.incremental = len(pf) + len(qf) > self.INCREMENTAL_ABOVE
+        if self.incremental:
+            rows = np.arange(n_act)
+            atoms = np.concatenate([pf, qf])
+            acts = np.concatenate([np.repeat(rows, np.diff(pp)), np.repeat(rows, np.diff(qp))])
+            neg = np.arange(len(atoms)) >= len(pf)
+            count = np.bincount(atoms, minlength=n)
+            hubs = np.argsort(-count, kind="stable")[:64]
+            self._hubs = hubs[count[hubs] > max(self.HUB_MIN_USERS, n_act // self.HUB_DIV)]
+            self._bit = np.zeros(n, np.uint64)
+            self._bit[self._hubs] = np.left_shift(np.uint64(1), np.arange(
+                len(self._hubs), dtype=np.uint64))
+            hub = self._bit[atoms] != 0
+            self._need = np.zeros((2, n_act), np.uint64)  # hub bits required true / false
+            np.bitwise_or.at(self._need, (neg[hub].astype(int), acts[hub]), self._bit[atoms[hub]])
+            o = np.lexsort((acts[~hub], atoms[~hub]))
+            self._atoms, self._users = atoms[~hub][o], acts[~hub][o]
+            self._delta = np.where(neg[~hub], 1, -1)[o]  # count change when the atom turns true
+            self._ptr = np.zeros(n + 1, np.int64)
+            self._ptr[1:] = np.cumsum(np.bincount(self._atoms, minlength=n))
+        self.reset(state)
+
+    def reset(self, state: np.ndarray | None = None) -> None:
+        self._state[:] = self.task.init if state is None else state
+        if not self.incremental:
+            self._mask[:] = self.task.applicable(self._state)
+            return
+        violated = self._state[self._atoms] == (self._delta > 0)
+        self._unsat = np.bincount(self._users[violated], minlength=len(self._mask))
+        self._ready = self._unsat == 0
+        self._gate()
+
+    def _gate(self) -> None:
+        """mask = ready and hub literals hold; only the (few) ready actions are examined."""
+        word = np.bitwise_or.reduce(self._bit[self._hubs][self._state[self._hubs]])
+        ready = np.flatnonzero(self._ready)
+        self._mask[:] = False
+        self._mask[ready] = ((self._need[0, ready] & ~word) | (self._need[1, ready] & word)) == 0
+
+    def step(self, i: int) -> None:
+        """Apply action `i`; `PddlError` naming the false preconditions if not applicable."""
+        t, s = self.task, self._state
+        if not self._mask[i]:
+            raise PddlError(f"action {t.actions[i]} is not applicable: "
+                            f"{', '.join(t.failed_preconditions(s, i))} false")
+        d, a = t.ids("dele", i), t.ids("add", i)
+        off, on = d[s[d]], a[~s[a]]
+        s[off] = False
+        s[on] = True
+        if not self.incremental:
+            self._mask[:] = t.applicable(s)
+            return
+        changed = np.concatenate((on, off))
+        lo = self._ptr[changed]
+        n = self._ptr[changed + 1] - lo
+        pos = np.repeat(lo - np.cumsum(n) + n, n) + np.arange(int(n.sum()))
+        u = self._users[pos]
+        np.add.at(self._unsat, u, self._delta[pos] * np.repeat(
+            np.repeat([1, -1], (on.size, off.size)), n))
+        self._ready[u] = self._unsat[u] == 0
+        self._gate()
+
+    def is_goal(self) -> bool:
+        return self.task.is_goal(self._state)
 
 
-def _ground_action(action: Action, by_type: Mapping[str, list[str]],
-                   static: Mapping[str, set[tuple[str, ...]]],
-                   index: Mapping[tuple[str, int, tuple[str, ...]], set[str]],
-                   ) -> Iterator[_GroundAction]:
-    """All ground instances of `action` whose static preconditions hold."""
-    types = dict(action.parameters)
-    lits = [lit for lit in action.precondition
-            if lit.atom.predicate == "=" or lit.atom.predicate in static]
-    fluent = [lit for lit in action.precondition if lit not in lits]
+class _Statics:
+    """Static facts with per-(predicate, position, other arguments) indices, and object types."""
 
-    def variables(lit: Literal) -> set[str]:
-        return {a for a in lit.atom.args if a.startswith("?")}
+    def __init__(self, domain: Domain, problem: Problem, fluent: frozenset[str]):
+        objects = {**domain.constants, **problem.objects}
+        self.names = sorted(objects)
+        self.oid = {o: k for k, o in enumerate(self.names)}
+        self.by_type = {t: [o for o in self.names if domain.is_subtype(objects[o], t)]
+                        for t in domain.types}
+        self.type_sets = {t: set(v) for t, v in self.by_type.items()}
+        self.facts: dict[str, set[tuple[str, ...]]] = {
+            p: set() for p in domain.predicates if p not in fluent}
+        self.index: dict[tuple[str, int, tuple[str, ...]], set[str]] = {}
+        for atom in problem.init:
+            if atom.predicate in self.facts:
+                self.facts[atom.predicate].add(atom.args)
+                for k, arg in enumerate(atom.args):
+                    rest = atom.args[:k] + atom.args[k + 1:]
+                    self.index.setdefault((atom.predicate, k, rest), set()).add(arg)
 
-    # Variable order: prefer a variable pinned by `=` or looked up in a static index given the
-    # variables bound so far; then one in many positive static literals; then a small type.
-    order: list[str] = []
-    pending = [lit for lit in lits if variables(lit)]
-    if not all(_static_holds(lit, {}, static) for lit in lits if not variables(lit)):
-        return
-    while len(order) < len(types):
-        bound = set(order)
+    def holds(self, lit: Literal, binding: Mapping[str, str]) -> bool:
+        args = tuple(binding.get(a, a) for a in lit.atom.args)
+        true = args[0] == args[1] if lit.atom.predicate == "=" else (
+            args in self.facts[lit.atom.predicate])
+        return true == lit.positive
 
-        def score(v: str, bound: set[str] = bound) -> tuple[int, int, int]:
-            pos = [lit for lit in pending if lit.positive and v in variables(lit)]
-            pinned = max((2 if lit.atom.predicate == "=" else 1 for lit in pos
-                          if variables(lit) - {v} <= bound), default=0)
-            return -pinned, -len(pos), len(by_type[types[v]])
-
-        order.append(min((v for v in types if v not in bound), key=score))
-    # At each depth, the literals whose last unbound variable is bound there.
-    checks = [[lit for lit in pending if v in variables(lit)
-               and variables(lit) <= set(order[: d + 1])] for d, v in enumerate(order)]
-    type_sets = {t: set(objs) for t, objs in by_type.items()}
-    binding: dict[str, str] = {}
-
-    def candidates(v: str, depth: int) -> list[str]:
-        pins: list[set[str] | frozenset[str]] = []
+    def candidates(self, v: str, typ: str, lits: list[Literal], binding: dict[str, str]
+                   ) -> list[str]:
+        """Objects for `v` satisfying `lits`, whose other variables are all in `binding`."""
+        pins: list[set[str]] = []
         excluded: set[str] = set()
-        slow: list[Literal] = []
-        for lit in checks[depth]:
+        slow = []
+        for lit in lits:
             pred, args = lit.atom.predicate, lit.atom.args
             where = [k for k, a in enumerate(args) if a == v]
-            if pred == "=":
-                others = [binding.get(a, a) for a in args if a != v]
-                if not others:
-                    if not lit.positive:
-                        return []
-                    continue
-                hit: set[str] | frozenset[str] = {others[0]}
-            elif len(where) == 1:
+            if pred == "=" and len(where) == 1:
+                hit = {binding.get(args[1 - where[0]], args[1 - where[0]])}
+            elif pred != "=" and len(where) == 1:
                 k = where[0]
                 rest = tuple(binding.get(a, a) for a in args[:k] + args[k + 1:])
-                hit = index.get((pred, k, rest), _EMPTY)
+                hit = self.index.get((pred, k, rest), set())
             else:
                 slow.append(lit)
                 continue
@@ -270,72 +274,189 @@ def _ground_action(action: Action, by_type: Mapping[str, list[str]],
                 pins.append(hit)
             else:
                 excluded |= hit
-        typed = type_sets[types[v]]
         if pins:
             pins.sort(key=len)
+            typed = self.type_sets[typ]
             out = [c for c in pins[0] if c in typed and c not in excluded
                    and all(c in s for s in pins[1:])]
         else:
-            out = [c for c in by_type[types[v]] if c not in excluded]
-        for lit in slow:
-            out = [c for c in out if _static_holds(lit, {**binding, v: c}, static)]
-        return out
+            out = [c for c in self.by_type[typ] if c not in excluded]
+        return [c for c in out if all(self.holds(lit, {**binding, v: c}) for lit in slow)]
 
-    def ground_atoms(sign: bool | None, atoms: Sequence[Literal]) -> tuple[str, ...]:
-        return tuple(_text(lit.atom.predicate, [binding.get(a, a) for a in lit.atom.args])
-                     for lit in atoms if sign is None or lit.positive == sign)
+    def bind(self, action: Action) -> np.ndarray:
+        """(n, arity) object ids of every binding of `action` whose static literals hold."""
+        types = dict(action.parameters)
+        params = list(types)
+        lits = [lit for lit in action.precondition
+                if lit.atom.predicate == "=" or lit.atom.predicate in self.facts]
 
-    add = [Literal(a) for a in action.add_effects]
-    dele = [Literal(a) for a in action.del_effects]
-    params = [v for v, _ in action.parameters]
+        def var(lit: Literal) -> set[str]:
+            return {a for a in lit.atom.args if a.startswith("?")}
 
-    def search(depth: int) -> Iterator[_GroundAction]:
-        if depth == len(order):
-            yield _GroundAction(
-                _text(action.name, [binding[v] for v in params]),
-                ground_atoms(True, fluent), ground_atoms(False, fluent),
-                ground_atoms(None, add), ground_atoms(None, dele))
-            return
-        v = order[depth]
-        for c in candidates(v, depth):
-            binding[v] = c
-            yield from search(depth + 1)
-        binding.pop(v, None)
+        if not all(self.holds(lit, {}) for lit in lits if not var(lit)):
+            return np.zeros((0, len(params)), np.int64)
+        pending = [lit for lit in lits if var(lit)]
+        order: list[str] = []
+        while len(order) < len(params):  # greedy join order, most constrained first
+            bound = set(order)
 
-    yield from search(0)
+            def score(v: str, bound: set[str] = bound) -> tuple[int, int, bool, int]:
+                mine = [lit for lit in pending if v in var(lit)]
+                pinned = max((2 if lit.atom.predicate == "=" else 1 for lit in mine
+                              if lit.positive and var(lit) - {v} <= bound), default=0)
+                return -pinned, -sum(lit.positive for lit in mine), not mine, len(
+                    self.by_type[types[v]])
+
+            order.append(min((v for v in params if v not in bound), key=score))
+        checks = [[lit for lit in pending if v in var(lit) and var(lit) <= set(order[: d + 1])]
+                  for d, v in enumerate(order)]
+        free = len(order)  # order[free:] is unconstrained: expanded as a cartesian product
+        while free and not checks[free - 1]:
+            free -= 1
+        prefixes: list[tuple[int, ...]] = []
+        binding: dict[str, str] = {}
+
+        def search(d: int) -> None:
+            if d == free:
+                prefixes.append(tuple(self.oid[binding[v]] for v in order[:free]))
+                return
+            for c in self.candidates(order[d], types[order[d]], checks[d], binding):
+                binding[order[d]] = c
+                search(d + 1)
+            binding.pop(order[d], None)
+
+        search(0)
+        head = np.array(prefixes, np.int64).reshape(len(prefixes), free)
+        tails = [np.array([self.oid[o] for o in self.by_type[types[v]]], np.int64)
+                 for v in order[free:]]
+        tail = (np.stack(np.meshgrid(*tails, indexing="ij"), -1).reshape(-1, len(tails))
+                if tails else np.zeros((1, 0), np.int64))
+        rows = np.concatenate([np.repeat(head, len(tail), 0), np.tile(tail, (len(head), 1))], 1)
+        return rows[:, [order.index(v) for v in params]]
 
 
-def _static_holds(lit: Literal, binding: Mapping[str, str],
-                  static: Mapping[str, set[tuple[str, ...]]]) -> bool:
-    args = tuple(binding.get(a, a) for a in lit.atom.args)
-    true = args[0] == args[1] if lit.atom.predicate == "=" else args in static[lit.atom.predicate]
-    return true == lit.positive
+def ground(domain: Domain, problem: Problem, *, relevant_only: bool = False) -> GroundTask:
+    """Ground `problem` over `domain` into a `GroundTask`.
+
+    By default every ground action whose static preconditions (types, static predicates,
+    ``=``, ``not =``) hold is kept, so the action set depends only on the objects and static
+    facts, not on the fluent initial state. With ``relevant_only=True`` only actions reachable
+    from the initial state under delete relaxation (negative preconditions ignored) are kept:
+    far fewer, but the action set and hence the action ids then depend on the initial state.
+    """
+    check_problem(domain, problem)
+    fluent = domain.fluent_predicates()
+    st = _Statics(domain, problem, fluent)
+    preds = sorted(fluent)
+    arity = max((len(domain.predicates[p]) for p in preds), default=0)
+    base = len(st.names) + 1
+    if len(preds) * base**arity >= 2**62:
+        raise PddlError(f"{problem.source}: too many objects ({len(st.names)}) to ground "
+                        f"predicates of arity {arity}")
+
+    def encode(pred: str, cols: list[np.ndarray | int], n: int) -> np.ndarray:
+        key = np.full(n, preds.index(pred), np.int64)
+        for k in range(arity):
+            key = key * base + (cols[k] + 1 if k < len(cols) else 0)
+        return key
+
+    def constant(atoms: list[str | tuple[str, ...]]) -> np.ndarray:
+        return np.array([encode(a[0], [st.oid[x] for x in a[1:]], 1)[0] for a in atoms],
+                        np.int64)
+
+    labels: list[str] = []
+    pairs: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {k: ([], []) for k in _KINDS}
+    for name in sorted(domain.actions):
+        act = domain.actions[name]
+        rows = st.bind(act)
+        if not len(rows):
+            continue
+        col = {v: k for k, (v, _) in enumerate(act.parameters)}
+        lits = [lit for lit in act.precondition if lit.atom.predicate in fluent]
+        for kind, atoms in (("pre", [lit.atom for lit in lits if lit.positive]),
+                            ("neg", [lit.atom for lit in lits if not lit.positive]),
+                            ("add", act.add_effects), ("dele", act.del_effects)):
+            for atom in atoms:
+                cols = [rows[:, col[a]] if a in col else st.oid[a] for a in atom.args]
+                pairs[kind][0].append(np.arange(len(labels), len(labels) + len(rows)))
+                pairs[kind][1].append(encode(atom.predicate, cols, len(rows)))
+        labels += ["(" + " ".join((name, *(st.names[k] for k in r))) + ")" for r in rows.tolist()]
+    flat = {k: (np.concatenate(r or [np.zeros(0, np.int64)]),
+                np.concatenate(a or [np.zeros(0, np.int64)])) for k, (r, a) in pairs.items()}
+    init = constant([(a.predicate, *a.args) for a in problem.init if a.predicate in fluent])
+    goal = [lit for lit in problem.goal if lit.atom.predicate in fluent]
+    goal_keys = constant([(lit.atom.predicate, *lit.atom.args) for lit in goal])
+    parts = [init, goal_keys] + [flat[k][1] for k in _KINDS]
+    keys, inv = np.unique(np.concatenate(parts), return_inverse=True)
+    init, goal_ids, *ids = np.split(inv, np.cumsum([len(p) for p in parts])[:-1])
+    flat = {k: (flat[k][0], i) for k, i in zip(_KINDS, ids, strict=True)}
+    flat["dele"] = _minus(flat["dele"], flat["add"], len(keys))
+    keep = (_relaxed(flat, init, len(labels), len(keys)) if relevant_only
+            else np.ones(len(labels), bool))
+    order = sorted(np.flatnonzero(keep).tolist(), key=labels.__getitem__)
+    new_row = np.full(len(labels), -1, np.int64)
+    new_row[order] = np.arange(len(order))
+    flat = {k: (new_row[r][keep[r]], a[keep[r]]) for k, (r, a) in flat.items()}
+    used = np.zeros(len(keys), bool)
+    used[np.concatenate([init, goal_ids, *(a for _, a in flat.values())])] = True
+    atoms = {int(u): _decode(int(keys[u]), preds, st.names, base, arity)
+             for u in np.flatnonzero(used)}
+    atom_order = sorted(atoms, key=lambda u: str(atoms[u]))
+    new_atom = np.full(len(keys), -1, np.int64)
+    new_atom[atom_order] = np.arange(len(atom_order))
+    n_atoms, n_actions = len(atom_order), len(order)
+    csr = {k: _csr(r, new_atom[a], n_actions, max(n_atoms, 1)) for k, (r, a) in flat.items()}
+    state = np.zeros(n_atoms, bool)
+    state[new_atom[init]] = True
+    signs = np.array([lit.positive for lit in goal], bool)
+    return GroundTask(
+        atoms=tuple(str(atoms[u]) for u in atom_order), actions=tuple(labels[i] for i in order),
+        labels=tuple(domain.show(atoms[u]) for u in atom_order), init=_ro(state),
+        csr=csr, literals=_literals(csr, n_atoms),
+        goal_pos=_ro(new_atom[goal_ids[signs]]), goal_neg=_ro(new_atom[goal_ids[~signs]]),
+        goal_possible=all(st.holds(lit, {}) for lit in problem.goal
+                          if lit.atom.predicate not in fluent),
+        index={labels[i]: k for k, i in enumerate(order)})
 
 
-def _relaxed_reachable(actions: list[_GroundAction], init: set[str]) -> list[_GroundAction]:
+def _decode(key: int, preds: list[str], names: list[str], base: int, arity: int) -> Atom:
+    digits = []
+    for _ in range(arity):
+        key, d = divmod(key, base)
+        digits.append(d)
+    return Atom(preds[key], tuple(names[d - 1] for d in reversed(digits) if d))
+
+
+def _minus(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray], n: int
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """(row, atom) pairs of `a` that are not in `b`."""
+    keep = ~np.isin(a[0] * n + a[1], b[0] * n + b[1])
+    return a[0][keep], a[1][keep]
+
+
+def _relaxed(flat: Mapping[str, tuple[np.ndarray, np.ndarray]], init: np.ndarray,
+             n_actions: int, n_atoms: int) -> np.ndarray:
     """Actions reachable from `init` ignoring delete effects and negative preconditions."""
-    waiting: dict[str, list[int]] = {}
-    missing = []
-    for i, g in enumerate(actions):
-        need = set(g.pre)
-        missing.append(len(need))
-        for a in need:
-            waiting.setdefault(a, []).append(i)
-    reached = set(init)
-    queue = list(init)
-    ready = [i for i, m in enumerate(missing) if m == 0]
-    keep = set()
-    while ready or queue:
-        while ready:
-            i = ready.pop()
-            keep.add(i)
-            for a in actions[i].add:
-                if a not in reached:
-                    reached.add(a)
-                    queue.append(a)
-        if queue:
-            for i in waiting.get(queue.pop(), ()):
-                missing[i] -= 1
-                if missing[i] == 0:
-                    ready.append(i)
-    return [g for i, g in enumerate(actions) if i in keep]
+    reached = np.zeros(n_atoms, bool)
+    reached[init] = True
+    (pre_r, pre_a), (add_r, add_a) = flat["pre"], flat["add"]
+    while True:
+        app = np.bincount(pre_r[~reached[pre_a]], minlength=n_actions) == 0
+        new = reached.copy()
+        new[add_a[app[add_r]]] = True
+        if (new == reached).all():
+            return app
+        reached = new
+
+
+
+def _literals(csr: Mapping[str, _CSR], n_atoms: int) -> _CSR:
+    """Per action, ids into [state, ~state, True]; a dummy True if it has no precondition."""
+    (pp, pf), (qp, qf) = csr["pre"], csr["neg"]
+    rows = np.arange(len(pp) - 1)
+    none = rows[(np.diff(pp) + np.diff(qp)) == 0]
+    acts = np.concatenate([np.repeat(rows, np.diff(pp)), np.repeat(rows, np.diff(qp)), none])
+    ids = np.concatenate([pf, qf + n_atoms, np.full(len(none), 2 * n_atoms)])
+    o = np.argsort(acts, kind="stable")
+    starts = np.searchsorted(acts[o], rows)
+    return _ro(starts), _ro(ids[o])

@@ -209,7 +209,8 @@ def check_problem_atoms(domain: Domain, problem: Problem) -> None:
             raise PddlError(f"{problem.source}: {where} atom {a} has the wrong number of arguments")
         unknown = [x for x in a.args if x not in known]
         if unknown:
-            raise PddlError(f"{problem.source}: {where} atom {a} uses unknown object {unknown[0]!r}")
+            where = f"{problem.source}: {where} atom {a}"
+            raise PddlError(f"{where} uses unknown object {unknown[0]!r}")
 
 
 def reachable_ops(
