@@ -10,10 +10,10 @@ import importlib.util
 import itertools
 import os
 import re
-import threading
 import signal
 import subprocess
 import sys
+import threading
 from collections import deque
 from pathlib import Path
 

@@ -3,27 +3,26 @@
 Why: the Gymnasium env steps the symbolic task tens of thousands of times per second and needs
 the applicable-action mask at every step. Static predicates (in no effect) are evaluated here
 and dropped. Parameters are bound by a backtracking join ordered by the static preconditions,
-using per-(predicate, position) indices of the static facts, so selective static predicates
-keep even ~11-parameter schemas cheap; parameters no static literal constrains are expanded
-as one numpy cartesian product, and atoms are instantiated vectorised. Atoms and actions are
-sorted by their PDDL text, so ids are stable for a given domain, object set and static facts.
+using per-(predicate, position) indices of the static facts; parameters no static literal
+constrains are expanded as one numpy cartesian product and atoms are instantiated vectorised.
+Atoms and actions are sorted by their PDDL text, so ids are stable for a given domain, object
+set and static facts.
 
-Preconditions and effects are stored as CSR lists of atom ids (action -> atoms), plus the
-transpose (atom -> actions) for incremental mask updates in `Cursor`. Dense bit-packed uint64
-matrices are available from `GroundTask.bit_matrices` but are not used internally: their size
-(and the cost of a mask from them) grows with actions x atoms, which was measured to be much
-slower than the sparse form for all but the smallest tasks.
+Preconditions and effects are CSR lists of atom ids. Dense bit-packed uint64 matrices are
+available (`GroundTask.bit_matrices`) but unused: a mask from them costs O(actions x atoms),
+measured 2-50x slower than the sparse `applicable` on every task tried.
 """
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from utamp_gym.errors import PddlError, UnknownNameError
-from utamp_gym.symbolic.pddl import Action, Atom, Domain, Literal, Problem, check_problem
+from utamp_gym.symbolic.pddl import Action, Domain, Literal, Problem, check_problem
 
 _CSR = tuple[np.ndarray, np.ndarray]  # (row pointers, flat column ids)
 _KINDS = ("pre", "neg", "add", "dele")  # dele = delete effects minus add effects
@@ -34,9 +33,19 @@ def _ro(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _unique(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sorted unique values and inverse (sort-based: np.unique's hash path is far slower)."""
+    order = np.argsort(x, kind="stable")
+    first = np.ones(len(x), bool)
+    np.not_equal(x[order][1:], x[order][:-1], out=first[1:])
+    inverse = np.empty(len(x), np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return x[order][first], inverse
+
+
 def _csr(rows: np.ndarray, cols: np.ndarray, n_rows: int, n_cols: int) -> _CSR:
-    """CSR of the (row, col) pairs, duplicates removed, columns sorted within a row."""
-    key = np.unique(rows * n_cols + cols)
+    """CSR of (row, col) pairs; duplicates removed, columns sorted within a row."""
+    key = _unique(rows * n_cols + cols)[0]
     ptr = np.zeros(n_rows + 1, np.int64)
     ptr[1:] = np.cumsum(np.bincount(key // n_cols, minlength=n_rows))
     return _ro(ptr), _ro(key % n_cols)
@@ -46,9 +55,10 @@ def _csr(rows: np.ndarray, cols: np.ndarray, n_rows: int, n_cols: int) -> _CSR:
 class GroundTask:
     """A grounded STRIPS task; a state is a bool vector over `atoms`.
 
-    `csr[kind]` for kind in pre, neg, add, dele is (ptr, ids): the atom ids of action ``i`` are
-    ``ids[ptr[i]:ptr[i+1]]``; ``dele`` excludes atoms the action also adds (add wins).
-    `goal_possible` is False when a static goal literal is false. Arrays are read-only.
+    `csr[kind]` (kind: pre, neg, add, dele) is (ptr, ids): action ``i``'s atoms are
+    ``ids[ptr[i]:ptr[i+1]]``; ``dele`` omits atoms the action also adds (add wins).
+    `literals` is the same per action as ids into ``[state, ~state, True]``. `goal_possible`
+    is False when a static goal literal is false. All arrays are read-only.
     """
 
     atoms: tuple[str, ...]
@@ -56,17 +66,15 @@ class GroundTask:
     labels: tuple[str, ...]  # atoms with predicates spelled as in the domain
     init: np.ndarray
     csr: Mapping[str, _CSR]
+    literals: _CSR
     goal_pos: np.ndarray
     goal_neg: np.ndarray
     goal_possible: bool
-    index: Mapping[str, int]
-    literals: _CSR  # per action, ids into [state, ~state, True] of its precondition literals
 
     def __repr__(self) -> str:
         return f"GroundTask(n_atoms={len(self.atoms)}, n_actions={len(self.actions)})"
 
     def ids(self, kind: str, i: int) -> np.ndarray:
-        """Atom ids of `kind` (pre, neg, add, dele) of action `i`."""
         ptr, flat = self.csr[kind]
         return flat[ptr[i]:ptr[i + 1]]
 
@@ -97,9 +105,10 @@ class GroundTask:
         """Id of a ground action given as ``"(pick a s1)"`` or ``("pick", "a", "s1")``."""
         parts = action.strip().strip("()").split() if isinstance(action, str) else action
         key = "(" + " ".join(str(p).lower() for p in parts) + ")"
-        if key not in self.index:
+        i = bisect.bisect_left(self.actions, key)
+        if i == len(self.actions) or self.actions[i] != key:
             raise UnknownNameError("ground action", key, self.actions)
-        return self.index[key]
+        return i
 
     def failed_preconditions(self, state: np.ndarray, i: int) -> list[str]:
         """Precondition literals of action `i` that are false in `state`, as PDDL text."""
@@ -121,11 +130,7 @@ class GroundTask:
         return np.unpackbits(raw, count=len(self.atoms), bitorder="little").astype(bool)
 
     def bit_matrices(self) -> dict[str, np.ndarray]:
-        """Dense (n_actions, n_words) uint64 matrix per kind, rows laid out as `pack`.
-
-        Built on each call (8 x n_actions x n_atoms / 64 bytes each); not used internally
-        because a mask from them costs O(actions x atoms), measured far slower than `applicable`.
-        """
+        """Dense (n_actions, n_words) uint64 matrix per kind, rows as `pack`; built per call."""
         out = {}
         for kind, (ptr, flat) in self.csr.items():
             rows = np.zeros((len(self.actions), len(self.atoms)), bool)
@@ -140,17 +145,16 @@ class GroundTask:
 class Cursor:
     """One rollout: the current state and its applicable mask, for fast repeated stepping.
 
-    On large tasks (more than `INCREMENTAL_ABOVE` precondition entries) a step updates only
-    the counts of actions whose preconditions mention a changed atom. Atoms used by very many
-    actions ("hubs", e.g. hand-empty) are instead kept as per-action bit masks compared with
-    one word, so toggling them costs a few elementwise passes rather than a scatter over every
-    pick. Small tasks recompute the mask with `GroundTask.applicable`, which is cheaper there.
+    Small tasks (at most `INCREMENTAL_ABOVE` precondition entries) recompute the mask with
+    `GroundTask.applicable`. Larger ones keep per-action counts of unsatisfied literals and a
+    step updates only the actions that mention a changed atom; the up to 64 atoms used by the
+    most actions ("hubs", e.g. hand-empty) are instead per-action bit masks checked only for
+    actions whose other literals hold, so toggling them does not touch every pick action.
     `state` and `mask` are read-only views overwritten by the next `step`/`reset`.
     """
 
     INCREMENTAL_ABOVE = 8000  # precondition entries
-    HUB_MIN_USERS = 64  # an atom is a hub if more than max(this, n_actions / 16) actions use it
-    HUB_DIV = 16
+    HUB_MIN_USERS = 64  # hubs are used by more than max(this, n_actions / 64) actions
 
     def __init__(self, task: GroundTask, state: np.ndarray | None = None):
         self.task = task
@@ -168,7 +172,7 @@ class Cursor:
             neg = np.arange(len(atoms)) >= len(pf)
             count = np.bincount(atoms, minlength=n)
             hubs = np.argsort(-count, kind="stable")[:64]
-            self._hubs = hubs[count[hubs] > max(self.HUB_MIN_USERS, n_act // self.HUB_DIV)]
+            self._hubs = hubs[count[hubs] > max(self.HUB_MIN_USERS, n_act // 64)]
             self._bit = np.zeros(n, np.uint64)
             self._bit[self._hubs] = np.left_shift(np.uint64(1), np.arange(
                 len(self._hubs), dtype=np.uint64))
@@ -217,8 +221,8 @@ class Cursor:
         n = self._ptr[changed + 1] - lo
         pos = np.repeat(lo - np.cumsum(n) + n, n) + np.arange(int(n.sum()))
         u = self._users[pos]
-        np.add.at(self._unsat, u, self._delta[pos] * np.repeat(
-            np.repeat([1, -1], (on.size, off.size)), n))
+        sign = np.repeat(np.repeat([1, -1], (on.size, off.size)), n)
+        np.add.at(self._unsat, u, self._delta[pos] * sign)
         self._ready[u] = self._unsat[u] == 0
         self._gate()
 
@@ -227,7 +231,7 @@ class Cursor:
 
 
 class _Statics:
-    """Static facts with per-(predicate, position, other arguments) indices, and object types."""
+    """Objects by type, and static facts indexed by (predicate, position, other arguments)."""
 
     def __init__(self, domain: Domain, problem: Problem, fluent: frozenset[str]):
         objects = {**domain.constants, **problem.objects}
@@ -261,27 +265,24 @@ class _Statics:
         for lit in lits:
             pred, args = lit.atom.predicate, lit.atom.args
             where = [k for k, a in enumerate(args) if a == v]
-            if pred == "=" and len(where) == 1:
-                hit = {binding.get(args[1 - where[0]], args[1 - where[0]])}
-            elif pred != "=" and len(where) == 1:
-                k = where[0]
-                rest = tuple(binding.get(a, a) for a in args[:k] + args[k + 1:])
-                hit = self.index.get((pred, k, rest), set())
-            else:
+            if len(where) != 1:
                 slow.append(lit)
                 continue
+            k = where[0]
+            if pred == "=":
+                hit = {binding.get(args[1 - k], args[1 - k])}
+            else:
+                rest = tuple(binding.get(a, a) for a in args[:k] + args[k + 1:])
+                hit = self.index.get((pred, k, rest), set())
             if lit.positive:
                 pins.append(hit)
             else:
                 excluded |= hit
-        if pins:
-            pins.sort(key=len)
-            typed = self.type_sets[typ]
-            out = [c for c in pins[0] if c in typed and c not in excluded
-                   and all(c in s for s in pins[1:])]
-        else:
-            out = [c for c in self.by_type[typ] if c not in excluded]
-        return [c for c in out if all(self.holds(lit, {**binding, v: c}) for lit in slow)]
+        pins.sort(key=len)
+        pool = pins[0] if pins else self.by_type[typ]
+        return [c for c in pool if c in self.type_sets[typ] and c not in excluded
+                and all(c in s for s in pins[1:])
+                and all(self.holds(lit, {**binding, v: c}) for lit in slow)]
 
     def bind(self, action: Action) -> np.ndarray:
         """(n, arity) object ids of every binding of `action` whose static literals hold."""
@@ -297,15 +298,15 @@ class _Statics:
             return np.zeros((0, len(params)), np.int64)
         pending = [lit for lit in lits if var(lit)]
         order: list[str] = []
-        while len(order) < len(params):  # greedy join order, most constrained first
+        while len(order) < len(params):  # greedy join order: most constrained first
             bound = set(order)
 
             def score(v: str, bound: set[str] = bound) -> tuple[int, int, bool, int]:
                 mine = [lit for lit in pending if v in var(lit)]
                 pinned = max((2 if lit.atom.predicate == "=" else 1 for lit in mine
                               if lit.positive and var(lit) - {v} <= bound), default=0)
-                return -pinned, -sum(lit.positive for lit in mine), not mine, len(
-                    self.by_type[types[v]])
+                n_pos = sum(lit.positive for lit in mine)
+                return -pinned, -n_pos, not mine, len(self.by_type[types[v]])
 
             order.append(min((v for v in params if v not in bound), key=score))
         checks = [[lit for lit in pending if v in var(lit) and var(lit) <= set(order[: d + 1])]
@@ -342,55 +343,55 @@ def ground(domain: Domain, problem: Problem, *, relevant_only: bool = False) -> 
     ``=``, ``not =``) hold is kept, so the action set depends only on the objects and static
     facts, not on the fluent initial state. With ``relevant_only=True`` only actions reachable
     from the initial state under delete relaxation (negative preconditions ignored) are kept:
-    far fewer, but the action set and hence the action ids then depend on the initial state.
+    often far fewer, but the action set, hence the ids, then depend on the initial state.
+    (All actions are still instantiated first, so grounding itself is not faster.)
     """
     check_problem(domain, problem)
     fluent = domain.fluent_predicates()
     st = _Statics(domain, problem, fluent)
     preds = sorted(fluent)
     arity = max((len(domain.predicates[p]) for p in preds), default=0)
-    base = len(st.names) + 1
+    base = len(st.names) + 1  # atom key: predicate, then each argument id + 1 (0 = none)
     if len(preds) * base**arity >= 2**62:
         raise PddlError(f"{problem.source}: too many objects ({len(st.names)}) to ground "
                         f"predicates of arity {arity}")
 
-    def encode(pred: str, cols: list[np.ndarray | int], n: int) -> np.ndarray:
+    def encode(pred: str, cols: Sequence[np.ndarray | int], n: int) -> np.ndarray:
         key = np.full(n, preds.index(pred), np.int64)
         for k in range(arity):
             key = key * base + (cols[k] + 1 if k < len(cols) else 0)
         return key
 
-    def constant(atoms: list[str | tuple[str, ...]]) -> np.ndarray:
-        return np.array([encode(a[0], [st.oid[x] for x in a[1:]], 1)[0] for a in atoms],
-                        np.int64)
+    def constant(lits: Sequence[Literal]) -> np.ndarray:
+        return np.array([encode(lit.atom.predicate, [st.oid[x] for x in lit.atom.args], 1)[0]
+                         for lit in lits], np.int64)
 
     labels: list[str] = []
-    pairs: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {k: ([], []) for k in _KINDS}
+    pairs: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {k: [] for k in _KINDS}
     for name in sorted(domain.actions):
         act = domain.actions[name]
         rows = st.bind(act)
-        if not len(rows):
-            continue
         col = {v: k for k, (v, _) in enumerate(act.parameters)}
         lits = [lit for lit in act.precondition if lit.atom.predicate in fluent]
         for kind, atoms in (("pre", [lit.atom for lit in lits if lit.positive]),
                             ("neg", [lit.atom for lit in lits if not lit.positive]),
                             ("add", act.add_effects), ("dele", act.del_effects)):
-            for atom in atoms:
-                cols = [rows[:, col[a]] if a in col else st.oid[a] for a in atom.args]
-                pairs[kind][0].append(np.arange(len(labels), len(labels) + len(rows)))
-                pairs[kind][1].append(encode(atom.predicate, cols, len(rows)))
-        labels += ["(" + " ".join((name, *(st.names[k] for k in r))) + ")" for r in rows.tolist()]
-    flat = {k: (np.concatenate(r or [np.zeros(0, np.int64)]),
-                np.concatenate(a or [np.zeros(0, np.int64)])) for k, (r, a) in pairs.items()}
-    init = constant([(a.predicate, *a.args) for a in problem.init if a.predicate in fluent])
+            pairs[kind] += [(np.arange(len(labels), len(labels) + len(rows)), encode(
+                atom.predicate, [rows[:, col[a]] if a in col else st.oid[a] for a in atom.args],
+                len(rows))) for atom in atoms]
+        names = np.array(st.names, object)[rows].tolist()
+        labels += [f"({name} {' '.join(r)})" if r else f"({name})" for r in names]
+    flat = {k: tuple(np.concatenate([p[j] for p in v] or [np.zeros(0, np.int64)])
+                     for j in (0, 1)) for k, v in pairs.items()}
+    init = constant([Literal(a) for a in problem.init if a.predicate in fluent])
     goal = [lit for lit in problem.goal if lit.atom.predicate in fluent]
-    goal_keys = constant([(lit.atom.predicate, *lit.atom.args) for lit in goal])
-    parts = [init, goal_keys] + [flat[k][1] for k in _KINDS]
-    keys, inv = np.unique(np.concatenate(parts), return_inverse=True)
+    parts = [init, constant(goal)] + [flat[k][1] for k in _KINDS]
+    keys, inv = _unique(np.concatenate(parts))
     init, goal_ids, *ids = np.split(inv, np.cumsum([len(p) for p in parts])[:-1])
     flat = {k: (flat[k][0], i) for k, i in zip(_KINDS, ids, strict=True)}
-    flat["dele"] = _minus(flat["dele"], flat["add"], len(keys))
+    add_keys = flat["add"][0] * len(keys) + flat["add"][1]
+    keep_del = ~np.isin(flat["dele"][0] * len(keys) + flat["dele"][1], add_keys)
+    flat["dele"] = (flat["dele"][0][keep_del], flat["dele"][1][keep_del])
     keep = (_relaxed(flat, init, len(labels), len(keys)) if relevant_only
             else np.ones(len(labels), bool))
     order = sorted(np.flatnonzero(keep).tolist(), key=labels.__getitem__)
@@ -399,39 +400,28 @@ def ground(domain: Domain, problem: Problem, *, relevant_only: bool = False) -> 
     flat = {k: (new_row[r][keep[r]], a[keep[r]]) for k, (r, a) in flat.items()}
     used = np.zeros(len(keys), bool)
     used[np.concatenate([init, goal_ids, *(a for _, a in flat.values())])] = True
-    atoms = {int(u): _decode(int(keys[u]), preds, st.names, base, arity)
-             for u in np.flatnonzero(used)}
-    atom_order = sorted(atoms, key=lambda u: str(atoms[u]))
+    used_ids = np.flatnonzero(used)
+    digits = keys[used_ids, None] // base ** np.arange(arity, -1, -1) % base
+    digits[:, 0] = keys[used_ids] // base**arity
+    text = [[preds[p], *(st.names[d - 1] for d in ds if d)] for p, *ds in digits.tolist()]
+    atom_order = sorted(range(len(text)), key=lambda u: "(" + " ".join(text[u]) + ")")
     new_atom = np.full(len(keys), -1, np.int64)
-    new_atom[atom_order] = np.arange(len(atom_order))
+    new_atom[used_ids[atom_order]] = np.arange(len(atom_order))
     n_atoms, n_actions = len(atom_order), len(order)
     csr = {k: _csr(r, new_atom[a], n_actions, max(n_atoms, 1)) for k, (r, a) in flat.items()}
     state = np.zeros(n_atoms, bool)
     state[new_atom[init]] = True
     signs = np.array([lit.positive for lit in goal], bool)
+    spell = domain.spelling
     return GroundTask(
-        atoms=tuple(str(atoms[u]) for u in atom_order), actions=tuple(labels[i] for i in order),
-        labels=tuple(domain.show(atoms[u]) for u in atom_order), init=_ro(state),
-        csr=csr, literals=_literals(csr, n_atoms),
+        atoms=tuple("(" + " ".join(text[u]) + ")" for u in atom_order),
+        actions=tuple(labels[i] for i in order),
+        labels=tuple("(" + " ".join([spell.get(text[u][0], text[u][0]), *text[u][1:]]) + ")"
+                     for u in atom_order),
+        init=_ro(state), csr=csr, literals=_literals(csr, n_atoms),
         goal_pos=_ro(new_atom[goal_ids[signs]]), goal_neg=_ro(new_atom[goal_ids[~signs]]),
         goal_possible=all(st.holds(lit, {}) for lit in problem.goal
-                          if lit.atom.predicate not in fluent),
-        index={labels[i]: k for k, i in enumerate(order)})
-
-
-def _decode(key: int, preds: list[str], names: list[str], base: int, arity: int) -> Atom:
-    digits = []
-    for _ in range(arity):
-        key, d = divmod(key, base)
-        digits.append(d)
-    return Atom(preds[key], tuple(names[d - 1] for d in reversed(digits) if d))
-
-
-def _minus(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray], n: int
-           ) -> tuple[np.ndarray, np.ndarray]:
-    """(row, atom) pairs of `a` that are not in `b`."""
-    keep = ~np.isin(a[0] * n + a[1], b[0] * n + b[1])
-    return a[0][keep], a[1][keep]
+                          if lit.atom.predicate not in fluent))
 
 
 def _relaxed(flat: Mapping[str, tuple[np.ndarray, np.ndarray]], init: np.ndarray,
@@ -449,7 +439,6 @@ def _relaxed(flat: Mapping[str, tuple[np.ndarray, np.ndarray]], init: np.ndarray
         reached = new
 
 
-
 def _literals(csr: Mapping[str, _CSR], n_atoms: int) -> _CSR:
     """Per action, ids into [state, ~state, True]; a dummy True if it has no precondition."""
     (pp, pf), (qp, qf) = csr["pre"], csr["neg"]
@@ -458,5 +447,4 @@ def _literals(csr: Mapping[str, _CSR], n_atoms: int) -> _CSR:
     acts = np.concatenate([np.repeat(rows, np.diff(pp)), np.repeat(rows, np.diff(qp)), none])
     ids = np.concatenate([pf, qf + n_atoms, np.full(len(none), 2 * n_atoms)])
     o = np.argsort(acts, kind="stable")
-    starts = np.searchsorted(acts[o], rows)
-    return _ro(starts), _ro(ids[o])
+    return _ro(np.searchsorted(acts[o], rows)), _ro(ids[o])
