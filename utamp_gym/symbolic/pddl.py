@@ -1,14 +1,11 @@
-"""Parser for the PDDL subset used by the U-TAMP domains.
+"""Parser for the PDDL subset of the U-TAMP domains (``:strips :typing
+:negative-preconditions :equality``): typed types/constants/predicates, actions with
+conjunctive preconditions (literals, ``=``, ``not =``) and effects (atoms, ``not atom``),
+problems with objects, init and a conjunctive goal. Anything else raises `PddlError` naming
+the source, line and problem, so an unsupported file fails at load time, not silently.
 
-Supported: requirements ``:strips :typing :negative-preconditions :equality``; typed
-``:types``/``:constants``/``:predicates``; actions whose precondition is a conjunction of
-literals (including ``(= ?a ?b)`` and ``(not (= ?a ?b))``) and whose effect is a conjunction of
-atoms and ``(not atom)``; problems with ``:objects``, ``:init`` and a conjunctive ``:goal``.
-Anything else is rejected with a `PddlError` naming the source, the line and the problem, so an
-unsupported domain fails at load time instead of being silently misread.
-
-Names are case-insensitive and normalised to lower case; `Domain.spelling` keeps predicate
-names as declared so that messages can show ``(canLift tray tray-handle-left)``.
+Names are case-insensitive (lower-cased); `Domain.spelling` keeps predicate names as
+declared so that messages can show ``(canLift tray tray-handle-left)``.
 """
 
 from __future__ import annotations
@@ -132,21 +129,32 @@ def _fail(source: str, line: int | None, message: str) -> PddlError:
 
 
 def _read(text: str, source: str) -> list[str | _Node]:
-    """Tokenise and nest; `;` starts a comment. Unbalanced parentheses report the line."""
-    stack = [_Node(0)]
+    """Tokenise and nest; `;` starts a comment. Unbalanced parentheses report the line.
+
+    For a '(' never closed, the line reported is the first list still open when a '(' starts
+    a later line at or left of its column (in indented PDDL, the likely culprit), else the
+    innermost unclosed list.
+    """
+    stack, cols, suspect = [_Node(0)], [-1], None
     for lineno, raw in enumerate(text.splitlines(), 1):
-        for tok in _TOKEN.findall(raw.split(";", 1)[0]):
+        for match in _TOKEN.finditer(raw.split(";", 1)[0]):
+            tok = match.group()
             if tok == "(":
+                if suspect is None and stack[-1].line < lineno and cols[-1] >= match.start():
+                    suspect = stack[-1].line
                 stack[-1].items.append(node := _Node(lineno))
                 stack.append(node)
+                cols.append(match.start())
             elif tok == ")":
                 if len(stack) == 1:
                     raise _fail(source, lineno, "unbalanced parentheses: ')' has no matching '('")
                 stack.pop()
+                cols.pop()
             else:
                 stack[-1].items.append(tok)
     if len(stack) > 1:
-        raise _fail(source, stack[-1].line, "unbalanced parentheses: '(' is never closed")
+        raise _fail(source, suspect or stack[-1].line,
+                    "unbalanced parentheses: '(' is never closed")
     return stack[0].items
 
 
@@ -231,10 +239,10 @@ class _Parser:
         if not node.items:
             raise self.fail(node, f"empty atom in {what}")
         pred = self.sym(node.items[0], "a predicate")
-        args = tuple(self.sym(x, "an argument") for x in node.items[1:])
         if pred in _KEYWORDS or (pred == "=" and not allow_eq):
             raise self.fail(node, f"unsupported '{pred}' in {what} (supported: a conjunction of "
                             f"atoms and (not atom){' and (= a b)' if allow_eq else ''})")
+        args = tuple(self.sym(x, "an argument") for x in node.items[1:])
         if self.predicates is None and pred != "=":
             return Atom(pred, args)
         if pred != "=" and pred not in self.predicates:
@@ -316,10 +324,8 @@ def _parse_action(p: _Parser, sec: _Node, types: Mapping[str, str | None],
     if len({v for v, _ in params}) != len(params):
         raise p.fail(pnode, f"action '{name}': duplicate parameter name")
     ok = {v for v, _ in params} | set(constants)
-    empty = _Node(sec.line)
-    pre = p.literals(fields.get(":precondition", empty), sec.line, ok, True,
-                     f"precondition of '{name}'")
-    eff = p.literals(fields.get(":effect", empty), sec.line, ok, False, f"effect of '{name}'")
+    pre, eff = (p.literals(fields.get(k, _Node(sec.line)), sec.line, ok, k == ":precondition",
+                           f"{k[1:]} of '{name}'") for k in (":precondition", ":effect"))
     return Action(name, tuple(params), tuple(pre),
                   tuple(lit.atom for lit in eff if lit.positive),
                   tuple(lit.atom for lit in eff if not lit.positive))
@@ -353,16 +359,17 @@ def parse_problem(text: str, source: str = "<string>", domain: Domain | None = N
     problem = Problem(name, dom_name, MappingProxyType(objects), frozenset(init), tuple(goal),
                       source)
     if domain is not None:
-        _check(domain, problem, lines)
+        check_problem(domain, problem, lines)
     return problem
 
 
-def check_problem(domain: Domain, problem: Problem) -> None:
-    """Raise `PddlError` if `problem` does not fit `domain` (names, arities, objects, types)."""
-    _check(domain, problem, {})
+def check_problem(domain: Domain, problem: Problem,
+                  lines: Mapping[object, int] | None = None) -> None:
+    """Raise `PddlError` if `problem` does not fit `domain` (names, arities, objects, types).
 
-
-def _check(domain: Domain, problem: Problem, lines: Mapping[object, int]) -> None:
+    `lines` optionally maps objects, init atoms and goal literals to their source line.
+    """
+    lines = lines or {}
     p = _Parser(problem.source, domain.predicates)
     if problem.domain_name and problem.domain_name != domain.name:
         raise p.fail(None, f"problem is for domain '{problem.domain_name}', not '{domain.name}'")
