@@ -1,0 +1,332 @@
+"""`UTampKitchenEnv`: organise a kitchen table by stacking every object on the tray.
+
+The dm_control split: `SymbolicState` (+ `SymbolicPoses`) or a `PhysicsBackend` is the
+physics, `KitchenTask` the reward and termination, this class the Gymnasium glue.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from utamp_gym.env.atoms import InitialAtoms, parse_atom
+from utamp_gym.env.backend import DEFAULT_BACKEND, MacroResult, PhysicsBackend, backend_factory
+from utamp_gym.env.options import EnvOptions, action_id
+from utamp_gym.env.poses import SymbolicPoses
+from utamp_gym.env.render import SchematicRenderer
+from utamp_gym.env.state import SymbolicState
+from utamp_gym.env.task import KitchenTask, home_joints, observation_space, tower_complete
+from utamp_gym.env.universe import Universe, ground_universe
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.planning.methods import DEFAULT_NOISE
+from utamp_gym.scene.model import Scene
+
+#: observation rows of `object_poses` / `present`: the suites' catalogue objects
+DEFAULT_OBJECTS = ("tray", "salt", "mug", "board", "pan")
+Obs = dict[str, np.ndarray]
+
+
+class UTampKitchenEnv(gym.Env[Obs, np.int64]):
+    """A Franka Panda stacks every object of a kitchen table on the tray (U-TAMP-2 macro actions).
+
+    Each episode samples a scene (uniformly, from the env's RNG) from the env's suite. The
+    registered ids are defined by the files in ``envs/`` (one per id):
+    ``UTampKitchen-v0`` (pick-place suite) and ``UTampKitchenSlide-v0`` (sliding suite).
+
+    **Action space** – ``Discrete(n)`` over the ground macro actions (``pick-support``,
+    ``place-support``, ``slide-support``) of the configuration's *universe*: the union of all
+    scenes of the suite (plus a fixed scene from outside it), grounded once, sorted by PDDL
+    string; `action_strings` lists them (see `utamp_gym.env.universe`). The order depends only
+    on (suite, domain, affordance source, fixed out-of-suite scene), not on `num_objects`.
+    `action_masks()` (sb3-contrib) and ``info["action_mask"]`` give the applicable ones:
+    static preconditions (objects present, affordances) hold in the episode's scene and
+    fluent ones in the current state. An action that is not an integer in ``[0, n)`` raises
+    `ValueError`; a valid id whose precondition fails changes nothing and sets
+    ``info["failure_reason"]`` to the first false precondition.
+
+    **Observation space** – ``Dict``:
+
+    * ``symbolic``: ``MultiBinary(m)``, the universe's fluent atoms in `symbolic_atoms` order;
+    * ``object_poses``: ``Box((k, 7), float32)``, ``[x, y, z, qw, qx, qy, qz]`` of each of
+      the `objects` rows (default tray, salt, mug, board, pan); absent objects are zeros;
+    * ``present``: ``MultiBinary(k)``, which rows are in the scene;
+    * ``robot``: ``Box((9,), float32)``, 7 arm joints (rad) + 2 fingers (m);
+    * ``image`` (only with ``camera=True``): ``Box((h, w, 3), uint8)``.
+
+    Symbolic grounding moves poses by the rules of `utamp_gym.env.poses` and keeps the robot
+    at home; physics grounding reads both from the simulator.
+
+    **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per object newly
+    on the tower (over the episode's best) and −0.01 per failed action (`utamp_gym.env.task`).
+
+    **Termination** – ``terminated`` at the goal: in symbolic grounding the PDDL goal (hand
+    empty, every slot but the tray's clear, so everything is one tower on the tray); in
+    physics grounding every object in one tower on the tray as measured by the backend's
+    `stacked_on_tray()`. It also terminates at a dead end, when no action is applicable after
+    a step (possible with noisy or rule-based affordances; an episode may even start at one,
+    and then its first step terminates it). With ``terminate_on_failure=True`` a failed
+    action terminates too.
+    ``truncated`` comes from Gymnasium's ``TimeLimit`` (``max_episode_steps`` of the env file,
+    or ``gym.make(..., max_episode_steps=N)``).
+
+    **Info** – ``action`` (PDDL string or None after reset), ``action_mask``,
+    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times and
+    ``step_s``, unless ``record_timings=False``; symbolic: always empty, so info trajectories
+    are reproducible), ``macro_result`` (physics: the `MacroResult`; symbolic: None),
+    ``scene`` (name).
+
+    **Options** (keyword arguments of ``gym.make``; each is validated up front):
+
+    * ``grounding``: "physics" (default; the backend simulates every macro action) or
+      "symbolic" (effects applied to the symbolic state, >20k steps/s);
+    * ``domain``: "utamp2" | "utamp1"; ``affordances``: "gt" | "rules" | "noisy" (re-detected
+      every episode, each attribute wrong with probability ``noise``; utamp1 has none);
+    * ``num_objects`` (2–5) restricts the scenes, ``scene`` fixes one (suite, packaged or file
+      name); ``reset(options={"scene": name})`` picks the scene of one episode;
+    * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array"),
+      ``camera`` (adds ``image``), ``image_size`` / ``render_size`` ((height, width));
+    * physics only: ``backend`` ("module:Class" or a callable, built as
+      ``backend(**backend_kwargs)``) and ``record_timings`` (wall-clock times in info).
+
+    In physics grounding an action's symbolic precondition is checked first (failing fast with
+    the reason); then the backend executes it; on success its symbolic effects are applied, on
+    a physical failure ``failure_reason`` is the backend's and the symbolic state is left as it
+    was (nothing is re-derived from the simulator, which may then disagree with it).
+
+    **Rendering** – "rgb_array": the simulator's camera in physics grounding, a top-down
+    schematic (`utamp_gym.env.render`) in symbolic grounding.
+
+    **Version history** – v0: initial release.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}  # noqa: RUF012
+
+    def __init__(
+        self,
+        suite: str | None = None,
+        objects: Sequence[str] = DEFAULT_OBJECTS,
+        grounding: str = "physics",
+        domain: str = "utamp2",
+        affordances: str = "gt",
+        noise: float = DEFAULT_NOISE,
+        num_objects: int | None = None,
+        scene: str | None = None,
+        terminate_on_failure: bool = False,
+        reward_shaping: bool = False,
+        render_mode: str | None = None,
+        camera: bool = False,
+        image_size: int | tuple[int, int] = (84, 84),
+        render_size: int | tuple[int, int] = (480, 480),
+        backend: str | Callable[..., PhysicsBackend] = DEFAULT_BACKEND,
+        backend_kwargs: Mapping[str, Any] | None = None,
+        record_timings: bool = True,
+    ) -> None:
+        kwargs: dict[str, Any] = {
+            "suite": suite, "objects": objects, "grounding": grounding, "domain": domain,
+            "affordances": affordances, "noise": noise, "num_objects": num_objects,
+            "scene": scene, "terminate_on_failure": terminate_on_failure,
+            "reward_shaping": reward_shaping, "render_mode": render_mode, "camera": camera,
+            "image_size": image_size, "render_size": render_size, "backend": backend,
+            "backend_kwargs": dict(backend_kwargs or {}), "record_timings": record_timings,
+        }  # fmt: skip
+        self.options = opts = EnvOptions(**kwargs)  # validates every option
+        self.render_mode = render_mode
+        self.scenes = opts.scenes()
+        self.universe: Universe = ground_universe(opts.universe_key())
+        self.action_space = spaces.Discrete(self.universe.n_actions)
+        self.observation_space = observation_space(
+            len(self.universe.fluent_atoms),
+            len(opts.objects),
+            opts.image_size if opts.camera else None,
+        )
+        self._state = SymbolicState(self.universe)
+        self._poses = SymbolicPoses(opts.objects)
+        self._renderer = SchematicRenderer(opts.objects)
+        self._task = KitchenTask(
+            shaping=opts.reward_shaping, terminate_on_failure=opts.terminate_on_failure
+        )
+        self._home = home_joints()
+        self._initial_atoms = InitialAtoms(
+            self.universe.domain, opts.domain, opts.affordances, opts.noise
+        )
+        self._scene: Scene | None = None
+        self._held: str | None = None
+        self._backend: PhysicsBackend | None = None
+        if opts.grounding == "physics":
+            self._backend = backend_factory(opts.backend)(**opts.backend_kwargs)
+
+    # ------------------------------------------------------------------ public helpers
+    @property
+    def scene(self) -> Scene:
+        """The scene of the current episode."""
+        if self._scene is None:
+            raise RuntimeError("no episode yet: call reset() first")
+        return self._scene
+
+    @property
+    def action_strings(self) -> tuple[str, ...]:
+        """The PDDL string of every action id."""
+        return self.universe.actions
+
+    @property
+    def symbolic_atoms(self) -> tuple[str, ...]:
+        """The fluent atom of every ``symbolic`` observation entry (predicates as declared)."""
+        return tuple(self.universe.domain.show(parse_atom(a)) for a in self.universe.fluent_atoms)
+
+    @property
+    def static_atoms(self) -> frozenset[str]:
+        """The current episode's static atoms (affordances, geometry), lower-case PDDL."""
+        return self._state.static_atoms
+
+    def true_atoms(self) -> list[str]:
+        """The fluent atoms that hold now, lower-case PDDL."""
+        return self._state.true_atoms()
+
+    def action_masks(self) -> np.ndarray:
+        """Bool mask of the applicable actions (the sb3-contrib `MaskablePPO` convention)."""
+        return self._state.mask()
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Obs, dict[str, Any]]:
+        super().reset(seed=seed)
+        options = dict(options or {})
+        name = options.pop("scene", None)
+        if options:
+            raise UnknownNameError("reset option", next(iter(options)), ["scene"])
+        if name is None:
+            scene = self.scenes[int(self.np_random.integers(len(self.scenes)))]
+        else:
+            by_name = {s.name: s for s in self.scenes}
+            if name not in by_name:
+                raise UnknownNameError("scene of this env", str(name), by_name)
+            scene = by_name[name]
+        self._scene, self._held = scene, None
+        atoms = self._initial_atoms(scene, self.np_random)
+        self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
+        self._poses.reset(scene)
+        self._renderer.reset(scene)
+        if self._backend is not None:
+            self._backend.reset(scene, np.random.default_rng(self.np_random.integers(2**63)))
+        self._task.initialize_episode(self._progress(self.options.reward_shaping)[1])
+        return self._observation(), self._info(None, None, {}, None)
+
+    def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
+        a = action_id(action, self.universe.n_actions)
+        if self._scene is None:
+            raise RuntimeError("call reset() before step()")
+        failure: str | None = None
+        macro: MacroResult | None = None
+        timings: dict[str, float] = {}
+        if not self._state.applicable(a):
+            failure = self._state.failure(a)
+        elif self._backend is not None:
+            start = time.perf_counter()
+            macro = self._backend.execute(self.universe.actions[a])
+            if self.options.record_timings:
+                timings = {**macro.timings, "step_s": time.perf_counter() - start}
+            else:  # wall-clock times would make info trajectories differ between runs
+                macro = replace(macro, timings={})
+            if macro.success:
+                self._apply(a)
+            else:
+                failure = macro.reason or f"{self.universe.actions[a]} failed in simulation"
+        else:
+            self._apply(a)
+        goal, height = self._progress(self.options.reward_shaping)
+        reward, terminated = self._task.outcome(
+            goal=goal, failed=failure is not None, tower_height=height
+        )
+        terminated = terminated or self._state.dead_end()
+        info = self._info(a, failure, timings, macro)
+        return self._observation(), reward, terminated, False, info
+
+    def render(self) -> np.ndarray | None:  # type: ignore[override]
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
+            return None
+        return self._image(self.options.render_size)
+
+    def close(self) -> None:
+        if self._backend is not None:
+            self._backend.close()  # kept: a closed env must not silently turn symbolic
+
+    # ------------------------------------------------------------------ internals
+    def _apply(self, a: int) -> None:
+        self._state.apply(a)
+        kind, obj, target = self.universe.roles[a]
+        self._poses.apply(kind, obj, target)
+        if kind == "pick-support":
+            self._held = obj
+        elif kind == "place-support":
+            self._held = None
+
+    def _progress(self, need_height: bool) -> tuple[bool, int]:
+        """(goal reached, objects on the tower; 0 unless `need_height`), measured once."""
+        base = self.scene.tower_base
+        if self._backend is None:
+            height = len(self._poses.tower(base)) if need_height else 0
+            return self._state.goal_reached(), height
+        tower = self._backend.stacked_on_tray()
+        goal = tower_complete(tower, base, self.scene.object_names)
+        return goal, len([o for o in tower if o != base])
+
+    def _observation(self) -> Obs:
+        if self._backend is None:
+            poses, robot = self._poses.observation(), self._home.copy()
+        else:
+            poses = np.zeros((len(self.options.objects), 7), np.float32)
+            rows = {n: i for i, n in enumerate(self.options.objects)}
+            for name, pose in self._backend.object_poses().items():
+                poses[rows[name]] = pose
+            robot = np.asarray(self._backend.joint_positions(), np.float32).copy()
+        obs = {
+            "symbolic": self._state.vector(),
+            "object_poses": poses,
+            "present": self._poses.present(),
+            "robot": robot,
+        }
+        if self.options.camera:
+            obs["image"] = self._image(self.options.image_size)
+        return obs
+
+    def _image(self, size: tuple[int, int]) -> np.ndarray:
+        if self._backend is not None:
+            return np.asarray(self._backend.render(size[1], size[0]), np.uint8)
+        return self._renderer.render(
+            self._poses.observation(), self._poses.present(), self._held, size
+        )
+
+    def _info(
+        self,
+        a: int | None,
+        failure: str | None,
+        timings: dict[str, float],
+        macro: MacroResult | None,
+    ) -> dict[str, Any]:
+        return {
+            "action": None if a is None else self.universe.actions[a],
+            "action_mask": self._state.mask(),
+            "failure_reason": failure,
+            "timings": dict(timings),
+            "macro_result": macro,
+            "scene": self.scene.name,
+        }
+
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle the universe by its key (re-grounded or taken from the cache on load)."""
+        state = self.__dict__.copy()
+        state["universe"] = self.universe.key
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        state["universe"] = ground_universe(state["universe"])
+        self.__dict__.update(state)

@@ -1,0 +1,178 @@
+"""Keyword options of the kitchen envs, validated up front with messages that list valid values.
+
+Why one frozen dataclass: every option is checked once, in one place, before anything is
+grounded or simulated, and the env, the universe cache key and the docs read the same fields.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from utamp_gym.env.backend import DEFAULT_BACKEND
+from utamp_gym.env.universe import UniverseKey
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
+from utamp_gym.scene.model import Scene
+from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
+from utamp_gym.symbolic.problem import DOMAINS
+
+GROUNDINGS = ("physics", "symbolic")
+RENDER_MODES = ("rgb_array",)
+MIN_OBJECTS = 2
+
+
+def _bool(name: str, value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return value
+
+
+def _choice(kind: str, value: Any, valid: Sequence[str]) -> str:
+    if not isinstance(value, str) or value not in valid:
+        raise UnknownNameError(kind, str(value), valid)
+    return value
+
+
+def _size(name: str, value: Any) -> tuple[int, int]:
+    """(height, width) in pixels; an int means a square."""
+    pair = (value, value) if isinstance(value, int) and not isinstance(value, bool) else value
+    ok = (
+        isinstance(pair, Sequence)
+        and len(pair) == 2
+        and all(isinstance(v, int) and not isinstance(v, bool) and 8 <= v <= 4096 for v in pair)
+    )
+    if not ok:
+        raise ValueError(f"{name} must be (height, width) in pixels, each 8..4096, got {value!r}")
+    return int(pair[0]), int(pair[1])
+
+
+@dataclass(frozen=True)
+class EnvOptions:
+    """Options of `UTampKitchenEnv` (documented in its class docstring)."""
+
+    suite: str | None
+    objects: tuple[str, ...]
+    grounding: str = "physics"
+    domain: str = "utamp2"
+    affordances: str = "gt"
+    noise: float = DEFAULT_NOISE
+    num_objects: int | None = None
+    scene: str | None = None
+    terminate_on_failure: bool = False
+    reward_shaping: bool = False
+    render_mode: str | None = None
+    camera: bool = False
+    image_size: tuple[int, int] = (84, 84)
+    render_size: tuple[int, int] = (480, 480)
+    backend: str | Callable[..., Any] = DEFAULT_BACKEND
+    backend_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    record_timings: bool = True
+
+    def __post_init__(self) -> None:
+        if self.suite is not None:
+            _choice("suite", self.suite, SUITES)
+        if self.suite is None and self.scene is None:
+            raise ValueError("an env needs a suite or a scene")
+        names = self.objects
+        if (
+            isinstance(names, str)
+            or not isinstance(names, Sequence)
+            or not names
+            or len(set(names)) != len(names)
+            or not all(isinstance(n, str) for n in names)
+        ):
+            raise ValueError(f"objects must be a sequence of distinct object names, got {names!r}")
+        _choice("grounding", self.grounding, GROUNDINGS)
+        _choice("domain", self.domain, DOMAINS)
+        _choice("affordance source", self.affordances, AFFORDANCE_SOURCES)
+        if isinstance(self.noise, bool) or not isinstance(self.noise, int | float):
+            raise ValueError(f"noise must be a number in [0, 1], got {self.noise!r}")
+        if not 0.0 <= float(self.noise) <= 1.0:
+            raise ValueError(f"noise must be in [0, 1], got {self.noise!r}")
+        if self.num_objects is not None and (
+            isinstance(self.num_objects, bool)
+            or not isinstance(self.num_objects, int)
+            or not MIN_OBJECTS <= self.num_objects <= len(names)
+        ):
+            raise ValueError(
+                f"num_objects must be an integer in {MIN_OBJECTS}..{len(names)} or None, "
+                f"got {self.num_objects!r}"
+            )
+        if self.scene is not None and not isinstance(self.scene, str):
+            raise ValueError(f"scene must be a scene name or path, got {self.scene!r}")
+        _bool("terminate_on_failure", self.terminate_on_failure)
+        _bool("reward_shaping", self.reward_shaping)
+        _bool("camera", self.camera)
+        _bool("record_timings", self.record_timings)
+        if self.render_mode is not None:
+            _choice("render_mode", self.render_mode, RENDER_MODES)
+        object.__setattr__(self, "objects", tuple(names))
+        object.__setattr__(self, "image_size", _size("image_size", self.image_size))
+        object.__setattr__(self, "render_size", _size("render_size", self.render_size))
+        if not isinstance(self.backend_kwargs, Mapping):
+            raise ValueError(f"backend_kwargs must be a mapping, got {self.backend_kwargs!r}")
+        if not (callable(self.backend) or isinstance(self.backend, str)):
+            raise ValueError(f"backend must be 'module:Class' or a callable, got {self.backend!r}")
+
+    # ------------------------------------------------------------------ derived
+    def universe_key(self) -> UniverseKey:
+        """The action universe: the whole suite (plus a fixed scene from outside it).
+
+        It ignores `num_objects` and a fixed suite `scene`, so those options keep the action
+        and observation spaces of the env id (useful for curricula).
+        """
+        in_suite = self.suite is not None and self.scene in {
+            s.name for s in suite_scenes(self.suite)
+        }
+        extra = (self.scene,) if self.scene is not None and not in_suite else ()
+        affordances = "none" if self.domain == "utamp1" else self.affordances
+        return UniverseKey(self.domain, affordances, self.suite, extra)
+
+    def scenes(self) -> tuple[Scene, ...]:
+        """The scenes episodes are sampled from (one if `scene` is set)."""
+        if self.scene is not None:
+            chosen: tuple[Scene, ...] = (resolve_scene(self.scene),)
+            if self.num_objects is not None and chosen[0].n_objects != self.num_objects:
+                raise ValueError(
+                    f"scene '{self.scene}' has {chosen[0].n_objects} objects, "
+                    f"but num_objects={self.num_objects}"
+                )
+        else:
+            assert self.suite is not None
+            pool = suite_scenes(self.suite)
+            chosen = tuple(
+                s for s in pool if self.num_objects is None or s.n_objects == self.num_objects
+            )
+            if not chosen:
+                counts = sorted({s.n_objects for s in pool})
+                raise ValueError(
+                    f"suite '{self.suite}' has no scene with {self.num_objects} objects; "
+                    f"valid num_objects: {', '.join(map(str, counts))}"
+                )
+        for s in chosen:
+            extra = [n for n in s.object_names if n not in self.objects]
+            if extra:
+                raise ValueError(
+                    f"scene '{s.name}' has objects {extra} outside the env's observation rows "
+                    f"{list(self.objects)}"
+                )
+        return chosen
+
+
+def action_id(action: Any, n: int) -> int:
+    """An env action as an int in ``[0, n)``, else `ValueError` (common cases checked first)."""
+    if type(action) not in (int, np.int64):
+        if isinstance(action, np.ndarray) and action.size == 1 and action.dtype.kind in "iu":
+            action = action.reshape(())[()]
+        if isinstance(action, bool | np.bool_) or not isinstance(action, int | np.integer):
+            raise ValueError(
+                f"action must be an integer id in [0, {n}), got {action!r}; to act with "
+                "PDDL strings wrap the env in utamp_gym.env.wrappers.SymbolicActionWrapper"
+            )
+    if not 0 <= action < n:
+        raise ValueError(f"action {int(action)} is out of range [0, {n})")
+    return int(action)

@@ -1,0 +1,135 @@
+"""`PlannerPolicy`: Fast Downward as a closed-loop policy for the kitchen envs.
+
+Why: a planning baseline must act in the same env as learned agents. The policy plans from the
+*current* symbolic state (the ``symbolic`` observation plus the scene's static atoms, written
+out as a PDDL problem), follows the plan, and replans whenever the observed state is not the
+one the plan predicted (a failed action, a physical failure, a new episode, or an exhausted
+plan). Every planner call's wall time (problem writing, grounding and search) is appended to
+`planning_times`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from utamp_gym.affordances.facts import Fact
+from utamp_gym.env.atoms import scene_atoms
+from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.errors import PlanningError, UnknownNameError
+from utamp_gym.planning.fast_downward import SEARCH_CONFIGS, solve
+from utamp_gym.planning.methods import DEFAULT_NOISE, affordances_for, method_spec
+from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.pddl import parse_domain
+from utamp_gym.symbolic.problem import domain_text, goal_atoms
+
+
+def state_problem(
+    scene: Scene, objects: Iterable[str], atoms: Iterable[str], domain: str, name: str = "now"
+) -> str:
+    """PDDL problem text: the scene's objects, the given init atoms and the scene's goal."""
+    pname = "utamp-" + scene.name.replace("/", "-") + f"-{name}"
+    lines = [f"(define (problem {pname})", f"  (:domain {domain})", "  (:objects"]
+    lines.append("    " + " ".join(objects) + " - obj)")
+    lines.append("  (:init")
+    lines.extend(f"    {a}" for a in sorted(atoms))
+    lines += ["  )", "  (:goal (and"]
+    lines.extend(f"    {g}" for g in goal_atoms(scene))
+    lines += ["  ))", ")"]
+    return "\n".join(lines) + "\n"
+
+
+class PlannerPolicy:
+    """``policy(obs, info) -> action id`` for a (possibly wrapped) `UTampKitchenEnv`.
+
+    `method` is a planning method of `utamp_gym.planning.methods` (domain + affordance
+    source); if it matches the env's own domain and affordances, the planner sees exactly the
+    env's static atoms (including this episode's noisy detection); otherwise it plans with its
+    own affordances, and a mismatch shows up as failed actions and replanning (e.g. a ground-
+    truth planner in a noisy env). Raises `PlanningError` if
+    no plan exists from the current state (or the planner times out), or if a plan step is
+    not in the env's action space.
+    """
+
+    def __init__(
+        self,
+        env: gym.Env[Any, Any],
+        method: str = "utamp2-gt",
+        *,
+        search: str = "lama-first",
+        timeout: float = 30.0,
+        noise: float = DEFAULT_NOISE,
+        seed: int = 0,
+    ) -> None:
+        kitchen = env.unwrapped
+        if not isinstance(kitchen, UTampKitchenEnv):
+            raise ValueError(f"PlannerPolicy needs a UTampKitchenEnv, got {kitchen!r}")
+        if search not in SEARCH_CONFIGS:
+            raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
+        if not timeout > 0:
+            raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+        self.env = kitchen
+        self.spec = method_spec(method)
+        self.search, self.timeout, self.noise = search, timeout, noise
+        self.planning_times: list[float] = []
+        self.plans: list[tuple[str, ...]] = []
+        self._domain_text = domain_text(self.spec.domain)
+        domain = parse_domain(self._domain_text, source=f"{self.spec.domain}.pddl")
+        self._fluent = domain.fluent_predicates()
+        self._rng = np.random.default_rng(seed)
+        self._facts: dict[str, frozenset[Fact]] = {}
+        self._plan: list[int] = []
+        self._expected: int | None = None
+
+    def reset(self) -> None:
+        """Forget the current plan (the next call plans afresh)."""
+        self._plan, self._expected = [], None
+
+    def __call__(self, obs: Mapping[str, np.ndarray], info: Mapping[str, Any] | None = None) -> int:
+        universe = self.env.universe
+        bits = sum(1 << int(j) for j in np.flatnonzero(obs["symbolic"]))
+        if bits != self._expected or not self._plan:
+            self._replan(bits)
+        action = self._plan.pop(0)
+        self._expected = universe.successor(bits, action)
+        return action
+
+    # ------------------------------------------------------------------ internals
+    def _static_atoms(self, scene: Scene) -> frozenset[str]:
+        opts = self.env.options
+        own = "none" if opts.domain == "utamp1" else opts.affordances
+        mine = "none" if self.spec.domain == "utamp1" else self.spec.affordances
+        if (opts.domain, own) == (self.spec.domain, mine):
+            return self.env.static_atoms
+        if scene.name not in self._facts:
+            self._facts[scene.name] = affordances_for(
+                scene, self.spec.affordances, self._rng, self.noise
+            )[0]
+        facts = self._facts[scene.name]
+        return scene_atoms(scene, facts, self.spec.domain, self._fluent)[0]
+
+    def _replan(self, bits: int) -> None:
+        env, universe = self.env, self.env.universe
+        scene = env.scene
+        start = time.perf_counter()
+        objects = scene_atoms(scene, (), self.spec.domain, self._fluent)[2]
+        atoms = [*self._static_atoms(scene), *universe.atoms_of(bits)]
+        problem = state_problem(scene, objects, atoms, self.spec.domain)
+        result = solve(self._domain_text, problem, search=self.search, timeout=self.timeout)
+        self.planning_times.append(time.perf_counter() - start)
+        if not result.solved:
+            raise PlanningError(f"no plan from the current state of {scene.name}: {result.reason}")
+        if not result.plan:
+            raise PlanningError(f"the goal of {scene.name} already holds: nothing to do")
+        self.plans.append(result.plan)
+        try:
+            self._plan = [universe.index(step) for step in result.plan]
+        except UnknownNameError as exc:
+            raise PlanningError(
+                f"plan step '{exc.name}' is not in the env's action space "
+                f"(method {self.spec.name} vs env domain {env.options.domain})"
+            ) from None

@@ -1,0 +1,136 @@
+"""The symbolic state of one episode: the fluent atoms and the action mask.
+
+Why: this is the env's fast path, and on small arrays numpy's per-call overhead, not the
+arithmetic, dominates. So the state is a Python int (bit j = fluent atom j; effects are two
+int operations) and the mask over *all* actions is a handful of numpy calls: unpack the bits
+``[s, 1 - s]``, gather every op's fluent literals, `np.add.reduceat` them into per-op counts
+of violated literals, compare with 0. There is no Python loop over actions per step. Ops
+whose static precondition fails in the episode's scene (fixed at `reset`) are reduced to one
+always-violated literal. Explaining a failure walks one op's precondition in Python, which
+only happens on a failing step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from utamp_gym.env.atoms import EpisodeAtoms
+from utamp_gym.env.universe import Universe, ground_universe
+
+
+class SymbolicState:
+    """Fluent state over `universe.fluent_atoms`, the per-episode static filter and the mask."""
+
+    def __init__(self, universe: Universe) -> None:
+        self.universe = universe
+        half = universe.half
+        self.bits = 0
+        self._goal = 0
+        self._invert = (1 << half) - 1
+        self._nbytes = 2 * half // 8
+        self._static: frozenset[str] = frozenset()
+        self._ptr = universe.check_ptr[:-1]
+        self._flat = universe.check_flat
+        self._ext = np.zeros(2 * half, np.intp)
+        self._mask = np.zeros(universe.n_actions, bool)
+        self._tables: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+    def reset(self, atoms: EpisodeAtoms, cache_key: str | None = None) -> None:
+        """Start an episode: the scene's static atoms fix which ops can ever apply.
+
+        The per-op literal table depends only on the static atoms, so it is cached under
+        `cache_key` (the scene name when those atoms are fixed per scene).
+        """
+        table = self._tables.get(cache_key) if cache_key is not None else None
+        if table is None:
+            table = self._table(atoms.static)
+            if cache_key is not None:
+                self._tables[cache_key] = table
+        self._flat, self._ptr = table
+        self._static = atoms.static
+        self.bits = self.universe.state_bits(atoms.fluent)
+        self._goal = self.universe.state_bits(atoms.goal)
+        self._refresh()
+
+    def _table(self, static: frozenset[str]) -> tuple[np.ndarray, np.ndarray]:
+        """(flat literal indices, row starts): statically impossible ops get one literal on an
+        always-1 bit (the inverted pad bit)."""
+        u = self.universe
+        ok = u.static_ok(u.pack_static(static))
+        lengths = np.where(ok, np.diff(u.check_ptr), 1)
+        ptr = np.zeros(len(lengths) + 1, np.int64)
+        np.cumsum(lengths, out=ptr[1:])
+        row = np.repeat(np.arange(len(lengths)), lengths)
+        src = u.check_ptr[row] + (np.arange(ptr[-1]) - ptr[row])
+        flat = np.where(ok[row], u.check_flat[src], u.half + len(u.fluent_atoms))
+        return flat, ptr[:-1]
+
+    def _refresh(self) -> None:
+        x = self.bits | ((~self.bits & self._invert) << self.universe.half)
+        raw = np.frombuffer(x.to_bytes(self._nbytes, "little"), np.uint8)
+        self._ext = np.unpackbits(raw, bitorder="little").astype(np.intp)  # intp: fast reduceat
+        self._mask = np.add.reduceat(self._ext[self._flat], self._ptr) == 0
+
+    # ------------------------------------------------------------------ queries
+    def mask(self) -> np.ndarray:
+        """A fresh bool mask over all actions: static and fluent preconditions hold."""
+        return self._mask.copy()
+
+    def applicable(self, i: int) -> bool:
+        return bool(self._mask[i])
+
+    def dead_end(self) -> bool:
+        """No action is applicable (possible with noisy or rule-based affordances)."""
+        return not self._mask.any()
+
+    def goal_reached(self) -> bool:
+        return self._goal & ~self.bits == 0
+
+    def vector(self) -> np.ndarray:
+        """A fresh int8 0/1 vector over `universe.fluent_atoms`."""
+        return self._ext[: len(self.universe.fluent_atoms)].astype(np.int8)
+
+    def true_atoms(self) -> list[str]:
+        """The fluent atoms that hold, as lower-case PDDL."""
+        return self.universe.atoms_of(self.bits)
+
+    @property
+    def static_atoms(self) -> frozenset[str]:
+        return self._static
+
+    def failure(self, i: int) -> str | None:
+        """Why action `i` is not applicable: its first false precondition, or None."""
+        if self._mask[i]:
+            return None
+        u = self.universe
+        fluent = u.domain.fluent_predicates()
+        for lit in u.preconditions(i):
+            text = str(lit.atom)
+            if lit.atom.predicate == "=":
+                holds = lit.atom.args[0] == lit.atom.args[1]
+            elif lit.atom.predicate in fluent:
+                j = u.fluent_index.get(text)
+                holds = j is not None and bool(self.bits >> j & 1)
+            else:
+                holds = text in self._static
+            if holds != lit.positive:
+                kind = "fluent" if lit.atom.predicate in fluent else "static"
+                return f"precondition {u.domain.show(lit)} of {u.actions[i]} is false ({kind})"
+        return f"{u.actions[i]} is not applicable"  # unreachable: some literal must fail
+
+    # ------------------------------------------------------------------ change
+    def apply(self, i: int) -> None:
+        """Apply action `i`'s effects (delete, then add); the caller checked applicability."""
+        self.bits = self.universe.successor(self.bits, i)
+        self._refresh()
+
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self) -> dict[str, object]:
+        """Pickle the universe by its key: it is re-grounded (or taken from the cache)."""
+        state = self.__dict__.copy()
+        state["universe"] = self.universe.key
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
+        self.__dict__.update(state)
