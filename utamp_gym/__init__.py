@@ -8,6 +8,6 @@ __version__ = "0.1.0"
 
 # Explicit registration of the envs defined in `envs/` (one file per env id), so that
 # `import utamp_gym` then `gymnasium.make("UTampKitchen-v0")` works.
-from utamp_gym.env.registry import register_envs  # noqa: E402
+from utamp_gym.env.registry import register_envs
 
 register_envs()
