@@ -20,7 +20,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/python examples/demo.py --out $(OUT)/demo
+	$(BIN)/python examples/planner_policy.py --out $(OUT)/demo
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -m "not slow" -q

@@ -248,6 +248,11 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         info = self._info(a, failure, timings, macro)
         return self._observation(), reward, terminated, False, info
 
+    @property
+    def backend(self) -> PhysicsBackend | None:
+        """The physics backend (None in symbolic grounding), e.g. to read measured towers."""
+        return self._backend
+
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")

@@ -28,7 +28,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 from types import ModuleType
@@ -338,21 +338,32 @@ def solve(
         raise UnknownNameError("translator", translator, TRANSLATORS)
     _check_timeout(timeout)
     start = time.perf_counter()
+    task = None
     if translator == "fd":
         sas, reason = _translate(domain, problem, timeout)
     else:
-        sas, reason = _ground_to_sas(domain, problem)
+        sas, reason, task = _ground_to_sas(domain, problem)
     translate_time = time.perf_counter() - start
     if reason is not None:
         return PlanResult(False, (), None, translate_time, translate_time, 0.0, reason, None)
     assert sas is not None
-    return _search_sas(
+    result = _search_sas(
         sas, search=search, timeout=timeout, start=start, translate_time=translate_time
     )
+    if task is not None and result.solved and len(result.plan) > 1:
+        from utamp_gym.planning.postprocess import eliminate
+
+        plan = eliminate(result.plan, *task)
+        result = replace(
+            result, plan=plan, cost=len(plan), planning_time_s=time.perf_counter() - start
+        )
+    return result
 
 
-def _ground_to_sas(domain: str, problem: str) -> tuple[str | None, str | None]:
-    """Our translator: parse, ground by relaxed reachability, write SAS."""
+def _ground_to_sas(domain: str, problem: str) -> tuple[str | None, str | None, tuple | None]:
+    """Our translator: parse, ground by relaxed reachability, write SAS.
+
+    Also returns (ops by name, init, goal) so that the plan can be post-processed."""
     from utamp_gym.planning.sas import to_sas
     from utamp_gym.symbolic.pddl import parse_domain, parse_problem
     from utamp_gym.symbolic.reach import reachable_ops
@@ -362,8 +373,8 @@ def _ground_to_sas(domain: str, problem: str) -> tuple[str | None, str | None]:
     ops, _, _ = reachable_ops(dom, prob)
     sas = to_sas(ops, prob.init, prob.goal)
     if sas is None:
-        return None, "goal unreachable (proved unsolvable by relaxed reachability)"
-    return sas, None
+        return None, "goal unreachable (proved unsolvable by relaxed reachability)", None
+    return sas, None, ({op.name: op for op in ops}, frozenset(prob.init), prob.goal)
 
 
 def _search_sas(
