@@ -18,11 +18,11 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import gymnasium as gym  # noqa: E402
-import imageio  # noqa: E402
+import gymnasium as gym
+import imageio
 
-import utamp_gym  # noqa: E402, F401  (registers the envs)
-from utamp_gym.env.planner_policy import PlannerPolicy  # noqa: E402
+import utamp_gym  # noqa: F401  (registers the envs)
+from utamp_gym.env.planner_policy import PlannerPolicy
 
 
 def main() -> None:

@@ -1,4 +1,4 @@
-"""The `utamp` command line: scenes, plan, validate (run, eval and train join as they land).
+"""The `utamp` command line: scenes, plan, validate, run, eval, train.
 
 Exit codes: 0 success (also for `plan` when the scene is unsolvable: see `solved`),
 1 an invalid plan (`validate`), 2 bad input (unknown scene, malformed file, ...).
@@ -11,8 +11,13 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from utamp_gym.errors import UtampError
+
+if TYPE_CHECKING:
+    from utamp_gym.planning.methods import PlanOutcome
+    from utamp_gym.scene.model import Scene
 
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
@@ -47,8 +52,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         (out / "domain.pddl").write_text(outcome.domain)
         (out / "problem.pddl").write_text(outcome.problem)
         (out / "plan.txt").write_text("".join(f"{a}\n" for a in outcome.plan))
+    explanation = _explain(scene, outcome) if args.explain and not outcome.solved else None
     if args.json:
-        print(json.dumps(outcome.to_json(), indent=2))
+        data = outcome.to_json()
+        if args.explain:
+            data["explanation"] = explanation
+        print(json.dumps(data, indent=2))
     elif outcome.solved:
         print(
             f"{scene.name} [{args.method}]: {outcome.plan_length} steps, "
@@ -58,6 +67,74 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             print(f"  {step}")
     else:
         print(f"{scene.name} [{args.method}]: not solved: {outcome.reason}")
+        if explanation is not None:
+            print(f"  why not: {explanation['message']}")
+    return 0
+
+
+def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
+    """Why-not explanation of an unsolved outcome (U-TAMP-2 methods only)."""
+    from utamp_gym.eval.explain import explain_unsolvable
+    from utamp_gym.planning.methods import method_spec
+
+    if method_spec(outcome.method).domain != "utamp2":
+        return {"found": False, "message": "explanations need U-TAMP-2 affordances (not utamp1)"}
+    return explain_unsolvable(scene, outcome.facts).to_json()
+
+
+def _cmd_eval(args: argparse.Namespace) -> int:
+    from utamp_gym.eval.summary import to_markdown
+    from utamp_gym.eval.sweep import SweepConfig, run_sweep, write_outputs
+
+    noise = (args.noise,)
+    if args.sweep_noise:
+        try:
+            noise = tuple(float(p) for p in args.sweep_noise.split(",") if p.strip())
+        except ValueError:
+            raise UtampError(
+                f"--sweep-noise: expected numbers like 0,0.01,0.05, got {args.sweep_noise!r}"
+            ) from None
+    default = "utamp2-noisy" if args.sweep_noise else "utamp1,utamp2-gt,utamp2-rules,utamp2-noisy"
+    methods = tuple(m.strip() for m in (args.methods or default).split(",") if m.strip())
+    cfg = SweepConfig(
+        suite=args.suite,
+        methods=methods,
+        seeds=args.seeds,
+        grounding=args.grounding,
+        limit=args.limit,
+        noise=noise,
+        timeout=args.timeout,
+        explain=not args.no_explain,
+    )
+    report = run_sweep(cfg, args.out, workers=args.workers, progress=not args.quiet)
+    summary = write_outputs(report)
+    if not args.quiet:
+        sys.stdout.write(to_markdown(summary))
+    print(
+        f"{report.ran} run(s), {report.resumed} resumed from {Path(args.out) / 'results.csv'}; "
+        f"{report.wall_time_s:.1f} s; wrote results.csv, summary.md, summary.json and figures "
+        f"in {args.out}"
+    )
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from utamp_gym.sim.execute import run_episode
+    from utamp_gym.suites import resolve_scene
+
+    result = run_episode(resolve_scene(args.scene), args.method, seed=args.seed, video=args.video)
+    data = result.to_dict()
+    if args.json:
+        data.pop("steps", None)
+        print(json.dumps(data, indent=2))
+        return 0
+    status = "success" if result.success else f"failure: {result.failure}"
+    print(f"{result.scene} [{result.method}, seed {result.seed}]: {status}")
+    print(
+        f"  plan {len(result.plan)} steps, planning {result.planning_time_s:.3f} s, "
+        f"execution {result.execution_time_s:.2f} s, wall {result.wall_time_s:.2f} s"
+    )
+    print(f"  tower on the tray: {' / '.join(result.final_stack) or '(empty)'}")
     return 0
 
 
@@ -101,13 +178,58 @@ def build_parser() -> argparse.ArgumentParser:
     )
     plan.add_argument("--json", action="store_true", help="print one JSON object")
     plan.add_argument("--out", help="write domain.pddl, problem.pddl and plan.txt here")
+    plan.add_argument(
+        "--explain",
+        action="store_true",
+        help="if unsolved, name the missing affordance facts that block the scene",
+    )
     plan.set_defaults(func=_cmd_plan)
+
+    run = sub.add_parser("run", help="plan a scene, then execute the plan in MuJoCo physics")
+    run.add_argument(
+        "scene", help="suite scene (pick-place/017), packaged scene or scene-file path"
+    )
+    run.add_argument("--method", choices=METHODS, default="utamp2-gt")
+    run.add_argument("--seed", type=int, default=0, help="pose noise, IK restarts and OMPL seed")
+    run.add_argument("--video", help="write an MP4 (or .gif) of the episode here")
+    run.add_argument("--json", action="store_true", help="print one JSON object")
+    run.set_defaults(func=_cmd_run)
 
     val = sub.add_parser("validate", help="check a plan against a domain and problem")
     val.add_argument("domain")
     val.add_argument("problem")
     val.add_argument("plan")
     val.set_defaults(func=_cmd_validate)
+
+    ev = sub.add_parser("eval", help="evaluate planning methods on a suite (the paper's table)")
+    ev.add_argument("--suite", choices=SUITES, required=True)
+    ev.add_argument(
+        "--methods",
+        help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2-vlm, "
+        "vlm-planner (default: the first four; utamp2-noisy alone with --sweep-noise)",
+    )
+    ev.add_argument("--seeds", type=int, default=1, help="seeds 0..K-1 per scene and method")
+    ev.add_argument(
+        "--workers", type=int, help="worker processes (default: CPU count; 0: in this process)"
+    )
+    ev.add_argument("--grounding", choices=("physics", "symbolic"), default="physics")
+    ev.add_argument("--limit", type=int, help="only the first N scenes of the suite")
+    ev.add_argument(
+        "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
+    )
+    ev.add_argument(
+        "--sweep-noise", help="comma-separated noise levels for utamp2-noisy (success vs F1)"
+    )
+    ev.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
+    ev.add_argument(
+        "--no-explain", action="store_true", help="do not explain unsolved U-TAMP-2 runs"
+    )
+    ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
+    ev.add_argument("--out", required=True, help="output directory (re-use it to resume)")
+    ev.set_defaults(func=_cmd_eval)
+    from utamp_gym.rl.cli import add_train_parser
+
+    add_train_parser(sub)
     return parser
 
 

@@ -1,0 +1,295 @@
+"""Decoding macro-action symbols into poses, and the pick / place skills in physics.
+
+The physics tests look only at what the simulation measured (poses, contacts, the
+finger gap); the symbolic layer never decides whether a skill worked.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
+from utamp_gym.resources import asset_path
+from utamp_gym.scene.catalogue import load_catalogue
+from utamp_gym.scene.io import load_scene, scene_from_dict
+from utamp_gym.sim.decode import (
+    GRASP_DEPTH,
+    PREGRASP,
+    GraspSymbols,
+    footprint_centre,
+    grasp_candidates,
+    hand_for_object,
+    parse_action,
+    place_object_pose,
+    slide_vector,
+    support_point,
+    world_aabb,
+)
+
+CAT = load_catalogue()
+INVERTED = np.diag([1.0, -1.0, -1.0])
+X = np.array([1.0, 0.0, 0.0])
+
+
+def pose(pos, rot=None, yaw: float = 0.0) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    out = np.eye(4)
+    out[:3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ (np.eye(3) if rot is None else rot)
+    out[:3, 3] = pos
+    return out
+
+
+@pytest.fixture(scope="module")
+def demo():
+    return load_scene(asset_path("scenes", "kitchen-demo.toml"))
+
+
+# ------------------------------------------------------------------ decoding (pure)
+def test_palm_on_top_grasps_top_down():
+    salt = CAT["salt-shaker"]
+    g = grasp_candidates(salt, GraspSymbols("s", "body", "on", "left", "right"),
+                         pose([0.5, 0.2, 0.0]), prefer_x=X)[0]  # fmt: skip
+    np.testing.assert_allclose(g.tcp[:3, 2], [0, 0, -1], atol=1e-12)  # approach straight down
+    np.testing.assert_allclose(abs(g.tcp[:3, 1] @ [0, 1, 0]), 1.0)  # fingers open along y
+    np.testing.assert_allclose(g.tcp[:3, 0], X, atol=1e-12)  # the preferred wrist turn
+    assert np.linalg.det(g.tcp[:3, :3]) == pytest.approx(1.0)
+    np.testing.assert_allclose(g.tcp[:3, 3], [0.5, 0.2, 0.11 - GRASP_DEPTH], atol=1e-12)
+    np.testing.assert_allclose(g.pregrasp[:3, 3] - g.tcp[:3, 3], [0, 0, PREGRASP], atol=1e-12)
+    assert g.width == pytest.approx(0.045) and g.width < g.opening <= 0.08
+
+
+def test_finger_axis_follows_the_finger_part_and_the_object_yaw():
+    salt, yaw = CAT["salt-shaker"], math.radians(30)
+    sym = GraspSymbols("s", "body", "on", "front", "back")
+    both = grasp_candidates(salt, sym, pose([0.5, 0.0, 0.0], yaw=yaw), prefer_x=X)
+    front = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    for g in both:
+        assert abs(g.tcp[:3, 1] @ front) == pytest.approx(1.0)
+    np.testing.assert_allclose(both[0].tcp[:3, 1], -both[1].tcp[:3, 1])
+    assert both[0].tcp[:3, 0] @ X >= both[1].tcp[:3, 0] @ X
+
+
+def test_inverted_mug_palm_under_is_still_top_down():
+    mug = CAT["glass-mug"]
+    at = pose([0.6, 0.38, 0.10], INVERTED)  # resting on its rim, the bottom faces up
+    g = grasp_candidates(mug, GraspSymbols("m", "body", "under", "left", "right"), at,
+                         prefer_x=X)[0]  # fmt: skip
+    np.testing.assert_allclose(g.tcp[:3, 2], [0, 0, -1], atol=1e-12)
+    np.testing.assert_allclose(g.tcp[:3, 3], [0.6, 0.38, 0.10 - GRASP_DEPTH], atol=1e-12)
+    # the loop handle is hollow in its middle: the fingers go to its outer grip bar
+    h = grasp_candidates(mug, GraspSymbols("m", "handle", "under", "left", "right"), at,
+                         prefer_x=X)[0]  # fmt: skip
+    np.testing.assert_allclose(h.tcp[:3, 2], [0, 0, -1], atol=1e-12)
+    assert h.tcp[0, 3] == pytest.approx(0.6 - 0.064)
+    assert h.width == pytest.approx(0.014)
+
+
+def test_fingertips_stay_above_the_support():
+    board = CAT["cutting-board"]  # a 2 cm thick handle: half of it is less than the depth
+    g = grasp_candidates(board, GraspSymbols("b", "handle", "on", "left", "right"),
+                         pose([0.2, -0.38, 0.0]), prefer_x=X)[0]  # fmt: skip
+    assert g.tcp[2, 3] - 0.0095 >= 0.003 - 1e-12  # pads end 3 mm above the table
+
+
+def test_place_target_is_centred_on_the_support():
+    tray, salt, board = CAT["wooden-tray"], CAT["salt-shaker"], CAT["cutting-board"]
+    tray_at = pose([0.5, 0.02, 0.0], yaw=0.01)
+    top = support_point(tray, "on", tray_at)
+    np.testing.assert_allclose(top, [0.5, 0.02, 0.012], atol=1e-12)  # the tray's floor
+    held = pose([0.3, 0.3, 0.25], yaw=0.1)
+    target = place_object_pose(salt, held, top, drop=0.0)
+    np.testing.assert_allclose(footprint_centre(salt, target), top[:2], atol=1e-12)
+    assert world_aabb(salt.bbox, target)[0][2] == pytest.approx(0.012)
+    np.testing.assert_allclose(target[:3, :3], held[:3, :3], atol=1e-12)  # yaw kept
+    # the board's footprint includes its handle: its frame sits off the tray's centre
+    b = place_object_pose(board, pose([0.3, 0.3, 0.2]), top, drop=0.0, yaw=0.0)
+    np.testing.assert_allclose(b[:2, 3], [0.535, 0.02], atol=1e-12)
+    tcp_t_obj = pose([0.01, 0.0, 0.05], INVERTED)
+    np.testing.assert_allclose(hand_for_object(b, tcp_t_obj) @ tcp_t_obj, b, atol=1e-12)
+
+
+def test_place_on_an_inverted_mug_and_not_on_a_downward_part():
+    mug, salt = CAT["glass-mug"], CAT["salt-shaker"]
+    top = support_point(mug, "under", pose([0.6, 0.38, 0.10], INVERTED))
+    np.testing.assert_allclose(top, [0.6, 0.38, 0.10], atol=1e-12)
+    target = place_object_pose(salt, pose([0.3, 0.3, 0.3], INVERTED), top, drop=0.0)
+    assert target[2, 2] == pytest.approx(-1.0)  # an inverted object stays inverted
+    assert world_aabb(salt.bbox, target)[0][2] == pytest.approx(0.10)
+    with pytest.raises(GroundingError, match="does not face up"):
+        support_point(mug, "under", pose([0.6, 0.38, 0.0]))
+
+
+def test_slide_vector_takes_the_footprint_to_the_space():
+    tray = CAT["wooden-tray"]
+    np.testing.assert_allclose(
+        slide_vector(tray, pose([0.95, 0.01, 0.0]), np.array([0.5, 0.0])), [-0.45, -0.01, 0]
+    )
+
+
+def test_parse_action(demo):
+    act = parse_action("(place-support salt salt-body on left right back on under mug back under)",
+                       demo)  # fmt: skip
+    assert (act.kind, act.grasp.member, act.support, act.support_part) == (
+        "place-support", "body", "mug", "under")  # fmt: skip
+    slide = parse_action("(slide-support tray tray-handle-back on front back back slot1 under on "
+                         "space1 back front under)", demo)  # fmt: skip
+    assert (slide.grasp.finger1, slide.support, slide.space) == ("front", "slot1", "space1")
+    with pytest.raises(UnknownNameError, match="tray-handle-front"):
+        parse_action("(pick-support tray tray-lid on front back back on slot1 under on)", demo)
+    with pytest.raises(UnknownNameError, match="valid: pick-support"):
+        parse_action("(stack salt mug)", demo)
+    with pytest.raises(GroundingError, match="takes 10 arguments"):
+        parse_action("(pick-support salt salt-body on left right)", demo)
+
+
+# ------------------------------------------------------------------ skills in physics
+physics = pytest.mark.physics
+PICK_SALT = "(pick-support salt salt-body on left right back on slot5 under on)"
+PLACE_SALT_ON_MUG = "(place-support salt salt-body on left right back on under mug back under)"
+
+
+@pytest.fixture
+def backend():
+    from utamp_gym.sim.backend import MujocoBackend
+
+    sim = MujocoBackend()
+    yield sim
+    sim.close()
+
+
+def _on(sim, name: str):
+    from utamp_gym.sim.world import rests_on_top, stack_from_poses
+
+    st = sim.state
+    support = stack_from_poses(st.world, st.data)[name]
+    return support, rests_on_top(st.world, st.data, name, support)
+
+
+@physics
+def test_backend_protocol_and_initial_state(backend, demo):
+    from utamp_gym.env.backend import PhysicsBackend
+
+    assert isinstance(backend, PhysicsBackend)
+    with pytest.raises(SimulationError, match="reset"):
+        backend.object_poses()
+    backend.reset(demo, np.random.default_rng(0))
+    poses = backend.object_poses()
+    assert set(poses) == set(demo.object_names) and all(p.shape == (7,) for p in poses.values())
+    assert backend.joint_positions().shape == (9,)
+    assert backend.stacked_on_tray() == []
+    image = backend.render(96, 64)
+    assert image.shape == (64, 96, 3) and image.dtype == np.uint8 and image.std() > 0
+    bad = backend.execute("(pick-support plate plate-body on left right back on slot5 under on)")
+    assert not bad.success and "plate" in bad.reason
+    nothing = backend.execute(PLACE_SALT_ON_MUG)
+    assert not nothing.success and "holds nothing" in nothing.reason
+
+
+@physics
+def test_pick_then_place_salt_on_the_inverted_mug(backend, demo):
+    backend.reset(demo, np.random.default_rng(0))
+    picked = backend.execute(PICK_SALT)
+    assert picked.success, picked.reason
+    assert set(picked.timings) == {"ik_s", "plan_s", "sim_s", "wall_s", "sim_time_s"}
+    assert _on(backend, "salt")[0] is None  # in the hand, nothing under it
+    assert backend.joint_positions()[7:].sum() == pytest.approx(0.045, abs=0.003)  # squeezing
+    placed = backend.execute(PLACE_SALT_ON_MUG)
+    assert placed.success, placed.reason
+    assert _on(backend, "salt") == ("mug", True)
+    assert _on(backend, "mug") == ("slot4", True)
+    quat = backend.object_poses()["salt"][3:]
+    assert abs(quat[0]) > math.cos(math.radians(5) / 2)  # standing upright
+
+
+@physics
+def test_the_tray_is_not_liftable_by_one_handle(backend, demo):
+    backend.reset(demo, np.random.default_rng(0))
+    # symbolically invalid in U-TAMP-2 (the tray is not liftable), but physics must try it
+    res = backend.execute(
+        "(pick-support tray tray-handle-back on front back back on slot1 under on)"
+    )
+    assert not res.success
+    assert "tray" in res.reason and "not liftable" in res.reason
+    assert backend.state.held is None  # it let go
+    assert _on(backend, "tray")[0] == "slot1"
+    assert backend.execute(PICK_SALT).success  # the robot recovered
+
+
+@physics
+def test_upright_mug_falls_off_the_shaker(backend):
+    slots = [
+        {"name": "slot4", "position": [0.6, 0.38], "min": [0.44, 0.22], "max": [0.82, 0.52]},
+        {"name": "slot5", "position": [0.6, -0.38], "min": [0.44, -0.52], "max": [0.82, -0.22]},
+    ]
+    scene = scene_from_dict({
+        "name": "mug-on-salt", "slots": slots,
+        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "objects": [{"name": "mug", "type": "glass-mug", "on": "slot4"},
+                    {"name": "salt", "type": "salt-shaker", "on": "slot5"}],
+    })  # fmt: skip
+    backend.reset(scene, np.random.default_rng(1))
+    picked = backend.execute("(pick-support mug mug-body on left right back on slot4 under on)")
+    assert picked.success, picked.reason
+    res = backend.execute("(place-support mug mug-body on left right back on under salt back on)")
+    assert not res.success and "mug fell off salt" in res.reason
+    assert _on(backend, "mug")[0] != "salt"
+
+
+@physics
+def test_a_held_object_counts_in_motion_planning(backend, demo):
+    backend.reset(demo, np.random.default_rng(0))
+    assert backend.execute(PICK_SALT).success
+    st = backend.state
+    arm, held = st.arm, st.held
+    low = np.diag([1.0, -1.0, -1.0, 1.0])
+    low[:3, 3] = [0.45, -0.15, 0.07]  # hand 7 cm over the free table: the salt would be in it
+    q_low = next(arm.ik_solutions(low, None))
+    checker = arm.sync(arm.free, gap=arm.gap())
+    assert checker.is_valid(q_low)  # the bare arm fits
+    checker.attach(held.body, held.tcp_t_obj)
+    try:
+        assert not checker.is_valid(q_low)
+        assert any(st.world.object_of_geom(c.geom1) == "salt" for c in checker.contacts(q_low))
+    finally:
+        checker.detach()
+    with pytest.raises(GroundingError, match="goal configuration in collision"):
+        arm.transfer(q_low, held=(held.body, held.tcp_t_obj))
+
+
+@physics
+def test_a_failed_place_keeps_the_object_in_the_hand(backend, demo):
+    backend.reset(demo, np.random.default_rng(0))
+    assert backend.execute(PICK_SALT).success
+    # the inverted mug's `on` part (its rim) faces down: nothing can be put on it
+    res = backend.execute("(place-support salt salt-body on left right back on under mug back on)")
+    assert not res.success and "does not face up" in res.reason
+    assert backend.state.held is not None and backend.state.held.obj == "salt"
+    placed = backend.execute(PLACE_SALT_ON_MUG)
+    assert placed.success, placed.reason
+
+
+@physics
+def test_closing_on_nothing_is_a_failed_grasp(backend):
+    flat = {s: {"shape": "flat"} for s in ("under", "left", "right", "front", "back")}
+    crate = {
+        "mass": 1.0, "material": "wood", "robustness": "sturdy",
+        "members": {  # "hole": an edge member inside the open crate, realised by nothing
+            "body": {"min": [-0.15, -0.15, 0.0], "max": [0.15, 0.15, 0.1]},
+            "hole": {"kind": "edge", "min": [-0.015, -0.015, 0.03], "max": [0.015, 0.015, 0.08]},
+        },
+        "parts": {**flat, "on": {"shape": "open"}},
+    }  # fmt: skip
+    scene = scene_from_dict({
+        "name": "empty-crate", "types": {"crate": crate},
+        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "slots": [{"name": "slot1", "position": [0.5, 0.0], "min": [0.3, -0.2], "max": [0.7, 0.2]}],
+        "objects": [{"name": "crate", "type": "crate", "on": "slot1"}],
+    })  # fmt: skip
+    backend.reset(scene, np.random.default_rng(0))
+    res = backend.execute("(pick-support crate crate-hole on left right back on slot1 under on)")
+    assert not res.success and "closed on nothing" in res.reason and "crate" in res.reason
+    assert backend.state.held is None
+    assert _on(backend, "crate") == ("slot1", True)

@@ -1,0 +1,184 @@
+"""Why-not explanations: which affordance facts block a scene that is unsolvable as detected.
+
+Given the detected facts D and the ground truth G, the candidate corrections are the
+missing facts (G − D, to add) and the spurious facts of predicates the domain uses
+negatively (D − G with ``canLift``: an object wrongly believed liftable cannot be
+slid). Subsets of corrections are tried by increasing size, each checked by planning
+with a short time-out (the planner proves most unsolvable tasks in-process by relaxed
+reachability, so a check costs milliseconds to tens of milliseconds); the first subset
+that makes the task solvable is a smallest one. Checks share one grounding (see
+`solvability`). Since adding facts only enables actions, a missing fact without
+which even the full ground truth is unsolvable belongs to every solution: these are
+found first (one check each) and the search only tries the others on top. When the
+size or time budget runs out, a minimal (irreducible, not necessarily smallest) set is
+found by deleting corrections from the full set one by one.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from utamp_gym.affordances.facts import Fact
+from utamp_gym.eval.solvability import SolvabilityOracle
+from utamp_gym.planning.methods import (
+    DEFAULT_NOISE,
+    affordances_for,
+    ground_truth_for,
+    method_spec,
+)
+from utamp_gym.scene.model import Scene
+
+NEGATIVELY_USED = ("canLift",)  # affordance predicates under `not` in utamp2.pddl
+Change = tuple[str, Fact]  # ("+", fact) to add, ("-", fact) to remove
+
+
+def format_fact(fact: Fact) -> str:
+    """``isP2PSupportive(on, frying-pan, under, cutting-board)``."""
+    return f"{fact[0]}({', '.join(fact[1:])})"
+
+
+@dataclass(frozen=True)
+class Explanation:
+    """Corrections that make an unsolvable scene solvable.
+
+    `found` is False when even the ground truth does not make it solvable (or no set was
+    found in the budget); `smallest` is True when the search by size proved minimum size.
+    """
+
+    scene: str
+    found: bool
+    missing: tuple[Fact, ...]
+    spurious: tuple[Fact, ...]
+    smallest: bool
+    checks: int
+    elapsed_s: float
+
+    @property
+    def message(self) -> str:
+        if not self.found:
+            return "no set of ground-truth affordance corrections makes the scene solvable"
+        parts = []
+        if self.missing:
+            parts.append("missing affordance facts: " + ", ".join(map(format_fact, self.missing)))
+        if self.spurious:
+            parts.append("spurious facts: " + ", ".join(map(format_fact, self.spurious)))
+        qualifier = "" if self.smallest else " (a minimal set; smaller ones were not ruled out)"
+        return "; ".join(parts) + qualifier
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "found": self.found,
+            "missing": [list(f) for f in self.missing],
+            "spurious": [list(f) for f in self.spurious],
+            "smallest": self.smallest,
+            "checks": self.checks,
+            "message": self.message,
+        }
+
+
+class _Checker:
+    """Solvability under a fact set (a `SolvabilityOracle`), cached, with a time budget."""
+
+    def __init__(self, oracle: SolvabilityOracle, budget_s: float):
+        self.oracle = oracle
+        self.deadline = time.perf_counter() + budget_s
+        self.cache: dict[frozenset[Fact], bool] = {}
+
+    @property
+    def expired(self) -> bool:
+        return time.perf_counter() > self.deadline
+
+    def __call__(self, facts: frozenset[Fact]) -> bool:
+        if facts not in self.cache:
+            self.cache[facts] = self.oracle(facts)
+        return self.cache[facts]
+
+
+def _apply(facts: frozenset[Fact], changes: Iterable[Change]) -> frozenset[Fact]:
+    out = set(facts)
+    for sign, f in changes:
+        (out.add if sign == "+" else out.discard)(f)
+    return frozenset(out)
+
+
+def explain_unsolvable(
+    scene: Scene,
+    detected: Iterable[Fact],
+    *,
+    ground_truth: Iterable[Fact] | None = None,
+    max_size: int = 2,
+    timeout: float = 5.0,
+    budget_s: float = 20.0,
+) -> Explanation:
+    """A smallest set of corrections (missing and spurious facts) making `scene` solvable.
+
+    `max_size` bounds the corrections tried beyond the required ones; `timeout` is per
+    planner call and `budget_s` bounds the whole search.
+    """
+    start = time.perf_counter()
+    det = frozenset(detected)
+    gt = frozenset(ground_truth) if ground_truth is not None else ground_truth_for(scene)
+    changes: list[Change] = [("+", f) for f in sorted(gt - det)]
+    changes += [("-", f) for f in sorted(det - gt) if f[0] in NEGATIVELY_USED]
+    check = _Checker(SolvabilityOracle(scene, det | gt, timeout=timeout), budget_s)
+
+    def result(found: bool, chosen: Sequence[Change], smallest: bool) -> Explanation:
+        return Explanation(
+            scene=scene.name,
+            found=found,
+            missing=tuple(f for s, f in chosen if s == "+"),
+            spurious=tuple(f for s, f in chosen if s == "-"),
+            smallest=smallest,
+            checks=len(check.cache),
+            elapsed_s=time.perf_counter() - start,
+        )
+
+    if not changes or not check(_apply(det, changes)):
+        return result(False, (), False)
+    # Adding positive facts only enables actions: a correction whose omission from the full
+    # set leaves the task unsolvable is in every solution (exact without removals).
+    required: list[Change] = []
+    if all(sign == "+" for sign, _ in changes):
+        required = [c for c in changes if not check(_apply(det, [k for k in changes if k != c]))]
+    optional = [c for c in changes if c not in required]
+    for extra in range(0, min(max_size, len(optional)) + 1):
+        for combo in itertools.combinations(optional, extra):
+            if check.expired:
+                break
+            chosen = sorted([*required, *combo])
+            if check(_apply(det, chosen)):
+                return result(True, chosen, True)
+        if check.expired:
+            break
+    kept = list(changes)
+    for c in changes:  # budget exhausted: greedy deletion gives a minimal set
+        if c not in required and check(_apply(det, [k for k in kept if k != c])):
+            kept.remove(c)
+    return result(True, kept, False)
+
+
+def explain_scene(
+    scene: Scene,
+    method: str,
+    *,
+    seed: int = 0,
+    noise: float = DEFAULT_NOISE,
+    max_size: int = 2,
+    timeout: float = 5.0,
+    budget_s: float = 20.0,
+) -> Explanation | None:
+    """Explain `method`'s detected affordances for `scene` (None for U-TAMP-1: no affordances).
+
+    The facts are drawn exactly as `plan_scene(scene, method, seed=seed, noise=noise)` draws
+    them, so this explains that call's outcome.
+    """
+    spec = method_spec(method)
+    if spec.domain != "utamp2":
+        return None
+    facts, _ = affordances_for(scene, spec.affordances, np.random.default_rng(seed), noise)
+    return explain_unsolvable(scene, facts, max_size=max_size, timeout=timeout, budget_s=budget_s)

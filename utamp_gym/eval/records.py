@@ -1,0 +1,188 @@
+"""Result rows of an evaluation sweep and the crash-safe `results.csv` they live in.
+
+One row per scene × method × seed (× grounding × noise). Rows are appended whole,
+each followed by flush + fsync, so a killed sweep leaves at most a torn last line,
+which `ResultsFile` drops when it opens the file again; rewrites (header upgrades,
+the final sort) go through a temporary file and `os.replace`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+GROUNDINGS = ("physics", "symbolic")
+PLAN_SEPARATOR = " ; "
+
+Key = tuple[str, str, int, str, str]  # scene, method, seed, grounding, noise
+
+
+def noise_label(noise: float | None) -> str:
+    """The noise part of a row key: ``""`` for methods without noise, else ``f"{p:g}"``."""
+    return "" if noise is None else f"{noise:g}"
+
+
+@dataclass(frozen=True)
+class ResultRow:
+    """One evaluated run. Times in seconds; `plan` holds the actions joined by `` ; ``.
+
+    `valid_gt` is whether the plan is valid under the ground-truth U-TAMP-2 model (None
+    without a plan); `crashed` marks rows recorded for a run that raised or whose worker
+    process died.
+    """
+
+    scene: str
+    suite: str
+    n_objects: int
+    method: str
+    seed: int
+    grounding: str
+    noise: float | None
+    solved: bool
+    success: bool
+    failure_reason: str
+    plan_length: int
+    planning_time_s: float | None
+    execution_time_s: float
+    wall_time_s: float
+    affordance_precision: float | None
+    affordance_recall: float | None
+    affordance_f1: float | None
+    valid_gt: bool | None = None
+    crashed: bool = False
+    plan: str = ""
+
+    @property
+    def key(self) -> Key:
+        return (self.scene, self.method, self.seed, self.grounding, noise_label(self.noise))
+
+    def to_csv(self) -> dict[str, str]:
+        return {k: _fmt(v) for k, v in asdict(self).items()}
+
+    @classmethod
+    def from_csv(cls, d: dict[str, str]) -> ResultRow:
+        return cls(
+            scene=d["scene"],
+            suite=d["suite"],
+            n_objects=int(d["n_objects"]),
+            method=d["method"],
+            seed=int(d["seed"]),
+            grounding=d["grounding"],
+            noise=_opt_float(d.get("noise", "")),
+            solved=_bool(d["solved"]),
+            success=_bool(d["success"]),
+            failure_reason=d.get("failure_reason", ""),
+            plan_length=int(d.get("plan_length") or 0),
+            planning_time_s=_opt_float(d.get("planning_time_s", "")),
+            execution_time_s=float(d.get("execution_time_s") or 0.0),
+            wall_time_s=float(d.get("wall_time_s") or 0.0),
+            affordance_precision=_opt_float(d.get("affordance_precision", "")),
+            affordance_recall=_opt_float(d.get("affordance_recall", "")),
+            affordance_f1=_opt_float(d.get("affordance_f1", "")),
+            valid_gt=None if d.get("valid_gt", "") == "" else _bool(d["valid_gt"]),
+            crashed=_bool(d.get("crashed") or "false"),
+            plan=d.get("plan", ""),
+        )
+
+
+COLUMNS: tuple[str, ...] = tuple(f.name for f in fields(ResultRow))
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def _bool(s: str) -> bool:
+    return s.strip().lower() in ("true", "1", "yes")
+
+
+def _opt_float(s: str | None) -> float | None:
+    return None if s is None or s.strip() == "" else float(s)
+
+
+def _csv_line(row: ResultRow) -> str:
+    buf = io.StringIO()
+    csv.DictWriter(buf, COLUMNS, lineterminator="\n").writerow(row.to_csv())
+    return buf.getvalue()
+
+
+def _write_atomic(path: Path, rows: Iterable[ResultRow]) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    with tmp.open("w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, COLUMNS, lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r.to_csv())
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+class ResultsFile:
+    """`results.csv` of one output directory: read on open, appended row by row."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.rows: dict[Key, ResultRow] = {}
+        self._load()
+
+    def _load(self) -> None:
+        if not self.path.exists():
+            _write_atomic(self.path, [])
+            return
+        rows, clean = _parse(self.path.read_text(encoding="utf-8"))
+        self.rows = {r.key: r for r in rows}
+        if not clean:  # torn last line or an older header: rewrite what was readable
+            _write_atomic(self.path, self.rows.values())
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.rows
+
+    def append(self, row: ResultRow) -> None:
+        """Append one complete row and make it durable before returning."""
+        line = _csv_line(row)
+        with self.path.open("a", newline="", encoding="utf-8") as f:
+            f.write(line)
+            f.flush()
+            os.fsync(f.fileno())
+        self.rows[row.key] = row
+
+    def sort(self) -> None:
+        """Rewrite the file in a stable order (atomically)."""
+        _write_atomic(self.path, sorted(self.rows.values(), key=_order))
+
+
+def _order(r: ResultRow) -> tuple[Any, ...]:
+    return (r.suite, r.grounding, r.method, r.noise or 0.0, r.scene, r.seed)
+
+
+def _parse(text: str) -> tuple[list[ResultRow], bool]:
+    """Readable rows of a CSV text, and whether the text was clean (complete, current)."""
+    clean = not text or text.endswith("\n")
+    if not clean:  # a killed writer: drop the incomplete last line
+        text = text[: text.rfind("\n") + 1]
+    reader = csv.DictReader(io.StringIO(text))
+    clean = clean and tuple(reader.fieldnames or COLUMNS) == COLUMNS
+    rows = []
+    for d in reader:
+        try:
+            rows.append(ResultRow.from_csv(d))
+        except (KeyError, ValueError, TypeError):
+            clean = False  # unreadable row: it is dropped and simply run again
+    return rows, clean
+
+
+def read_rows(path: str | Path) -> list[ResultRow]:
+    """All readable rows of a results file (read only; the file is not repaired)."""
+    return _parse(Path(path).read_text(encoding="utf-8"))[0]

@@ -1,0 +1,234 @@
+"""One evaluation run: plan a scene with a method, ground the plan, return one result row.
+
+Grounding ``symbolic``: success = a plan was found and it is valid under the
+ground-truth U-TAMP-2 model (`check_against_ground_truth`); the failure reason is the
+first violated precondition or the planner's reason. Grounding ``physics``: the plan is
+executed in MuJoCo and physics decides (`run_episode` for the built-in methods at the
+default noise; otherwise the pre-computed plan is executed step by step on the same
+backend, exactly as `run_episode` does). An unsolved U-TAMP-2 run is explained
+(`explain`). `run_task` never raises: a crash becomes a failure row.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from utamp_gym.affordances.facts import Fact, Scores
+from utamp_gym.errors import EndpointError
+from utamp_gym.eval.explain import explain_unsolvable
+from utamp_gym.eval.records import PLAN_SEPARATOR, Key, ResultRow, noise_label
+from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
+from utamp_gym.planning.crosscheck import check_against_ground_truth
+from utamp_gym.planning.methods import (
+    DEFAULT_NOISE,
+    METHODS,
+    affordances_for,
+    method_spec,
+    plan_scene,
+)
+from utamp_gym.scene.model import Scene
+
+EVAL_METHODS = (*METHODS, *VLM_METHODS)
+DEFAULT_TIMEOUT = 30.0
+
+
+@dataclass(frozen=True)
+class EvalTask:
+    """One scene × method × seed in one grounding (picklable: sent to worker processes)."""
+
+    scene: str
+    method: str
+    seed: int = 0
+    grounding: str = "physics"
+    noise: float | None = None  # utamp2-noisy only
+    timeout: float = DEFAULT_TIMEOUT
+    explain: bool = True
+
+    @property
+    def key(self) -> Key:
+        return (self.scene, self.method, self.seed, self.grounding, noise_label(self.noise))
+
+
+@dataclass(frozen=True)
+class _Planned:
+    solved: bool
+    plan: tuple[str, ...]
+    planning_time_s: float
+    reason: str | None
+    scores: Scores | None
+    facts: frozenset[Fact] | None  # detected U-TAMP-2 affordances, for explanations
+
+
+def _suite_of(name: str) -> str:
+    return name.split("/", 1)[0] if "/" in name else "custom"
+
+
+def _plan(scene: Scene, task: EvalTask) -> _Planned:
+    if task.method in VLM_METHODS:
+        from utamp_gym.eval.vlm_client import VlmClient
+
+        start = time.perf_counter()
+        try:
+            out = RUNNERS[task.method](
+                scene, VlmClient.from_env(), seed=task.seed, timeout=task.timeout
+            )
+        except EndpointError as exc:  # unusable answer: a failure, not a crash
+            return _Planned(False, (), time.perf_counter() - start, f"VLM: {exc}", None, None)
+        return _Planned(
+            out.solved, out.plan, out.planning_time_s, out.reason, out.scores, out.facts
+        )
+    noise = DEFAULT_NOISE if task.noise is None else task.noise
+    o = plan_scene(scene, task.method, seed=task.seed, timeout=task.timeout, noise=noise)
+    facts = o.facts if method_spec(task.method).domain == "utamp2" else None
+    scores = o.affordance_scores if task.method != "utamp1" else None
+    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts)
+
+
+def _uses_run_episode(task: EvalTask) -> bool:
+    noise_ok = task.noise is None or task.noise == DEFAULT_NOISE
+    return task.method in METHODS and noise_ok and task.timeout == DEFAULT_TIMEOUT
+
+
+def _episode(scene: Scene, task: EvalTask) -> tuple[_Planned, bool, str, float]:
+    """`run_episode`: (what was planned, success, failure reason, execution time)."""
+    from utamp_gym.sim.execute import run_episode
+
+    ep = run_episode(scene, task.method, task.seed)
+    spec = method_spec(task.method)
+    facts, scores = affordances_for(
+        scene, spec.affordances, np.random.default_rng(task.seed), DEFAULT_NOISE
+    )  # the same draws as the planning inside run_episode
+    f = ep.failure
+    reason = (
+        ""
+        if f is None
+        else (
+            f["reason"]
+            if f.get("step") is None
+            else f"step {f['step']} {f['action']}: {f['reason']}"
+        )
+    )
+    planned = _Planned(
+        ep.solved,
+        tuple(ep.plan),
+        ep.planning_time_s,
+        None if ep.solved else reason.removeprefix("not planned: "),
+        scores if task.method != "utamp1" else None,
+        facts if spec.domain == "utamp2" else None,
+    )
+    return planned, ep.success, reason, ep.execution_time_s
+
+
+def execute_plan(scene: Scene, plan: tuple[str, ...], seed: int) -> tuple[bool, str, float]:
+    """Execute a pre-computed plan in MuJoCo as `run_episode` does: (success, reason, time)."""
+    from utamp_gym.sim.backend import MujocoBackend
+
+    sim = MujocoBackend()
+    failure = ""
+    start = time.perf_counter()
+    try:
+        sim.reset(scene, np.random.default_rng(seed))
+        for i, action in enumerate(plan):
+            res = sim.execute(action)
+            if not res.success:
+                failure = f"step {i} {action}: {res.reason}"
+                break
+        final = sim.stacked_on_tray()
+    finally:
+        sim.close()
+    others = set(scene.object_names) - {scene.tower_base}
+    if not failure and set(final) != others:
+        failure = f"goal not reached: the tray holds {final or 'nothing'}"
+    return not failure, failure, time.perf_counter() - start
+
+
+def _run(task: EvalTask, start: float) -> ResultRow:
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene(task.scene)
+    exec_time = 0.0
+    if task.grounding == "physics" and _uses_run_episode(task):
+        planned, success, failure, exec_time = _episode(scene, task)
+    else:
+        planned = _plan(scene, task)
+        success, failure = False, ""
+    valid_gt = None
+    if planned.solved:
+        check = check_against_ground_truth(scene, planned.plan)
+        valid_gt = check.valid
+        if task.grounding == "symbolic":
+            success = check.valid
+            failure = "" if check.valid else f"invalid under ground truth: {check.message}"
+        elif not _uses_run_episode(task):
+            success, failure, exec_time = execute_plan(scene, planned.plan, task.seed)
+    else:
+        failure = f"not solved: {planned.reason}"
+        if task.explain and planned.facts is not None:
+            failure += "; " + explain_unsolvable(scene, planned.facts).message
+    s = planned.scores
+    return ResultRow(
+        scene=scene.name,
+        suite=_suite_of(scene.name),
+        n_objects=scene.n_objects,
+        method=task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        noise=task.noise,
+        solved=planned.solved,
+        success=bool(success),
+        failure_reason="" if success else failure,
+        plan_length=len(planned.plan),
+        planning_time_s=planned.planning_time_s,
+        execution_time_s=exec_time,
+        wall_time_s=time.perf_counter() - start,
+        affordance_precision=None if s is None else s.precision,
+        affordance_recall=None if s is None else s.recall,
+        affordance_f1=None if s is None else s.f1,
+        valid_gt=valid_gt,
+        plan=PLAN_SEPARATOR.join(planned.plan),
+    )
+
+
+def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> ResultRow:
+    """The row recorded for a run that crashed (an exception, or its worker process died)."""
+    try:
+        from utamp_gym.suites import resolve_scene
+
+        n_objects = resolve_scene(task.scene).n_objects
+    except Exception:
+        n_objects = 0
+    return ResultRow(
+        scene=task.scene,
+        suite=_suite_of(task.scene),
+        n_objects=n_objects,
+        method=task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        noise=task.noise,
+        solved=False,
+        success=False,
+        failure_reason=reason,
+        plan_length=0,
+        planning_time_s=None,
+        execution_time_s=0.0,
+        wall_time_s=wall_time_s,
+        affordance_precision=None,
+        affordance_recall=None,
+        affordance_f1=None,
+        crashed=True,
+    )
+
+
+def run_task(task: EvalTask) -> ResultRow:
+    """Run one task; any exception becomes a failure row (`crashed`) with its reason."""
+    start = time.perf_counter()
+    try:
+        return _run(task, start)
+    except Exception as exc:
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        reason = f"crashed: {type(exc).__name__}: {exc} (at {where.name}:{where.lineno})"
+        return failure_row(task, reason, time.perf_counter() - start)

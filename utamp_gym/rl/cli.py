@@ -1,0 +1,87 @@
+"""`utamp train`: the RL baselines on the command line (wired into `utamp_gym.cli`).
+
+    utamp train --env UTampKitchen-v0 --algo maskable-ppo|ppo|dqn [--grounding symbolic|physics]
+        [--num-objects N] [--steps N] [--envs K] [--seed S] --out DIR
+
+Heavy imports (torch, stable-baselines3) happen only when the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value}")
+    return value
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    from utamp_gym.rl.train import train
+
+    result = train(
+        env_id=args.env,
+        algo=args.algo,
+        grounding=args.grounding,
+        num_objects=args.num_objects,
+        steps=args.steps,
+        n_envs=args.envs,
+        seed=args.seed,
+        out=args.out,
+        eval_every=args.eval_every,
+        eval_episodes=args.eval_episodes,
+        progress=not args.no_progress,
+        stop_at_target=args.stop_at_target,
+    )
+    reached = (
+        f"{result.steps_to_target} steps ({result.time_to_target_s:.1f} s)"
+        if result.steps_to_target is not None
+        else "not reached"
+    )
+    print(
+        f"{args.algo}: {result.steps} steps in {result.wall_time_s:.1f} s, final success "
+        f"{result.final_success:.2f}, target success at {reached}; model: {result.model_path}"
+    )
+    return 0
+
+
+def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``train`` command to `subparsers` (from ``parser.add_subparsers()``)."""
+    from utamp_gym.env.registry import env_ids
+    from utamp_gym.rl.policy import ALGOS
+    from utamp_gym.rl.train import GROUNDINGS
+
+    p = subparsers.add_parser(
+        "train",
+        help="train an RL baseline (MaskablePPO, PPO or DQN)",
+        description="Train an RL agent on a kitchen env; writes model.zip, checkpoints/, "
+        "learning_curve.png and train.json to --out.",
+    )
+    p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids())
+    p.add_argument("--algo", default="maskable-ppo", choices=ALGOS)
+    p.add_argument("--grounding", default="symbolic", choices=GROUNDINGS)
+    p.add_argument(
+        "--num-objects",
+        type=int,
+        choices=range(2, 6),
+        default=None,
+        metavar="N",
+        help="train on the N-object scenes only (2-5; default all)",
+    )
+    p.add_argument("--steps", type=_positive, default=200_000, help="environment steps")
+    p.add_argument("--envs", type=_positive, default=8, help="parallel envs")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--eval-every", type=_positive, default=10_000, help="steps between evals")
+    p.add_argument("--eval-episodes", type=_positive, default=60, help="episodes per eval")
+    p.add_argument(
+        "--stop-at-target",
+        action="store_true",
+        help="stop at the first evaluation with >= 90%% success",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_train)
+    return p

@@ -1,0 +1,173 @@
+"""`MujocoBackend`: the physics backend of the Gym env (see `utamp_gym.env.backend`).
+
+`reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose,
+draws the initial pose noise from the given generator and lets everything settle;
+`execute` runs one U-TAMP-2 macro action through `skills`. Everything random (pose
+noise, IK restarts, OMPL seeds) is drawn from that one generator, so the same seed
+gives the same rollout. Rendering is headless (set ``MUJOCO_GL=egl``) and cheap:
+shadows, reflections and skybox are off.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from utamp_gym.env.backend import MacroResult
+from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
+from utamp_gym.robot.kinematics import PandaKinematics
+from utamp_gym.robot.panda_mjcf import add_panda, set_home
+from utamp_gym.scene.model import Scene
+from utamp_gym.sim.control import ArmDriver, Timings
+from utamp_gym.sim.decode import parse_action
+from utamp_gym.sim.measure import SimState, settle_objects
+from utamp_gym.sim.skills import run_skill
+from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top, stack_from_poses
+
+CAMERA = "overview"
+#: Finger-pad contact time constant and damping ratio used by this backend. The Panda
+#: model's own (panda_mjcf.PAD_SOLREF, 0.004 s = 2 dt) sits at MuJoCo's stability limit:
+#: squeezing a light member that can turn freely (a mug's handle) the pads chatter and
+#: the member can squirt out (~1 in 100 grasps measured); 3 dt removed it (0 in 120).
+#: Pass ``pad_solref=None`` to keep the robot model's value.
+PAD_SOLREF = (0.006, 1.0)
+FrameSink = Callable[[np.ndarray], None]
+
+
+class MujocoBackend:
+    """Simulated Panda executing macro actions on a kitchen table (MuJoCo + Pinocchio + OMPL).
+
+    `frame_sink`, if set before `reset`, receives an RGB frame (`frame_size` = width,
+    height) every `frame_period` s of simulated time while actions run (for videos).
+    """
+
+    def __init__(
+        self,
+        *,
+        pos_noise: float = 0.003,
+        yaw_noise_deg: float = 2.0,
+        settle_s: float = 0.5,
+        frame_sink: FrameSink | None = None,
+        frame_period: float = 0.1,
+        frame_size: tuple[int, int] = (480, 360),
+        pad_solref: tuple[float, float] | None = PAD_SOLREF,
+    ):
+        self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
+        self.frame_sink, self.frame_period, self.frame_size = frame_sink, frame_period, frame_size
+        self.pad_solref = pad_solref
+        self._kin: PandaKinematics | None = None
+        self._state: SimState | None = None
+        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._steps = 0
+
+    # ------------------------------------------------------------ protocol
+    def reset(self, scene: Scene, rng: np.random.Generator) -> None:
+        """Build the scene's world (+ Panda at home) with seeded pose noise and settle it."""
+        self._close_renderers()
+        if self._kin is None:
+            self._kin = PandaKinematics()
+        spec, info = build_world_spec(
+            scene, rng=rng, pos_noise=self.pos_noise, yaw_noise_deg=self.yaw_noise_deg
+        )
+        handles = add_panda(spec)
+        world = compile_world(spec, info)
+        data = mujoco.MjData(world.model)
+        ids = handles.bind(world.model)
+        if self.pad_solref is not None:
+            world.model.geom_solref[ids.finger_pad_geom_ids] = self.pad_solref
+        set_home(world.model, data, ids)
+        on_step = self._on_step if self.frame_sink is not None else None
+        arm = ArmDriver(world.model, data, ids, self._kin, rng, on_step=on_step)
+        self._state = SimState(world, data, arm)
+        self._steps = 0
+        settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
+        arm.timings = Timings()
+
+    def execute(self, action: str) -> MacroResult:
+        """Run one grounded PDDL macro action; a failure comes back with a reason."""
+        st = self._require()
+        try:
+            act = parse_action(action, st.world.scene)
+        except (GroundingError, UnknownNameError) as exc:
+            return MacroResult(False, f"invalid action {action}: {exc}", Timings().as_dict(0.0))
+        return run_skill(st, act)
+
+    def object_poses(self) -> dict[str, np.ndarray]:
+        """Object name -> [x, y, z, qw, qx, qy, qz] of its frame in the world."""
+        st = self._require()
+        return {
+            n: np.concatenate([st.data.xpos[b], st.data.xquat[b]])
+            for n, b in st.world.body_ids.items()
+        }
+
+    def joint_positions(self) -> np.ndarray:
+        """7 arm joint angles (rad) and 2 finger positions (m)."""
+        st = self._require()
+        ids = st.arm.ids
+        return np.concatenate([st.data.qpos[ids.arm_qpos_adr], st.data.qpos[ids.finger_qpos_adr]])
+
+    def stacked_on_tray(self) -> list[str]:
+        """Objects standing on the tower base, bottom to top (base excluded), as simulated."""
+        st = self._require()
+        stack = stack_from_poses(st.world, st.data)
+        out: list[str] = []
+        cur = st.world.scene.tower_base
+        while True:
+            above = [
+                o
+                for o, s in stack.items()
+                if s == cur and o not in out and rests_on_top(st.world, st.data, o, cur)
+            ]
+            if not above:
+                return out
+            cur = above[0]
+            out.append(cur)
+
+    def render(self, width: int, height: int) -> np.ndarray:
+        """RGB image (height, width, 3) from the overview camera."""
+        st = self._require()
+        key = (int(width), int(height))
+        renderer = self._renderers.get(key)
+        if renderer is None:
+            vis = st.world.model.vis.global_
+            vis.offwidth, vis.offheight = max(vis.offwidth, key[0]), max(vis.offheight, key[1])
+            renderer = self._renderers[key] = mujoco.Renderer(st.world.model, key[1], key[0])
+        renderer.update_scene(st.data, camera=CAMERA)
+        for flag in (
+            mujoco.mjtRndFlag.mjRND_SHADOW,
+            mujoco.mjtRndFlag.mjRND_REFLECTION,
+            mujoco.mjtRndFlag.mjRND_SKYBOX,
+        ):
+            renderer.scene.flags[flag] = 0
+        return renderer.render()
+
+    def close(self) -> None:
+        self._close_renderers()
+        self._state = None
+
+    # ------------------------------------------------------------ helpers
+    @property
+    def state(self) -> SimState:
+        """The live simulation (world, data, arm); for tests and tools."""
+        return self._require()
+
+    def _require(self) -> SimState:
+        if self._state is None:
+            raise SimulationError("MujocoBackend: call reset(scene, rng) first")
+        return self._state
+
+    def _on_step(self) -> None:
+        self._steps += 1
+        st = self._state
+        if st is None or self.frame_sink is None:
+            return
+        period = max(1, round(self.frame_period / st.arm.dt))
+        if self._steps % period == 0:
+            self.frame_sink(self.render(*self.frame_size))
+
+    def _close_renderers(self) -> None:
+        for r in self._renderers.values():
+            r.close()
+        self._renderers.clear()

@@ -1,0 +1,337 @@
+"""Drive the simulated Panda: IK, OMPL transfers, straight Cartesian segments, gripper.
+
+`ArmDriver` owns the robot side of one compiled world: Pinocchio kinematics, two
+collision checkers (a 1 cm margin for free-space planning, a 2 mm one for the
+configurations near contact: grasp, place, Cartesian segments) and the position
+servos. Every motion is a time-parameterised stream of joint setpoints; the physics
+alone decides what the hand and the objects do. All randomness (IK restarts, OMPL)
+comes from the `np.random.Generator` given at construction. Time spent in IK, OMPL
+and stepping is accumulated in `timings` (see `Timings`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from utamp_gym.errors import GroundingError
+from utamp_gym.robot.collision import CollisionChecker
+from utamp_gym.robot.kinematics import HOME_Q, PandaKinematics
+from utamp_gym.robot.motion import (
+    PANDA_ACC_LIMITS,
+    PANDA_VEL_LIMITS,
+    plan_motion,
+    time_parameterize,
+)
+from utamp_gym.robot.panda_mjcf import ARM_KP, ARM_KV, PandaIds
+
+LEAD = ARM_KV[0] / ARM_KP[0]  # servo lag (s) cancelled by velocity feed-forward
+FREE_SCALE = (0.8, 0.5)  # fraction of the Panda's velocity / acceleration limits, empty hand
+HELD_SCALE = (0.5, 0.3)  # ... while carrying an object
+LINE_STEP = 0.01  # m between IK waypoints of a Cartesian segment
+MIN_GAP = 0.004  # m, closed fingers below this gap hold nothing
+MAX_JOINT_JUMP = 0.25  # rad between consecutive Cartesian waypoints (no IK branch flips)
+
+
+@dataclass
+class Timings:
+    """Seconds spent per phase of one macro action (wall clock except `sim_time_s`)."""
+
+    ik_s: float = 0.0
+    plan_s: float = 0.0
+    sim_s: float = 0.0
+    sim_time_s: float = 0.0
+
+    def as_dict(self, wall_s: float) -> dict[str, float]:
+        return {
+            "ik_s": self.ik_s,
+            "plan_s": self.plan_s,
+            "sim_s": self.sim_s,
+            "wall_s": wall_s,
+            "sim_time_s": self.sim_time_s,
+        }
+
+
+@contextmanager
+def ignoring(checker: CollisionChecker, geoms: Sequence[int]) -> Iterator[None]:
+    """Within the block, contacts of the robot with `geoms` (e.g. the grasped object) do
+    not count: the fingers are meant to touch it."""
+    saved = dict(checker.tolerance)
+    for a in checker.ids.geom_ids.tolist():
+        for b in geoms:
+            checker.tolerance[(min(a, b), max(a, b))] = -np.inf
+    try:
+        yield
+    finally:
+        checker.tolerance = saved
+
+
+class ArmDriver:
+    """Position-servo control of one Panda in a compiled MuJoCo model."""
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        ids: PandaIds,
+        kin: PandaKinematics,
+        rng: np.random.Generator,
+        *,
+        on_step: Callable[[], None] | None = None,
+    ):
+        self.model, self.data, self.ids, self.kin, self.rng = model, data, ids, kin, rng
+        self.free = CollisionChecker(model, ids, margin=0.01, self_margin=0.002)
+        self.near = CollisionChecker(model, ids, margin=0.002, self_margin=0.001)
+        self.dt = float(model.opt.timestep)
+        self.on_step = on_step  # called after every mj_step (e.g. a video recorder)
+        self.timings = Timings()
+
+    # ------------------------------------------------------------ state
+    def q(self) -> np.ndarray:
+        return self.data.qpos[self.ids.arm_qpos_adr].copy()
+
+    def gap(self) -> float:
+        """Current finger gap (m)."""
+        return float(self.data.qpos[self.ids.finger_qpos_adr].sum())
+
+    def tcp(self) -> np.ndarray:
+        """4x4 world pose of the TCP in the simulation."""
+        out = np.eye(4)
+        out[:3, :3] = self.data.site_xmat[self.ids.tcp_site_id].reshape(3, 3)
+        out[:3, 3] = self.data.site_xpos[self.ids.tcp_site_id]
+        return out
+
+    def sync(self, checker: CollisionChecker, gap: float | None = None) -> CollisionChecker:
+        """Give `checker` the simulated world state, optionally with the fingers at `gap`."""
+        checker.sync(self.data)
+        if gap is not None:
+            checker.data.qpos[self.ids.finger_qpos_adr] = gap / 2
+        return checker
+
+    # ------------------------------------------------------------ stepping
+    def step(self, n: int) -> None:
+        """Advance the physics `n` steps with the current controls."""
+        t0 = time.perf_counter()
+        if self.on_step is None:
+            mujoco.mj_step(self.model, self.data, nstep=max(n, 0))
+        else:
+            for _ in range(n):
+                mujoco.mj_step(self.model, self.data)
+                self.on_step()
+        self.timings.sim_s += time.perf_counter() - t0
+        self.timings.sim_time_s += max(n, 0) * self.dt
+
+    def track(self, setpoints: np.ndarray) -> None:
+        """Send one row of arm setpoints per physics step."""
+        t0 = time.perf_counter()
+        ctrl, act = self.data.ctrl, self.ids.arm_actuator_ids
+        for q in setpoints:
+            ctrl[act] = q
+            mujoco.mj_step(self.model, self.data)
+            if self.on_step is not None:
+                self.on_step()
+        self.timings.sim_s += time.perf_counter() - t0
+        self.timings.sim_time_s += len(setpoints) * self.dt
+
+    def settle_arm(self, q_goal: np.ndarray, *, tol: float = 2e-3, max_s: float = 0.4) -> None:
+        """Hold `q_goal` until the joints are within `tol` rad and nearly still."""
+        self.data.ctrl[self.ids.arm_actuator_ids] = q_goal
+        for _ in range(max(1, round(max_s / 0.02))):
+            err = np.abs(self.q() - q_goal).max()
+            speed = np.abs(self.data.qvel[self.ids.arm_dof_adr]).max()
+            if err < tol and speed < 0.02:
+                return
+            self.step(10)
+
+    def set_gripper(self, gap: float) -> None:
+        self.data.ctrl[self.ids.gripper_actuator_id] = gap
+
+    def close_gripper(self, *, min_s: float = 0.3, max_s: float = 0.8) -> float:
+        """Squeeze (gap command 0, full gripper force) until the fingers stop; return the
+        final gap (m)."""
+        self.set_gripper(0.0)
+        self.step(round(min_s / self.dt))
+        for _ in range(round((max_s - min_s) / 0.02)):
+            if np.abs(self.data.qvel[self.ids.finger_dof_adr]).max() < 2e-3:
+                break
+            self.step(10)
+        return self.gap()
+
+    def holds_something(self) -> bool:
+        """True if the closed fingers are held apart by something."""
+        return self.gap() > MIN_GAP
+
+    def open_gripper(self, gap: float, *, clear: float | None = None, max_s: float = 0.6) -> None:
+        """Move the fingers to `gap`; wait until they are there or, with `clear`, only
+        until they opened that far beyond the current gap (enough to let go)."""
+        target = gap if clear is None else min(gap, self.gap() + clear)
+        self.set_gripper(gap)
+        for _ in range(round(max_s / 0.02)):
+            if abs(self.gap() - target) < 1.5e-3 or (clear is not None and self.gap() > target):
+                break
+            self.step(10)
+
+    # ------------------------------------------------------------ IK and paths
+    def seed_for(self, target: np.ndarray) -> np.ndarray:
+        """The ready pose turned towards `target` with the wrist pre-rotated to its yaw.
+
+        A natural elbow-up start for IK (at the ready pose, TCP yaw = q1 - (q7 - q7_home)).
+        """
+        q = np.array(HOME_Q)
+        q[0] = np.arctan2(target[1, 3], target[0, 3])
+        yaw = np.arctan2(target[1, 0], target[0, 0])
+        q[6] = HOME_Q[6] + (q[0] - yaw + np.pi) % (2 * np.pi) - np.pi
+        return np.clip(q, self.kin.lower, self.kin.upper)
+
+    def ik_solutions(
+        self,
+        target: np.ndarray,
+        accept: Callable[[np.ndarray], bool] | None,
+        *,
+        restarts: int = 10,
+    ) -> Iterator[np.ndarray]:
+        """Accepted IK solutions for `target`: from `seed_for`, the current and the ready
+        configuration, then from `restarts` random starts (lazily, in that order)."""
+        seeds = [self.seed_for(target), self.q(), np.array(HOME_Q)]
+        for k in range(len(seeds) + restarts):
+            t0 = time.perf_counter()
+            seed = seeds[k] if k < len(seeds) else self.kin.random_q(self.rng)
+            res = self.kin.ik(target, seed, self.rng, accept=accept, max_attempts=1)
+            self.timings.ik_s += time.perf_counter() - t0
+            if res.success:
+                yield res.q
+
+    def line(
+        self,
+        q_start: np.ndarray,
+        start: np.ndarray,
+        offset: np.ndarray,
+        valid: Callable[[np.ndarray], bool],
+        *,
+        what: str,
+    ) -> LinePath:
+        """Joint waypoints moving the TCP from `start` (4x4) by `offset` (m), orientation fixed.
+
+        Each waypoint is solved from the previous one (a step that turns a joint more than
+        `MAX_JOINT_JUMP` is subdivided) and must be `valid`; raises `GroundingError`
+        naming `what` if the line leaves the arm's reach or collides.
+        """
+        offset = np.asarray(offset, dtype=float)
+        length = float(np.linalg.norm(offset))
+        n = max(1, int(np.ceil(length / LINE_STEP)))
+        knots, path = [0.0], [np.asarray(q_start, dtype=float)]
+
+        def solve(s_from: float, s_to: float, depth: int) -> None:
+            target = start.copy()
+            target[:3, 3] = start[:3, 3] + offset * (s_to / length)
+            res = self.kin.ik(target, path[-1], self.rng, max_attempts=1)
+            if res.success and np.abs(res.q - path[-1]).max() <= MAX_JOINT_JUMP:
+                if not valid(res.q):
+                    raise GroundingError(f"{what} would collide ({self._why(res.q)})")
+                knots.append(s_to)
+                path.append(res.q)
+            elif depth < 3:
+                solve(s_from, (s_from + s_to) / 2, depth + 1)
+                solve((s_from + s_to) / 2, s_to, depth + 1)
+            else:
+                raise GroundingError(f"IK infeasible: {what} leaves the arm's reach")
+
+        t0 = time.perf_counter()
+        try:
+            if length > 0:
+                for k in range(1, n + 1):
+                    solve(length * (k - 1) / n, length * k / n, 0)
+        finally:
+            self.timings.ik_s += time.perf_counter() - t0
+        return LinePath(np.array(knots), np.array(path))
+
+    def _why(self, q: np.ndarray) -> str:
+        contacts = self.near.contacts(q)
+        return self.near.describe(contacts) if contacts else "joint limits"
+
+    def move_line(self, line: LinePath, speed: float, acc: float) -> None:
+        """Follow a Cartesian line at up to `speed` m/s (trapezoidal, joint speeds capped)."""
+        if line.length > 0:
+            vel = PANDA_VEL_LIMITS * FREE_SCALE[0]
+            self.track(line_setpoints(line, speed, acc, vel, self.dt))
+        self.settle_arm(line.q[-1])
+
+    def transfer(
+        self, q_goal: np.ndarray, *, held: tuple[int, np.ndarray] | None = None, what: str = ""
+    ) -> None:
+        """Collision-free joint motion (OMPL if the straight line is blocked) to `q_goal`.
+
+        `held` = (body id, tcp_T_obj) carries an object in the collision model. Raises
+        `GroundingError` ("OMPL infeasible: <what>: ...") if no path is found.
+        """
+        checker = self.sync(self.free)
+        if held is not None:
+            checker.attach(held[0], held[1])
+        t0 = time.perf_counter()
+        try:
+            plan = plan_motion(checker, self.q(), q_goal, self.rng, timeout=1.5)
+        except GroundingError as exc:
+            raise GroundingError(f"OMPL infeasible: {what or 'transfer'}: {exc}") from None
+        finally:
+            checker.detach()
+            self.timings.plan_s += time.perf_counter() - t0
+        vel, acc = HELD_SCALE if held is not None else FREE_SCALE
+        setpoints = time_parameterize(
+            plan.waypoints, PANDA_VEL_LIMITS * vel, PANDA_ACC_LIMITS * acc, self.dt, lead=LEAD
+        )
+        self.track(setpoints)
+        self.settle_arm(q_goal)
+
+
+@dataclass(frozen=True)
+class LinePath:
+    """Joint waypoints `q` (N, 7) of a straight TCP line at arc lengths `s` (N,), metres."""
+
+    s: np.ndarray
+    q: np.ndarray
+
+    @property
+    def length(self) -> float:
+        return float(self.s[-1])
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.q[-1]
+
+    def reversed(self) -> LinePath:
+        return LinePath(self.length - self.s[::-1], self.q[::-1])
+
+
+def line_setpoints(
+    line: LinePath, speed: float, acc: float, joint_vel: np.ndarray, dt: float
+) -> np.ndarray:
+    """Setpoints along a line with a trapezoidal arc-length profile and velocity feed-forward.
+
+    The path speed is lowered where needed so no joint exceeds `joint_vel`.
+    """
+    knots, path, length = line.s, line.q, line.length
+    dq = np.diff(path, axis=0) / np.maximum(np.diff(knots), 1e-12)[:, None]
+    v = min(speed, float(np.min(joint_vel / np.maximum(np.abs(dq).max(axis=0), 1e-9))))
+    v = min(v, float(np.sqrt(length * acc)))
+    t_acc = v / acc
+    duration = 2 * t_acc + max(0.0, (length - v * t_acc) / v)
+    t = np.minimum(np.arange(1, int(np.ceil(duration / dt)) + 1) * dt, duration)
+    s = np.where(
+        t < t_acc,
+        0.5 * acc * t**2,
+        np.where(
+            t < duration - t_acc,
+            0.5 * acc * t_acc**2 + v * (t - t_acc),
+            length - 0.5 * acc * (duration - t) ** 2,
+        ),
+    )
+    s = np.clip(s, 0.0, length)
+    sdot = np.where(t < t_acc, acc * t, np.where(t < duration - t_acc, v, acc * (duration - t)))
+    q = np.column_stack([np.interp(s, knots, path[:, j]) for j in range(path.shape[1])])
+    idx = np.clip(np.searchsorted(knots, s, side="right") - 1, 0, len(dq) - 1)
+    return q + LEAD * sdot[:, None] * dq[idx]

@@ -1,0 +1,153 @@
+"""What the physics says: the simulated state the skills act on and the checks on it.
+
+Every success criterion of a macro action is measured here from the simulated poses,
+velocities and contacts (`utamp_gym.sim.world` queries), never taken from the
+symbolic layer: an object that moved or tipped, an object slipping in the hand,
+what an object rests on after release.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from utamp_gym.errors import GroundingError
+from utamp_gym.sim.control import ArmDriver
+from utamp_gym.sim.decode import pose_of, support_point, world_aabb
+from utamp_gym.sim.world import World, object_orientation, rests_on_top, stack_from_poses
+
+MOVED = 0.02  # m, another object moving this far was disturbed
+LIFT = 0.12  # m, least lift after grasping
+LIFT_CLEARANCE = 0.03  # m, lift the held object this far over the tallest other object
+MAX_LIFT = 0.30  # m
+
+
+class SkillFailure(Exception):
+    """A physically failed skill; the message is the reason reported to the caller."""
+
+
+@dataclass
+class Held:
+    """What the hand holds after a successful pick, as measured."""
+
+    obj: str
+    member: str
+    body: int
+    tcp_t_obj: np.ndarray
+    opening: float
+
+
+@dataclass
+class SimState:
+    """The simulated world the skills act on."""
+
+    world: World
+    data: mujoco.MjData
+    arm: ArmDriver
+    held: Held | None = None
+
+
+# ------------------------------------------------------------------ measurements
+def obj_pose(st: SimState, name: str) -> np.ndarray:
+    """Simulated 4x4 world pose of an object's frame."""
+    b = st.world.body_ids[name]
+    return pose_of(st.data.xpos[b], st.data.xquat[b])
+
+
+def snapshot(st: SimState, skip: set[str]) -> dict[str, tuple[np.ndarray, str | None]]:
+    """Position and orientation class of every object not in `skip` (see `disturbed`)."""
+    return {
+        n: (st.data.xpos[b].copy(), object_orientation(st.world.model, st.data, n))
+        for n, b in st.world.body_ids.items()
+        if n not in skip
+    }
+
+
+def disturbed(st: SimState, before: dict[str, tuple[np.ndarray, str | None]]) -> str | None:
+    """Reason naming the first object that moved more than `MOVED` or tipped, else None."""
+    for name, (pos, orientation) in before.items():
+        moved = float(np.linalg.norm(st.data.xpos[st.world.body_ids[name]] - pos))
+        now = object_orientation(st.world.model, st.data, name)
+        if now != orientation:
+            return f"{name} tipped over"
+        if moved > MOVED:
+            return f"{name} moved {moved * 100:.1f} cm"
+    return None
+
+
+def grasp_drift(st: SimState, held: Held) -> tuple[float, float]:
+    """(offset change in m, rotation change in deg) of the held object in the hand."""
+    now = np.linalg.inv(st.arm.tcp()) @ obj_pose(st, held.obj)
+    delta = np.linalg.inv(held.tcp_t_obj) @ now
+    angle = math.degrees(math.acos(np.clip((np.trace(delta[:3, :3]) - 1) / 2, -1.0, 1.0)))
+    return float(np.linalg.norm(delta[:3, 3])), angle
+
+
+def settle_objects(st: SimState, *, min_s: float = 0.25, max_s: float = 1.2) -> None:
+    """Step until every object is nearly at rest (or `max_s` passed)."""
+    arm = st.arm
+    arm.step(round(min_s / arm.dt))
+    dofs = [st.world.dof_adr[n] for n in st.world.body_ids]
+    for _ in range(round((max_s - min_s) / 0.05)):
+        speed = max(float(np.abs(st.data.qvel[a : a + 6]).max()) for a in dofs)
+        if speed < 0.01:
+            return
+        arm.step(round(0.05 / arm.dt))
+
+
+def lift_height(st: SimState, name: str) -> float:
+    """Least lift taking `name` over the tallest other object (`LIFT` .. `MAX_LIFT`)."""
+    scene = st.world.scene
+    bottom = world_aabb(scene.type_of(name).bbox, obj_pose(st, name))[0][2]
+    tops = [
+        world_aabb(scene.type_of(o).bbox, obj_pose(st, o))[1][2]
+        for o in st.world.body_ids
+        if o != name
+    ]
+    need = max(tops, default=0.0) + LIFT_CLEARANCE - bottom
+    return float(np.clip(need, LIFT, MAX_LIFT))
+
+
+def verify_on(st: SimState, name: str, support: str) -> None:
+    """Raise `SkillFailure` unless `name` stands upright/inverted on top of `support`."""
+    tipped = object_orientation(st.world.model, st.data, name) is None
+    now = stack_from_poses(st.world, st.data).get(name)
+    if now != support:
+        below_table = st.data.xpos[st.world.body_ids[name]][2] < -0.05
+        where = now if now is not None else "the floor" if below_table else "nothing stable"
+        how = "tipped over and " if tipped else ""
+        raise SkillFailure(f"{name} fell off {support}: it {how}rests on {where}")
+    if tipped:
+        raise SkillFailure(f"{name} tipped over on {support}")
+    if not rests_on_top(st.world, st.data, name, support):
+        raise SkillFailure(f"{name} rests {_off_surface(st, name, support)}")
+
+
+def _off_surface(st: SimState, name: str, support: str) -> str:
+    """How an object resting on `support` misses its usable surface (for the reason)."""
+    bottom = world_aabb(st.world.scene.type_of(name).bbox, obj_pose(st, name))[0][2]
+    top = 0.0
+    if support in st.world.body_ids:
+        pose = obj_pose(st, support)
+        part = "on" if pose[2, 2] >= 0 else "under"
+        try:
+            top = float(support_point(st.world.scene.type_of(support), part, pose)[2])
+        except GroundingError:  # the support itself is tilted
+            return f"on a tilted {support}"
+    if bottom > top:
+        return f"{(bottom - top) * 100:.1f} cm above the surface of {support} (on its rim)"
+    return f"inside {support} instead of on top"
+
+
+def riders(stack: dict[str, str | None], name: str) -> list[str]:
+    """Objects standing on `name` (directly or higher up), bottom to top."""
+    out, cur = [], name
+    while True:
+        nxt = [o for o, s in stack.items() if s == cur]
+        if not nxt:
+            return out
+        cur = nxt[0]
+        out.append(cur)

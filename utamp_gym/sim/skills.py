@@ -1,0 +1,345 @@
+"""The three U-TAMP-2 macro skills executed in physics: pick, place and slide.
+
+Each skill decodes its symbols against the *current* simulated poses (`decode`),
+grounds them with IK and OMPL (`control.ArmDriver`) and runs the motion through the
+position servos. Success is then measured, never assumed: the gap of the closed
+fingers, how far the object rose with the hand, whether it stayed in the grasp, what
+it rests on after release (`stack_from_poses`, `rests_on_top`), whether anything else
+moved. The symbolic layer is not consulted. Failures come back as a `MacroResult`
+with a reason naming the object.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
+
+import numpy as np
+
+from utamp_gym.env.backend import MacroResult
+from utamp_gym.errors import GroundingError
+from utamp_gym.sim.control import LinePath, Timings, ignoring
+from utamp_gym.sim.decode import (
+    MAX_OPENING,
+    GraspPose,
+    GraspSymbols,
+    MacroAction,
+    footprint_centre,
+    grasp_candidates,
+    hand_for_object,
+    place_object_pose,
+    slide_vector,
+    support_point,
+    yaw_of,
+)
+from utamp_gym.sim.measure import (
+    Held,
+    SimState,
+    SkillFailure,
+    disturbed,
+    grasp_drift,
+    lift_height,
+    obj_pose,
+    riders,
+    settle_objects,
+    snapshot,
+    verify_on,
+)
+from utamp_gym.sim.world import stack_from_poses
+
+APPROACH = (0.25, 1.0)  # m/s, m/s^2: pre-grasp -> grasp, lift, retreat
+PLACE = (0.15, 0.6)  # pre-place -> place
+SLIDE = (0.12, 0.3)  # pushing/pulling an object over its support
+RELEASE_CLEARANCE = 0.006  # m the fingers open beyond the held width before moving away
+PREPLACE = 0.10  # m above the place pose
+RETREAT = 0.10  # m up after releasing
+MAX_SLIP = 0.02  # m, held object offset change while lifting that counts as slipping
+MAX_TILT_DEG = 15.0  # held object rotation while lifting that counts as pivoting
+DROP_SLIP, DROP_TILT_DEG = 0.05, 30.0  # ... during transport: the object was dropped
+REGRASP_SLIP, REGRASP_TILT_DEG = 0.003, 1.0  # ... during transport: re-aim the placement
+SLIDE_TOL = 0.02  # m, slid footprint centre within this of the space centre
+
+
+# ------------------------------------------------------------------ shared phases
+def _plan_grasp(
+    st: SimState, sym: GraspSymbols, lift: float
+) -> tuple[GraspPose, LinePath, LinePath]:
+    """(grasp, approach path pre-grasp -> grasp, lift path) or `GroundingError`.
+
+    Tries both finger-axis signs and several IK solutions; a solution is kept only if
+    the straight approach and the lift (`lift` m up, 0: none) are feasible from it.
+    """
+    arm, world = st.arm, st.world
+    t = world.scene.type_of(sym.obj)
+    geoms = world.geom_ids[sym.obj]
+    tried = []
+    candidates = grasp_candidates(t, sym, obj_pose(st, sym.obj), prefer_x=arm.tcp()[:3, 0])
+    if candidates[0].width > MAX_OPENING:
+        raise SkillFailure(
+            f"cannot grasp {sym.obj} by its {sym.member}: it is {candidates[0].width * 100:.0f} cm"
+            f" between the fingers, the hand opens {MAX_OPENING * 100:.0f} cm"
+        )
+    for g in candidates:
+        near = arm.sync(arm.near, gap=g.opening)
+        with ignoring(near, geoms):
+            for q in arm.ik_solutions(g.tcp, near.is_valid):
+                try:
+                    back = arm.line(
+                        q,
+                        g.tcp,
+                        g.pregrasp[:3, 3] - g.tcp[:3, 3],
+                        near.is_valid,
+                        what="the approach",
+                    )
+                    up = arm.line(
+                        q,
+                        g.tcp,
+                        np.array([0.0, 0.0, lift]),
+                        near.is_valid,
+                        what=f"lifting {sym.obj}",
+                    )
+                except GroundingError as exc:
+                    tried.append(str(exc))
+                    continue
+                return g, back.reversed(), up
+        tried.append("no collision-free IK solution")
+    raise GroundingError(
+        f"IK infeasible: cannot grasp {sym.obj} by its {sym.member} with the palm on "
+        f"'{sym.palm}' ({'; '.join(dict.fromkeys(tried))})"
+    )
+
+
+def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPose, LinePath, Held]:
+    """Move to the pre-grasp, approach, close the fingers; check they hold something.
+
+    Returns the grasp, the planned lift path and what is held. Sets `st.held` as soon
+    as the fingers close, so a later failure lets go.
+    """
+    g, approach, up = _plan_grasp(st, sym, lift)
+    arm = st.arm
+    arm.set_gripper(g.opening)
+    arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
+    arm.open_gripper(g.opening)
+    arm.move_line(approach, *APPROACH)
+    gap = arm.close_gripper()
+    tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, sym.obj)
+    st.held = Held(sym.obj, sym.member, st.world.body_ids[sym.obj], tcp_t_obj, g.opening)
+    if not arm.holds_something():
+        raise SkillFailure(
+            f"grasp failed: the fingers closed on nothing at the {sym.member} of {sym.obj} "
+            f"(gap {gap * 1000:.1f} mm)"
+        )
+    return g, up, st.held
+
+
+def _release_and_retreat(st: SimState, obj: str, opening: float) -> None:
+    """Open the fingers, then move the hand up (as far as `RETREAT`), ignoring `obj`."""
+    arm = st.arm
+    arm.open_gripper(opening, clear=RELEASE_CLEARANCE)
+    st.held = None
+    start, q = arm.kin.fk(arm.q()), arm.q()
+    near = arm.sync(arm.near, gap=opening)
+    with ignoring(near, st.world.geom_ids[obj]):
+        for rise in (RETREAT, RETREAT / 2, RETREAT / 4):
+            try:
+                path = arm.line(
+                    q, start, np.array([0.0, 0.0, rise]), near.is_valid, what="the retreat"
+                )
+            except GroundingError:
+                continue
+            arm.move_line(path, *APPROACH)
+            return
+
+
+# ------------------------------------------------------------------ skills
+def pick(st: SimState, act: MacroAction) -> None:
+    """Grasp the member and lift the object off its support; raises on failure."""
+    sym = act.grasp
+    if st.held is not None:
+        raise SkillFailure(f"cannot pick {sym.obj}: the hand already holds {st.held.obj}")
+    arm = st.arm
+    before = snapshot(st, {sym.obj})
+    lift = lift_height(st, sym.obj)
+    _, path, held = _grasp(st, sym, lift)
+    start_obj, start_tcp = obj_pose(st, sym.obj), arm.tcp()
+    near = arm.sync(arm.near, gap=arm.gap())
+    near.attach(held.body, held.tcp_t_obj)
+    try:
+        with near.tolerating(path.q[0]):
+            blocked = [q for q in path.q if not near.is_valid(q)]
+            if blocked:
+                why = near.describe(near.contacts(blocked[0]))
+                raise GroundingError(f"lifting {sym.obj} would collide ({why})")
+    finally:
+        near.detach()
+    arm.move_line(path, *APPROACH)
+    arm.step(round(0.15 / arm.dt))
+    hand_rise = arm.tcp()[2, 3] - start_tcp[2, 3]
+    obj_rise = obj_pose(st, sym.obj)[2, 3] - start_obj[2, 3]
+    slip, tilt = grasp_drift(st, held)
+    if not arm.holds_something():
+        raise SkillFailure(f"{sym.obj} slipped out of the grasp while lifting")
+    if obj_rise < 0.5 * hand_rise or tilt > MAX_TILT_DEG or slip > MAX_SLIP:
+        how = (
+            "it stayed down"
+            if obj_rise < 0.5 * hand_rise
+            else f"it pivoted {tilt:.0f} deg in the grasp"
+            if tilt > MAX_TILT_DEG
+            else f"it slipped {slip * 100:.1f} cm in the grasp"
+        )
+        raise SkillFailure(
+            f"{sym.obj} is not liftable by its {sym.member}: {how} "
+            f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm)"
+        )
+    moved = disturbed(st, before)
+    if moved:
+        raise SkillFailure(f"picking {sym.obj} disturbed the scene: {moved}")
+    held.tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, sym.obj)  # as carried
+
+
+def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
+    scene = st.world.scene
+    if act.support in st.world.slot_positions:
+        return np.asarray(st.world.slot_positions[act.support], dtype=float)
+    if act.support not in st.world.body_ids:
+        valid = [*st.world.body_ids, *st.world.slot_positions]
+        raise GroundingError(f"unknown support '{act.support}'; valid: {', '.join(valid)}")
+    try:
+        return support_point(
+            scene.type_of(act.support), act.support_part, obj_pose(st, act.support)
+        )
+    except GroundingError as exc:
+        raise SkillFailure(f"cannot place {act.grasp.obj} on {act.support}: {exc}") from None
+
+
+def place(st: SimState, act: MacroAction) -> None:
+    """Carry the held object over the support's centroid, lower it, release, verify."""
+    name, held, arm = act.grasp.obj, st.held, st.arm
+    if held is None or held.obj != name:
+        what = "nothing" if held is None else held.obj
+        raise SkillFailure(f"cannot place {name}: the hand holds {what}")
+    slip, tilt = grasp_drift(st, held)
+    if not arm.holds_something() or slip > DROP_SLIP or tilt > DROP_TILT_DEG:
+        raise SkillFailure(f"{name} is no longer in the hand (it moved {slip * 100:.1f} cm)")
+    before = snapshot(st, {name})
+    up = _plan_place(st, held, act)
+    what = f"carrying {name} to {act.support}"
+    arm.transfer(up.end, held=(held.body, held.tcp_t_obj), what=what)
+    slip, tilt = grasp_drift(st, held)
+    if not arm.holds_something() or slip > DROP_SLIP or tilt > DROP_TILT_DEG:
+        raise SkillFailure(
+            f"{name} dropped during transport (moved {slip * 100:.1f} cm, {tilt:.0f} deg "
+            "in the hand)"
+        )
+    if slip > REGRASP_SLIP or tilt > REGRASP_TILT_DEG:  # it turned in the hand: re-aim
+        held.tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, name)
+        up = _plan_place(st, held, act)
+        arm.transfer(up.end, held=(held.body, held.tcp_t_obj), what=what)
+    arm.move_line(up.reversed(), *PLACE)
+    _release_and_retreat(st, name, held.opening)
+    settle_objects(st)
+    verify_on(st, name, act.support)
+    moved = disturbed(st, before)
+    if moved:
+        raise SkillFailure(f"placing {name} on {act.support} toppled the stack: {moved}")
+
+
+def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
+    """Path from the place configuration up to the pre-place one, or `GroundingError`.
+
+    The object keeps its current yaw; if that does not fit, it turns to its support's.
+    """
+    name, arm = held.obj, st.arm
+    t, now = st.world.scene.type_of(name), obj_pose(st, name)
+    surface = _support_surface(st, act)
+    base_yaw = (
+        yaw_of(obj_pose(st, act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
+    )
+    tried = []
+    near = arm.sync(arm.near, gap=arm.gap())
+    near.attach(held.body, held.tcp_t_obj)
+    try:
+        for yaw in (None, base_yaw):
+            tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.tcp_t_obj)
+            for q in arm.ik_solutions(tcp, near.is_valid):
+                try:
+                    return arm.line(
+                        q,
+                        tcp,
+                        np.array([0.0, 0.0, PREPLACE]),
+                        near.is_valid,
+                        what=f"lowering {name} onto {act.support}",
+                    )
+                except GroundingError as exc:
+                    tried.append(str(exc))
+            tried.append("no collision-free IK solution")
+    finally:
+        near.detach()
+    raise GroundingError(
+        f"IK infeasible: cannot put {name} on {act.support} ({'; '.join(dict.fromkeys(tried))})"
+    )
+
+
+def slide(st: SimState, act: MacroAction) -> None:
+    """Grasp, drag the object over its support into the free space, release, verify."""
+    sym, arm = act.grasp, st.arm
+    if st.held is not None:
+        raise SkillFailure(f"cannot slide {sym.obj}: the hand already holds {st.held.obj}")
+    spaces = {s.name: s for s in st.world.scene.spaces}
+    if act.space not in spaces:
+        raise GroundingError(f"unknown space '{act.space}'; valid: {', '.join(spaces)}")
+    stack = stack_from_poses(st.world, st.data)
+    above = riders(stack, sym.obj)
+    before = snapshot(st, {sym.obj, *above})
+    t = st.world.scene.type_of(sym.obj)
+    g, _, _ = _grasp(st, sym)
+    offset = slide_vector(t, obj_pose(st, sym.obj), np.asarray(spaces[act.space].position))
+    near = arm.sync(arm.near, gap=arm.gap())
+    with ignoring(near, st.world.geom_ids[sym.obj]):
+        path = arm.line(
+            arm.q(), g.tcp, offset, near.is_valid, what=f"sliding {sym.obj} into {act.space}"
+        )
+    arm.move_line(path, *SLIDE)
+    _release_and_retreat(st, sym.obj, g.opening)
+    settle_objects(st)
+    centre = footprint_centre(t, obj_pose(st, sym.obj))
+    miss = float(np.linalg.norm(centre - np.asarray(spaces[act.space].position)))
+    if miss > SLIDE_TOL:
+        raise SkillFailure(
+            f"slide did not reach {act.space}: {sym.obj}'s footprint centre is "
+            f"{miss * 100:.1f} cm from the space centre"
+        )
+    for rider in above:
+        verify_on(st, rider, stack[rider] or sym.obj)
+    moved = disturbed(st, before)
+    if moved:
+        raise SkillFailure(f"sliding {sym.obj} disturbed the scene: {moved}")
+
+
+SKILLS: Mapping[str, Callable[[SimState, MacroAction], None]] = MappingProxyType(
+    {"pick-support": pick, "place-support": place, "slide-support": slide}
+)
+
+
+def run_skill(st: SimState, act: MacroAction) -> MacroResult:
+    """Execute one macro action and report; after a failure the hand keeps only an object
+    it held before and still holds firmly (a failed place), else it lets go."""
+    t0 = time.perf_counter()
+    st.arm.timings = Timings()
+    held_before = st.held
+    try:
+        SKILLS[act.kind](st, act)
+        ok, reason = True, None
+    except (SkillFailure, GroundingError) as exc:
+        ok, reason = False, str(exc)
+        if st.held is not None and (st.held is not held_before or not _firmly_held(st)):
+            _release_and_retreat(st, st.held.obj, st.held.opening)
+            settle_objects(st, min_s=0.1, max_s=0.6)
+    return MacroResult(ok, reason, st.arm.timings.as_dict(time.perf_counter() - t0))
+
+
+def _firmly_held(st: SimState) -> bool:
+    assert st.held is not None
+    slip, tilt = grasp_drift(st, st.held)
+    return st.arm.holds_something() and slip <= DROP_SLIP and tilt <= DROP_TILT_DEG
