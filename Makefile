@@ -30,6 +30,8 @@ test-all: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/planning.py
+	$(BIN)/python benchmarks/env_throughput.py
+	$(BIN)/python benchmarks/physics_suite.py --seeds 1
 
 lint: $(STAMP)
 	$(BIN)/ruff check utamp_gym tests benchmarks examples
