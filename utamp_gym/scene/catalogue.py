@@ -112,10 +112,11 @@ def _number(value: Any, file: str, path: str, *, positive: bool = False) -> floa
     return float(value)
 
 
-def _vec(value: Any, n: int, file: str, path: str) -> tuple[float, ...]:
+def vec(value: Any, n: int, file: str, path: str, *, positive: bool = False) -> tuple[float, ...]:
+    """A list of `n` numbers (each > 0 if `positive`); errors name the file and the field."""
     if not isinstance(value, list) or len(value) != n:
         raise SceneError(f"expected a list of {n} numbers, got {value!r}", file=file, field=path)
-    return tuple(_number(v, file, f"{path}[{i}]") for i, v in enumerate(value))
+    return tuple(_number(v, file, f"{path}[{i}]", positive=positive) for i, v in enumerate(value))
 
 
 def _choice(value: Any, valid: tuple[str, ...], file: str, path: str) -> str:
@@ -141,8 +142,8 @@ def parse_type(
         mpath = f"{path}.members.{mname}"
         if not isinstance(m, Mapping):
             raise SceneError("expected a table", file=file, field=mpath)
-        lo = _vec(_need(m, "min", file, mpath), 3, file, f"{mpath}.min")
-        hi = _vec(_need(m, "max", file, mpath), 3, file, f"{mpath}.max")
+        lo = vec(_need(m, "min", file, mpath), 3, file, f"{mpath}.min")
+        hi = vec(_need(m, "max", file, mpath), 3, file, f"{mpath}.max")
         if any(a >= b for a, b in zip(lo, hi, strict=True)):
             raise SceneError(f"min {lo} must be below max {hi}", file=file, field=mpath)
         members[mname] = Member(
@@ -172,10 +173,10 @@ def parse_type(
             )
         parts[pname] = PartAttrs(
             shape=_choice(_need(p, "shape", file, ppath), SHAPES, file, f"{ppath}.shape"),
-            size=None if size is None else _vec(size, 2, file, f"{ppath}.size"),  # type: ignore[arg-type]
+            size=None if size is None else vec(size, 2, file, f"{ppath}.size"),  # type: ignore[arg-type]
             food_surface=bool(p.get("food_surface", False)),
             height=None if height is None else _number(height, file, f"{ppath}.height"),
-            center=None if center is None else _vec(center, 2, file, f"{ppath}.center"),  # type: ignore[arg-type]
+            center=None if center is None else vec(center, 2, file, f"{ppath}.center"),  # type: ignore[arg-type]
         )
     missing = [s for s in SIDES if s not in parts]
     if missing:

@@ -16,7 +16,7 @@ import numpy as np
 import tomli_w
 
 from utamp_gym.errors import SceneError
-from utamp_gym.scene.catalogue import Catalogue, load_catalogue, parse_type, type_to_dict
+from utamp_gym.scene.catalogue import Catalogue, load_catalogue, parse_type, type_to_dict, vec
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.model import ORIENTATIONS, Scene, SceneObject, Slot, Space
 
@@ -37,18 +37,6 @@ def _name(value: Any, file: str, path: str) -> str:
             f"'{value}' is reserved ({', '.join(sorted(RESERVED))})", file=file, field=path
         )
     return value
-
-
-def _vec(value: Any, n: int, file: str, path: str, *, positive: bool = False) -> tuple[float, ...]:
-    if (
-        not isinstance(value, list)
-        or len(value) != n
-        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
-    ):
-        raise SceneError(f"expected a list of {n} numbers, got {value!r}", file=file, field=path)
-    if positive and any(v <= 0 for v in value):
-        raise SceneError(f"all entries must be > 0, got {value!r}", file=file, field=path)
-    return tuple(float(v) for v in value)
 
 
 def _list(data: Mapping[str, Any], key: str, file: str) -> list[Mapping[str, Any]]:
@@ -92,8 +80,8 @@ def scene_from_dict(
     ws = data.get("workspace")
     if not isinstance(ws, Mapping):
         raise SceneError("missing or not a table", file=file, field="workspace")
-    ws_min = _vec(ws.get("min"), 3, file, "workspace.min")
-    ws_max = _vec(ws.get("max"), 3, file, "workspace.max")
+    ws_min = vec(ws.get("min"), 3, file, "workspace.min")
+    ws_max = vec(ws.get("max"), 3, file, "workspace.max")
     if any(a >= b for a, b in zip(ws_min, ws_max, strict=True)):
         raise SceneError("min must be below max on every axis", file=file, field="workspace")
 
@@ -114,13 +102,13 @@ def scene_from_dict(
     slots: list[Slot] = []
     for i, s in enumerate(_list(data, "slots", file)):
         p = f"slots[{i}]"
-        pos = _vec(s.get("position"), 2, file, f"{p}.position")
+        pos = vec(s.get("position"), 2, file, f"{p}.position")
         if "size" in s:
-            half = np.asarray(_vec(s.get("size"), 2, file, f"{p}.size", positive=True)) / 2
+            half = np.asarray(vec(s.get("size"), 2, file, f"{p}.size", positive=True)) / 2
             lo, hi = np.asarray(pos) - half, np.asarray(pos) + half
         else:
-            lo = np.asarray(_vec(s.get("min"), 2, file, f"{p}.min"))
-            hi = np.asarray(_vec(s.get("max"), 2, file, f"{p}.max"))
+            lo = np.asarray(vec(s.get("min"), 2, file, f"{p}.min"))
+            hi = np.asarray(vec(s.get("max"), 2, file, f"{p}.max"))
             if np.any(lo >= hi):
                 raise SceneError("min must be below max", file=file, field=p)
         region = Box((*lo.tolist(), 0.0), (*hi.tolist(), 0.0))
@@ -152,8 +140,8 @@ def scene_from_dict(
         space = Space(
             _name(s.get("name"), file, f"{p}.name"),
             slot_name,
-            _vec(s.get("position"), 2, file, f"{p}.position"),  # type: ignore[arg-type]
-            _vec(s.get("size"), 2, file, f"{p}.size", positive=True),  # type: ignore[arg-type]
+            vec(s.get("position"), 2, file, f"{p}.position"),  # type: ignore[arg-type]
+            vec(s.get("size"), 2, file, f"{p}.size", positive=True),  # type: ignore[arg-type]
         )
         slot_box = next(sl.box for sl in slots if sl.name == slot_name)
         if not slot_box.contains_xy(space.box, tol=1e-6):
@@ -204,7 +192,7 @@ def scene_from_dict(
                     file=file,
                     field=f"{p}.position",
                 )
-            position = _vec(position, 2, file, f"{p}.position")
+            position = vec(position, 2, file, f"{p}.position")
         unknown = sorted(set(o) - {"name", "type", "on", "orientation", "position"})
         if unknown:
             raise SceneError(
