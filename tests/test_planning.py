@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
@@ -54,6 +56,20 @@ def test_rules_match_gt_and_noise_is_seeded() -> None:
     b = plan_scene(scene, "utamp2-noisy", seed=4, noise=0.2)
     assert a.facts == b.facts and a.plan == b.plan
     assert a.affordance_scores.f1 < 1.0
+
+
+def test_noisy_detection_differs_between_scenes_of_one_seed() -> None:
+    """One seed must not repeat one corruption in every scene of a sweep."""
+    scene = resolve_scene("kitchen-demo")
+    twin = dataclasses.replace(scene, name="kitchen-demo-twin")  # same objects, other name
+    pairs = [
+        (
+            plan_scene(scene, "utamp2-noisy", seed=s, noise=0.2).facts,
+            plan_scene(twin, "utamp2-noisy", seed=s, noise=0.2).facts,
+        )
+        for s in range(3)
+    ]
+    assert any(a != b for a, b in pairs)
 
 
 def test_utamp1_plans_violate_ground_truth_where_they_ignore_affordances() -> None:

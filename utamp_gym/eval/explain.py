@@ -21,13 +21,12 @@ import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.eval.solvability import SolvabilityOracle
 from utamp_gym.planning.methods import (
     DEFAULT_NOISE,
     affordances_for,
+    detection_rng,
     ground_truth_for,
     method_spec,
 )
@@ -180,5 +179,6 @@ def explain_scene(
     spec = method_spec(method)
     if spec.domain != "utamp2":
         return None
-    facts, _ = affordances_for(scene, spec.affordances, np.random.default_rng(seed), noise)
+    rng = detection_rng(seed, scene.name)
+    facts, _ = affordances_for(scene, spec.affordances, rng, noise)
     return explain_unsolvable(scene, facts, max_size=max_size, timeout=timeout, budget_s=budget_s)

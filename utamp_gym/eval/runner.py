@@ -3,9 +3,8 @@
 Grounding ``symbolic``: success = a plan was found and it is valid under the
 ground-truth U-TAMP-2 model (`check_against_ground_truth`); the failure reason is the
 first violated precondition or the planner's reason. Grounding ``physics``: the plan is
-executed in MuJoCo and physics decides (`run_episode` for the built-in methods at the
-default noise; otherwise the pre-computed plan is executed step by step on the same
-backend, exactly as `run_episode` does). An unsolved U-TAMP-2 run is explained
+executed in MuJoCo by `execute_plan`, the executor behind `run_episode` (same seed, same
+rollout), and physics decides. An unsolved U-TAMP-2 run is explained
 (`explain`). `run_task` never raises: a crash becomes a failure row.
 """
 
@@ -14,8 +13,6 @@ from __future__ import annotations
 import time
 import traceback
 from dataclasses import dataclass
-
-import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError
@@ -26,7 +23,6 @@ from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import (
     DEFAULT_NOISE,
     METHODS,
-    affordances_for,
     method_spec,
     plan_scene,
 )
@@ -88,74 +84,13 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
     return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts)
 
 
-def _uses_run_episode(task: EvalTask) -> bool:
-    noise_ok = task.noise is None or task.noise == DEFAULT_NOISE
-    return task.method in METHODS and noise_ok and task.timeout == DEFAULT_TIMEOUT
-
-
-def _episode(scene: Scene, task: EvalTask) -> tuple[_Planned, bool, str, float]:
-    """`run_episode`: (what was planned, success, failure reason, execution time)."""
-    from utamp_gym.sim.execute import run_episode
-
-    ep = run_episode(scene, task.method, task.seed)
-    spec = method_spec(task.method)
-    facts, scores = affordances_for(
-        scene, spec.affordances, np.random.default_rng(task.seed), DEFAULT_NOISE
-    )  # the same draws as the planning inside run_episode
-    f = ep.failure
-    reason = (
-        ""
-        if f is None
-        else (
-            f["reason"]
-            if f.get("step") is None
-            else f"step {f['step']} {f['action']}: {f['reason']}"
-        )
-    )
-    planned = _Planned(
-        ep.solved,
-        tuple(ep.plan),
-        ep.planning_time_s,
-        None if ep.solved else reason.removeprefix("not planned: "),
-        scores if task.method != "utamp1" else None,
-        facts if spec.domain == "utamp2" else None,
-    )
-    return planned, ep.success, reason, ep.execution_time_s
-
-
-def execute_plan(scene: Scene, plan: tuple[str, ...], seed: int) -> tuple[bool, str, float]:
-    """Execute a pre-computed plan in MuJoCo as `run_episode` does: (success, reason, time)."""
-    from utamp_gym.sim.backend import MujocoBackend
-
-    sim = MujocoBackend()
-    failure = ""
-    start = time.perf_counter()
-    try:
-        sim.reset(scene, np.random.default_rng(seed))
-        for i, action in enumerate(plan):
-            res = sim.execute(action)
-            if not res.success:
-                failure = f"step {i} {action}: {res.reason}"
-                break
-        final = sim.stacked_on_tray()
-    finally:
-        sim.close()
-    others = set(scene.object_names) - {scene.tower_base}
-    if not failure and set(final) != others:
-        failure = f"goal not reached: the tray holds {final or 'nothing'}"
-    return not failure, failure, time.perf_counter() - start
-
-
 def _run(task: EvalTask, start: float) -> ResultRow:
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(task.scene)
     exec_time = 0.0
-    if task.grounding == "physics" and _uses_run_episode(task):
-        planned, success, failure, exec_time = _episode(scene, task)
-    else:
-        planned = _plan(scene, task)
-        success, failure = False, ""
+    planned = _plan(scene, task)
+    success, failure = False, ""
     valid_gt = None
     if planned.solved:
         check = check_against_ground_truth(scene, planned.plan)
@@ -163,8 +98,11 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         if task.grounding == "symbolic":
             success = check.valid
             failure = "" if check.valid else f"invalid under ground truth: {check.message}"
-        elif not _uses_run_episode(task):
-            success, failure, exec_time = execute_plan(scene, planned.plan, task.seed)
+        else:
+            from utamp_gym.sim.execute import execute_plan
+
+            ex = execute_plan(scene, planned.plan, task.seed)
+            success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
     else:
         failure = f"not solved: {planned.reason}"
         if task.explain and planned.facts is not None:

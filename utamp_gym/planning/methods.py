@@ -10,6 +10,7 @@
 from __future__ import annotations
 
 import time
+import zlib
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -72,6 +73,15 @@ def ground_truth_for(scene: Scene) -> frozenset[Fact]:
     derived = derive_affordances(types)
     extra = {f for f in derived if any(x in unknown for x in f[1:])}
     return gt | frozenset(extra)
+
+
+def detection_rng(seed: int, scene_name: str) -> np.random.Generator:
+    """The generator of a scene's noisy detection: independent per (seed, scene).
+
+    Keyed on the scene name as well as the seed, so one seed of a sweep corrupts each
+    scene differently (a per-seed stream would repeat one corruption in every scene).
+    """
+    return np.random.default_rng([seed, zlib.crc32(scene_name.encode())])
 
 
 def affordances_for(
@@ -143,10 +153,11 @@ def plan_scene(
     """Abstract the scene, plan with Fast Downward, and report.
 
     The planning time covers affordance detection, problem generation, translation and
-    search. An unsolvable task or a time-out comes back with ``solved=False`` and a reason.
+    search. Without `rng`, noisy detection draws from `detection_rng(seed, scene.name)`.
+    An unsolvable task or a time-out comes back with ``solved=False`` and a reason.
     """
     spec = method_spec(method)
-    rng = rng if rng is not None else np.random.default_rng(seed)
+    rng = rng if rng is not None else detection_rng(seed, scene.name)
     start = time.perf_counter()
     facts, scores = affordances_for(scene, spec.affordances, rng, noise)
     domain = domain_text(spec.domain)

@@ -27,12 +27,6 @@ from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top, stack_from_poses
 
 CAMERA = "overview"
-#: Finger-pad contact time constant and damping ratio used by this backend. The Panda
-#: model's own (panda_mjcf.PAD_SOLREF, 0.004 s = 2 dt) sits at MuJoCo's stability limit:
-#: squeezing a light member that can turn freely (a mug's handle) the pads chatter and
-#: the member can squirt out (~1 in 100 grasps measured); 3 dt removed it (0 in 120).
-#: Pass ``pad_solref=None`` to keep the robot model's value.
-PAD_SOLREF = (0.006, 1.0)
 FrameSink = Callable[[np.ndarray], None]
 
 
@@ -52,11 +46,9 @@ class MujocoBackend:
         frame_sink: FrameSink | None = None,
         frame_period: float = 0.1,
         frame_size: tuple[int, int] = (480, 360),
-        pad_solref: tuple[float, float] | None = PAD_SOLREF,
     ):
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
         self.frame_sink, self.frame_period, self.frame_size = frame_sink, frame_period, frame_size
-        self.pad_solref = pad_solref
         self._kin: PandaKinematics | None = None
         self._state: SimState | None = None
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
@@ -75,8 +67,6 @@ class MujocoBackend:
         world = compile_world(spec, info)
         data = mujoco.MjData(world.model)
         ids = handles.bind(world.model)
-        if self.pad_solref is not None:
-            world.model.geom_solref[ids.finger_pad_geom_ids] = self.pad_solref
         set_home(world.model, data, ids)
         on_step = self._on_step if self.frame_sink is not None else None
         arm = ArmDriver(world.model, data, ids, self._kin, rng, on_step=on_step)

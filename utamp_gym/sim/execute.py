@@ -1,16 +1,17 @@
 """Plan a scene symbolically, then execute the plan step by step in physics.
 
 `run_episode` is the end-to-end check of one scene: `plan_scene` gives the macro
-actions, `MujocoBackend` executes them and stops at the first failure, and the
-result reports what physics measured (the tower standing on the tray, the final
-object poses), with planning, execution and per-step timings. Optionally it writes
+actions and `execute_plan` has `MujocoBackend` execute them, stopping at the first
+failure (`execute_plan` alone replays any given plan, e.g. a VLM's). The result
+reports what physics measured (the tower standing on the tray, the final object
+poses), with planning, execution and per-step timings. Optionally it writes
 a headless video of the execution (MP4 via imageio-ffmpeg, or GIF).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -59,6 +60,71 @@ class EpisodeResult:
         return asdict(self)
 
 
+@dataclass(frozen=True)
+class Execution:
+    """What physics measured while executing one plan (see `execute_plan`)."""
+
+    success: bool
+    failure: dict[str, Any] | None  # {step, action, reason}
+    final_stack: list[str]
+    object_poses: dict[str, list[float]]
+    execution_time_s: float
+    steps: list[StepRecord]
+
+    @property
+    def failure_reason(self) -> str:
+        """One line: ``""`` on success, else ``step I ACTION: REASON`` or the goal shortfall."""
+        f = self.failure
+        if f is None:
+            return ""
+        if f["action"] is None:
+            return f["reason"]
+        return f"step {f['step']} {f['action']}: {f['reason']}"
+
+
+def execute_plan(
+    scene: Scene,
+    plan: Sequence[str],
+    seed: int = 0,
+    video: str | Path | None = None,
+    *,
+    backend: MujocoBackend | None = None,
+) -> Execution:
+    """Execute `plan` on `scene` in MuJoCo, stopping at the first failed step.
+
+    `seed` feeds one generator for pose noise, IK restarts and OMPL. `success` means
+    every step succeeded and all objects stand in one tower on the tray, as simulated.
+    """
+    plan = list(plan)
+    with _video(video) as sink:
+        own = backend is None
+        sim = backend or MujocoBackend()
+        sim.frame_sink = sink
+        try:
+            start = time.perf_counter()
+            sim.reset(scene, np.random.default_rng(seed))
+            if sink is not None:
+                sink(sim.render(*VIDEO_SIZE))
+            steps, failure = _execute(sim, plan)
+            if sink is not None:
+                sink(sim.render(*VIDEO_SIZE))
+            elapsed = time.perf_counter() - start
+            final_stack = sim.stacked_on_tray()
+            poses = {n: [float(v) for v in p] for n, p in sim.object_poses().items()}
+        finally:
+            sim.frame_sink = None
+            if own:
+                sim.close()
+    others = set(scene.object_names) - {scene.tower_base}
+    if failure is None and set(final_stack) != others:
+        failure = {
+            "step": len(plan),
+            "action": None,
+            "reason": f"goal not reached: the tray holds {final_stack or 'nothing'}",
+        }
+    return Execution(failure is None, failure, final_stack, poses, elapsed, steps)
+
+
 def run_episode(
     scene: Scene | str,
     method: str = "utamp2-gt",
@@ -67,12 +133,11 @@ def run_episode(
     *,
     backend: MujocoBackend | None = None,
 ) -> EpisodeResult:
-    """Plan `scene` with `method`, execute it in MuJoCo and measure the result.
+    """Plan `scene` with `method`, execute it in MuJoCo (`execute_plan`) and measure.
 
-    `seed` drives the planner's randomness and, through one generator, the pose noise,
-    IK restarts and OMPL: the same seed gives the same rollout. Execution stops at the
-    first failed step. `success` means every step succeeded and all objects stand in
-    one tower on the tray, as simulated.
+    `seed` drives the planner's randomness and the physics generator: the same seed
+    gives the same rollout. An unsolved scene is not executed (its poses are measured
+    after reset).
     """
     if isinstance(scene, str):
         from utamp_gym.suites import resolve_scene
@@ -80,49 +145,24 @@ def run_episode(
         scene = resolve_scene(scene)
     t0 = time.perf_counter()
     outcome = plan_scene(scene, method, seed=seed)
-    plan = list(outcome.plan)
-    with _video(video) as sink:
-        own = backend is None
-        sim = backend or MujocoBackend()
-        sim.frame_sink = sink
-        try:
-            t_exec = time.perf_counter()
-            sim.reset(scene, np.random.default_rng(seed))
-            if sink is not None:
-                sink(sim.render(*VIDEO_SIZE))
-            steps, failure = _execute(sim, plan) if outcome.solved else ([], None)
-            if sink is not None:
-                sink(sim.render(*VIDEO_SIZE))
-            execution_time = time.perf_counter() - t_exec
-            final_stack = sim.stacked_on_tray()
-            poses = {n: [float(v) for v in p] for n, p in sim.object_poses().items()}
-        finally:
-            sim.frame_sink = None
-            if own:
-                sim.close()
-    others = set(scene.object_names) - {scene.tower_base}
+    ex = execute_plan(scene, outcome.plan if outcome.solved else (), seed, video, backend=backend)
+    failure = ex.failure
     if not outcome.solved:
         failure = {"step": None, "action": None, "reason": f"not planned: {outcome.reason}"}
-    elif failure is None and set(final_stack) != others:
-        failure = {
-            "step": len(plan),
-            "action": None,
-            "reason": f"goal not reached: the tray holds {final_stack or 'nothing'}",
-        }
     return EpisodeResult(
         scene=scene.name,
         method=method,
         seed=seed,
         solved=outcome.solved,
-        plan=plan,
+        plan=list(outcome.plan),
         success=outcome.solved and failure is None,
         failure=failure,
-        final_stack=final_stack,
-        object_poses=poses,
+        final_stack=ex.final_stack,
+        object_poses=ex.object_poses,
         planning_time_s=outcome.planning_time_s,
-        execution_time_s=execution_time,
+        execution_time_s=ex.execution_time_s,
         wall_time_s=time.perf_counter() - t0,
-        steps=steps,
+        steps=ex.steps,
     )
 
 

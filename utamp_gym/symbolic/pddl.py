@@ -16,104 +16,24 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 from utamp_gym.errors import PddlError
+from utamp_gym.symbolic.pddl_model import Action, Atom, Domain, Literal, Problem
+
+__all__ = [
+    "Action",
+    "Atom",
+    "Domain",
+    "Literal",
+    "Problem",
+    "check_problem",
+    "parse_domain",
+    "parse_plan",
+    "parse_problem",
+]
 
 SUPPORTED_REQUIREMENTS = (":strips", ":typing", ":negative-preconditions", ":equality")
 _TOKEN = re.compile(r"\(|\)|[^\s()]+")
 _STEP = re.compile(r"\(\s*([^\s()]+(?:\s+[^\s()]+)*)\s*\)")
 _KEYWORDS = ("and", "not", "or", "imply", "forall", "exists", "when", "either", "increase")
-
-
-@dataclass(frozen=True)
-class Atom:
-    """A predicate applied to arguments (variables ``?x``, constants or objects)."""
-
-    predicate: str
-    args: tuple[str, ...] = ()
-
-    def __str__(self) -> str:
-        return "(" + " ".join((self.predicate, *self.args)) + ")"
-
-
-@dataclass(frozen=True)
-class Literal:
-    """An atom or its negation; predicate ``=`` means equality of its two arguments."""
-
-    atom: Atom
-    positive: bool = True
-
-    def __str__(self) -> str:
-        return str(self.atom) if self.positive else f"(not {self.atom})"
-
-
-@dataclass(frozen=True)
-class Action:
-    """An action schema: typed parameters, precondition literals, add and delete effects."""
-
-    name: str
-    parameters: tuple[tuple[str, str], ...]  # (?var, type)
-    precondition: tuple[Literal, ...]
-    add_effects: tuple[Atom, ...]
-    del_effects: tuple[Atom, ...]
-
-    @property
-    def arity(self) -> int:
-        return len(self.parameters)
-
-    def instantiate(
-        self, args: Iterable[str]
-    ) -> tuple[tuple[Literal, ...], tuple[Atom, ...], tuple[Atom, ...]]:
-        """Substitute `args` for the parameters: (precondition, add effects, delete effects)."""
-        sub = dict(zip((v for v, _ in self.parameters), args, strict=True))
-
-        def atom(a: Atom) -> Atom:
-            return Atom(a.predicate, tuple(sub.get(x, x) for x in a.args))
-
-        pre = tuple(Literal(atom(lit.atom), lit.positive) for lit in self.precondition)
-        return pre, tuple(map(atom, self.add_effects)), tuple(map(atom, self.del_effects))
-
-
-@dataclass(frozen=True)
-class Domain:
-    """A parsed domain; mappings are read-only and `types` maps each type to its parent."""
-
-    name: str
-    requirements: tuple[str, ...]
-    types: Mapping[str, str | None]
-    constants: Mapping[str, str]  # name -> type
-    predicates: Mapping[str, tuple[str, ...]]  # name -> argument types
-    actions: Mapping[str, Action]
-    spelling: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
-    source: str = field(default="<string>", compare=False, repr=False)
-
-    def is_subtype(self, sub: str, sup: str) -> bool:
-        """True if type `sub` equals `sup` or inherits from it."""
-        t: str | None = sub
-        while t is not None and t != sup:
-            t = self.types.get(t)
-        return t is not None
-
-    def show(self, item: Atom | Literal) -> str:
-        """PDDL text of an atom or literal with the predicate spelled as in the domain."""
-        if isinstance(item, Literal):
-            return self.show(item.atom) if item.positive else f"(not {self.show(item.atom)})"
-        return "(" + " ".join((self.spelling.get(item.predicate, item.predicate), *item.args)) + ")"
-
-    def fluent_predicates(self) -> frozenset[str]:
-        """Predicates that occur in some effect; all others are static."""
-        return frozenset(a.predicate for act in self.actions.values()
-                         for a in (*act.add_effects, *act.del_effects))
-
-
-@dataclass(frozen=True)
-class Problem:
-    """A parsed problem; `objects` maps object name to type (domain constants excluded)."""
-
-    name: str
-    domain_name: str
-    objects: Mapping[str, str]
-    init: frozenset[Atom]
-    goal: tuple[Literal, ...]
-    source: str = field(default="<string>", compare=False, repr=False)
 
 
 @dataclass
@@ -153,8 +73,9 @@ def _read(text: str, source: str) -> list[str | _Node]:
             else:
                 stack[-1].items.append(tok)
     if len(stack) > 1:
-        raise _fail(source, suspect or stack[-1].line,
-                    "unbalanced parentheses: '(' is never closed")
+        raise _fail(
+            source, suspect or stack[-1].line, "unbalanced parentheses: '(' is never closed"
+        )
     return stack[0].items
 
 
@@ -183,8 +104,13 @@ class _Parser:
         top = _read(text, self.source)
         root = top[0] if len(top) == 1 and isinstance(top[0], _Node) else None
         head = root.items[1] if root is not None and len(root.items) > 1 else None
-        if not (root and str(root.items[0]).lower() == "define" and isinstance(head, _Node)
-                and len(head.items) == 2 and str(head.items[0]).lower() == kind):
+        if not (
+            root
+            and str(root.items[0]).lower() == "define"
+            and isinstance(head, _Node)
+            and len(head.items) == 2
+            and str(head.items[0]).lower() == kind
+        ):
             raise self.fail(root, f"expected exactly one (define ({kind} NAME) ...)")
         return self.sym(head.items[1], f"{kind} name"), root
 
@@ -193,8 +119,13 @@ class _Parser:
             sec = self.node(item, root.line, "a (:section ...)")
             yield (self.sym(sec.items[0], "a section keyword") if sec.items else ""), sec
 
-    def typed_list(self, items: list[str | _Node], line: int, variables: bool,
-                   types: Mapping[str, object] | None = None) -> list[tuple[str, str]]:
+    def typed_list(
+        self,
+        items: list[str | _Node],
+        line: int,
+        variables: bool,
+        types: Mapping[str, object] | None = None,
+    ) -> list[tuple[str, str]]:
         """Parse ``a b - t c`` into [(a, t), (b, t), (c, object)]; check types if given."""
         out: list[tuple[str, str]] = []
         pending: list[str] = []
@@ -215,12 +146,14 @@ class _Parser:
         out += [(p, "object") for p in pending]
         for name, typ in out if types is not None else ():
             if typ not in types:
-                raise self.fail(line, f"unknown type '{typ}' of '{name}'; "
-                                f"declared: {', '.join(sorted(types))}")
+                raise self.fail(
+                    line, f"unknown type '{typ}' of '{name}'; declared: {', '.join(sorted(types))}"
+                )
         return out
 
-    def literals(self, item: str | _Node, line: int, ok: Iterable[str] | None, allow_eq: bool,
-                 what: str) -> list[Literal]:
+    def literals(
+        self, item: str | _Node, line: int, ok: Iterable[str] | None, allow_eq: bool, what: str
+    ) -> list[Literal]:
         """Parse a conjunction (``(and ...)``, ``()`` or a single literal)."""
         node = self.node(item, line, what)
         if not node.items:
@@ -240,18 +173,26 @@ class _Parser:
             raise self.fail(node, f"empty atom in {what}")
         pred = self.sym(node.items[0], "a predicate")
         if pred in _KEYWORDS or (pred == "=" and not allow_eq):
-            raise self.fail(node, f"unsupported '{pred}' in {what} (supported: a conjunction of "
-                            f"atoms and (not atom){' and (= a b)' if allow_eq else ''})")
+            raise self.fail(
+                node,
+                f"unsupported '{pred}' in {what} (supported: a conjunction of "
+                f"atoms and (not atom){' and (= a b)' if allow_eq else ''})",
+            )
         args = tuple(self.sym(x, "an argument") for x in node.items[1:])
         if self.predicates is None and pred != "=":
             return Atom(pred, args)
         if pred != "=" and pred not in self.predicates:
-            raise self.fail(node, f"unknown predicate '{pred}' in {what}; "
-                            f"declared: {', '.join(sorted(self.predicates))}")
+            raise self.fail(
+                node,
+                f"unknown predicate '{pred}' in {what}; "
+                f"declared: {', '.join(sorted(self.predicates))}",
+            )
         arity = 2 if pred == "=" else len(self.predicates[pred])
         if len(args) != arity:
-            raise self.fail(node, f"wrong arity for '{pred}' in {what}: expects {arity} "
-                            f"argument(s), got {len(args)}")
+            raise self.fail(
+                node,
+                f"wrong arity for '{pred}' in {what}: expects {arity} argument(s), got {len(args)}",
+            )
         bad = [a for a in args if ok is not None and a not in ok]
         if bad:
             kind = "variable" if bad[0].startswith("?") else "object"
@@ -275,8 +216,11 @@ def parse_domain(text: str, source: str = "<string>") -> Domain:
             reqs = [p.sym(r, "a requirement") for r in body]
             bad = [r for r in reqs if r not in SUPPORTED_REQUIREMENTS]
             if bad:
-                raise p.fail(sec, f"unsupported requirement(s) {' '.join(bad)}; "
-                             f"supported: {' '.join(SUPPORTED_REQUIREMENTS)}")
+                raise p.fail(
+                    sec,
+                    f"unsupported requirement(s) {' '.join(bad)}; "
+                    f"supported: {' '.join(SUPPORTED_REQUIREMENTS)}",
+                )
         elif key == ":types":
             for t, parent in p.typed_list(body, sec.line, variables=False):
                 types[t] = parent
@@ -303,32 +247,58 @@ def parse_domain(text: str, source: str = "<string>") -> Domain:
                 raise p.fail(sec, f"duplicate action '{act.name}'")
             actions[act.name] = act
         else:
-            raise p.fail(sec, f"unsupported domain section '{key}'; supported: :requirements "
-                         ":types :constants :predicates :action")
-    return Domain(name, tuple(reqs), MappingProxyType(types), MappingProxyType(constants),
-                  MappingProxyType(preds), MappingProxyType(actions),
-                  MappingProxyType(spelling), source)
+            raise p.fail(
+                sec,
+                f"unsupported domain section '{key}'; supported: :requirements "
+                ":types :constants :predicates :action",
+            )
+    return Domain(
+        name,
+        tuple(reqs),
+        MappingProxyType(types),
+        MappingProxyType(constants),
+        MappingProxyType(preds),
+        MappingProxyType(actions),
+        MappingProxyType(spelling),
+        source,
+    )
 
 
-def _parse_action(p: _Parser, sec: _Node, types: Mapping[str, str | None],
-                  constants: Mapping[str, str]) -> Action:
+def _parse_action(
+    p: _Parser, sec: _Node, types: Mapping[str, str | None], constants: Mapping[str, str]
+) -> Action:
     name = p.sym(sec.items[1], "an action name") if len(sec.items) > 1 else ""
     rest = sec.items[2:]
     keys = [p.sym(k, "a keyword") for k in rest[::2]]
     fields = dict(zip(keys, rest[1::2], strict=False))
     if not name or len(rest) % 2 or set(keys) - {":parameters", ":precondition", ":effect"}:
-        raise p.fail(sec, f"action '{name}': expected (:action NAME :parameters (...) "
-                     ":precondition (...) :effect (...))")
+        raise p.fail(
+            sec,
+            f"action '{name}': expected (:action NAME :parameters (...) "
+            ":precondition (...) :effect (...))",
+        )
     pnode = p.node(fields.get(":parameters", _Node(sec.line)), sec.line, "a parameter list")
     params = p.typed_list(pnode.items, pnode.line, True, types)
     if len({v for v, _ in params}) != len(params):
         raise p.fail(pnode, f"action '{name}': duplicate parameter name")
     ok = {v for v, _ in params} | set(constants)
-    pre, eff = (p.literals(fields.get(k, _Node(sec.line)), sec.line, ok, k == ":precondition",
-                           f"{k[1:]} of '{name}'") for k in (":precondition", ":effect"))
-    return Action(name, tuple(params), tuple(pre),
-                  tuple(lit.atom for lit in eff if lit.positive),
-                  tuple(lit.atom for lit in eff if not lit.positive))
+    pre, eff = (
+        p.literals(
+            fields.get(k, _Node(sec.line)),
+            sec.line,
+            ok,
+            k == ":precondition",
+            f"{k[1:]} of '{name}'",
+        )
+        for k in (":precondition", ":effect")
+    )
+    return Action(
+        name,
+        tuple(params),
+        tuple(pre),
+        tuple(lit.atom for lit in eff if lit.positive),
+        tuple(lit.atom for lit in eff if not lit.positive),
+    )
 
 
 def parse_problem(text: str, source: str = "<string>", domain: Domain | None = None) -> Problem:
@@ -352,19 +322,22 @@ def parse_problem(text: str, source: str = "<string>", domain: Domain | None = N
             goal = p.literals(sec.items[1], sec.line, None, False, "the goal")
             lines.update(dict.fromkeys(goal, sec.line))
         elif key != ":requirements":
-            raise p.fail(sec, f"unsupported problem section '{key}'; supported: :domain "
-                         ":objects :init :goal")
+            raise p.fail(
+                sec, f"unsupported problem section '{key}'; supported: :domain :objects :init :goal"
+            )
     if goal is None:
         raise p.fail(root, "problem has no (:goal ...)")
-    problem = Problem(name, dom_name, MappingProxyType(objects), frozenset(init), tuple(goal),
-                      source)
+    problem = Problem(
+        name, dom_name, MappingProxyType(objects), frozenset(init), tuple(goal), source
+    )
     if domain is not None:
         check_problem(domain, problem, lines)
     return problem
 
 
-def check_problem(domain: Domain, problem: Problem,
-                  lines: Mapping[object, int] | None = None) -> None:
+def check_problem(
+    domain: Domain, problem: Problem, lines: Mapping[object, int] | None = None
+) -> None:
     """Raise `PddlError` if `problem` does not fit `domain` (names, arities, objects, types).
 
     `lines` optionally maps objects, init atoms and goal literals to their source line.
@@ -376,14 +349,17 @@ def check_problem(domain: Domain, problem: Problem,
     for o, t in problem.objects.items():
         p.typed_list([o, "-", t], lines.get(o, 0), False, domain.types)
         if domain.constants.get(o, t) != t:
-            raise p.fail(lines.get(o), f"object '{o}' redeclares a constant of type "
-                         f"'{domain.constants[o]}' as '{t}'")
+            raise p.fail(
+                lines.get(o),
+                f"object '{o}' redeclares a constant of type '{domain.constants[o]}' as '{t}'",
+            )
     ok = set(domain.constants) | set(problem.objects)
     for a in sorted(problem.init, key=lambda a: (lines.get(a, 0), str(a))):
         p.atom(_Node(lines.get(a, 0), [a.predicate, *a.args]), ok, False, "the initial state")
     for lit in problem.goal:
-        p.atom(_Node(lines.get(lit, 0), [lit.atom.predicate, *lit.atom.args]), ok, False,
-               "the goal")
+        p.atom(
+            _Node(lines.get(lit, 0), [lit.atom.predicate, *lit.atom.args]), ok, False, "the goal"
+        )
 
 
 def parse_plan(text: str, source: str = "<string>") -> list[tuple[str, ...]]:

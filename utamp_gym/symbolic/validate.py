@@ -66,8 +66,10 @@ def _step_error(domain: Domain, objects: dict[str, str], step: tuple[str, ...]) 
         if obj not in objects:
             return f"unknown object '{obj}'"
         if not domain.is_subtype(objects[obj], typ):
-            return (f"object '{obj}' has type '{objects[obj]}' but parameter {var} of "
-                    f"'{name}' needs type '{typ}'")
+            return (
+                f"object '{obj}' has type '{objects[obj]}' but parameter {var} of "
+                f"'{name}' needs type '{typ}'"
+            )
     return None
 
 
@@ -96,21 +98,34 @@ def validate_plan(
                 error = f"precondition {domain.show(failed)} is false"
         if error is not None:
             return ValidationResult(
-                valid=False, steps_applied=applied, failing_step=number, failing_action=label,
+                valid=False,
+                steps_applied=applied,
+                failing_step=number,
+                failing_action=label,
                 failed_precondition=None if failed is None else domain.show(failed),
-                message=f"step {number} {label}: {error}", final_state=frozenset(state))
+                message=f"step {number} {label}: {error}",
+                final_state=frozenset(state),
+            )
         state.difference_update(delete)
         state.update(add)
         applied += 1
     unmet = tuple(domain.show(lit) for lit in problem.goal if not holds(lit, state))
     if unmet:
-        what = (f"goal literal {unmet[0]} is false" if len(unmet) == 1
-                else f"{len(unmet)} goal literals are false: {', '.join(unmet)}")
+        what = (
+            f"goal literal {unmet[0]} is false"
+            if len(unmet) == 1
+            else f"{len(unmet)} goal literals are false: {', '.join(unmet)}"
+        )
         message = f"plan applied but {what}"
     else:
         message = f"plan valid: {applied} steps reach the goal"
-    return ValidationResult(valid=not unmet, steps_applied=applied, goal_unmet=unmet,
-                            message=message, final_state=frozenset(state))
+    return ValidationResult(
+        valid=not unmet,
+        steps_applied=applied,
+        goal_unmet=unmet,
+        message=message,
+        final_state=frozenset(state),
+    )
 
 
 def _read(path: str | Path, what: str) -> str:
@@ -125,7 +140,6 @@ def validate_files(
 ) -> ValidationResult:
     """Read and parse the three files (errors name the file), then `validate_plan`."""
     domain = parse_domain(_read(domain_path, "domain"), source=str(domain_path))
-    problem = parse_problem(_read(problem_path, "problem"), source=str(problem_path),
-                            domain=domain)
+    problem = parse_problem(_read(problem_path, "problem"), source=str(problem_path), domain=domain)
     plan = parse_plan(_read(plan_path, "plan"), source=str(plan_path))
     return validate_plan(domain, problem, plan)
