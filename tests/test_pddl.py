@@ -79,9 +79,16 @@ def test_action_round_trip() -> None:
     pick = parse_domain(DOMAIN).actions["pick"]
     assert pick.parameters == (("?b", "block"), ("?s", "surface"))
     assert [str(lit) for lit in pick.precondition] == [
-        "(not (= ?b ?s))", "(on ?b ?s)", "(clear ?b)", "(not (busy arm))"]
-    assert pick.add_effects == (Atom("holding", ("arm", "?b")), Atom("busy", ("arm",)),
-                                Atom("clear", ("?s",)))
+        "(not (= ?b ?s))",
+        "(on ?b ?s)",
+        "(clear ?b)",
+        "(not (busy arm))",
+    ]
+    assert pick.add_effects == (
+        Atom("holding", ("arm", "?b")),
+        Atom("busy", ("arm",)),
+        Atom("clear", ("?s",)),
+    )
     assert pick.del_effects == (Atom("on", ("?b", "?s")), Atom("clear", ("?b",)))
     pre, add, dele = pick.instantiate(["a", "s1"])
     assert pre[0] == Literal(Atom("=", ("a", "s1")), positive=False)
@@ -98,18 +105,33 @@ def test_problem_round_trip() -> None:
     d = parse_domain(DOMAIN)
     p = parse_problem(PROBLEM, source="bw.pddl", domain=d)
     assert p.name == "bw-3" and p.domain_name == "bw"
-    assert dict(p.objects) == {"a": "block", "b": "block", "c": "block",
-                               "s1": "slot", "s2": "slot", "s3": "slot"}
+    assert dict(p.objects) == {
+        "a": "block",
+        "b": "block",
+        "c": "block",
+        "s1": "slot",
+        "s2": "slot",
+        "s3": "slot",
+    }
     assert len(p.init) == 18
     assert Atom("fitson", ("a", "b")) in p.init and Atom("clear", ("a",)) in p.init
     assert [str(lit) for lit in p.goal] == [
-        "(on a b)", "(on b c)", "(clear s1)", "(clear s2)", "(not (busy arm))"]
+        "(on a b)",
+        "(on b c)",
+        "(clear s1)",
+        "(clear s2)",
+        "(not (busy arm))",
+    ]
     assert parse_problem(PROBLEM) == p  # syntax-only parse gives the same problem
 
 
 def test_parse_plan_reads_sas_plan() -> None:
     assert parse_plan(SAS_PLAN) == [
-        ("pick", "b", "s2"), ("place", "b", "c"), ("pick", "a", "s1"), ("place", "a", "b")]
+        ("pick", "b", "s2"),
+        ("place", "b", "c"),
+        ("pick", "a", "s1"),
+        ("place", "a", "b"),
+    ]
     assert parse_plan("; cost = 0 (unit cost)\n\n") == []
 
 
@@ -119,19 +141,33 @@ def test_parse_plan_reads_sas_plan() -> None:
         ("(domain bw)", "dom.pddl:1: expected exactly one (define (domain NAME) ...)"),
         (DOMAIN.rstrip()[:-1], "dom.pddl:2: unbalanced parentheses: '(' is never closed"),
         (DOMAIN + ")", "dom.pddl:23: unbalanced parentheses: ')'"),
-        (DOMAIN.replace("(not (busy arm)))\n    :effect (and (holding",
-                        "(not (bussy arm)))\n    :effect (and (holding"),
-         "dom.pddl:12: unknown predicate 'bussy'"),
-        (DOMAIN.replace("(clear ?b) (not (busy arm))", "(clear ?b ?s) (not (busy arm))"),
-         "dom.pddl:12: wrong arity for 'clear'"),
-        (DOMAIN.replace("(?b - block ?s - surface)\n    :precondition (and (not",
-                        "(?b - blok ?s - surface)\n    :precondition (and (not"),
-         "dom.pddl:11: unknown type 'blok'"),
-        (DOMAIN.replace("(on ?b ?s) (clear ?b) (not", "(on ?b ?x) (clear ?b) (not"),
-         "unknown variable '?x'"),
+        (
+            DOMAIN.replace(
+                "(not (busy arm)))\n    :effect (and (holding",
+                "(not (bussy arm)))\n    :effect (and (holding",
+            ),
+            "dom.pddl:12: unknown predicate 'bussy'",
+        ),
+        (
+            DOMAIN.replace("(clear ?b) (not (busy arm))", "(clear ?b ?s) (not (busy arm))"),
+            "dom.pddl:12: wrong arity for 'clear'",
+        ),
+        (
+            DOMAIN.replace(
+                "(?b - block ?s - surface)\n    :precondition (and (not",
+                "(?b - blok ?s - surface)\n    :precondition (and (not",
+            ),
+            "dom.pddl:11: unknown type 'blok'",
+        ),
+        (
+            DOMAIN.replace("(on ?b ?s) (clear ?b) (not", "(on ?b ?x) (clear ?b) (not"),
+            "unknown variable '?x'",
+        ),
         (DOMAIN.replace(":equality)", ":equality :adl)"), "unsupported requirement(s) :adl"),
-        (DOMAIN.replace("(and (holding arm ?b) (clear ?s)", "(or (holding arm ?b) (clear ?s)"),
-         "dom.pddl:16: unsupported 'or' in precondition of 'place'"),
+        (
+            DOMAIN.replace("(and (holding arm ?b) (clear ?s)", "(or (holding arm ?b) (clear ?s)"),
+            "dom.pddl:16: unsupported 'or' in precondition of 'place'",
+        ),
     ],
 )
 def test_domain_errors_name_source_and_problem(text: str, expected: str) -> None:

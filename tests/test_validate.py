@@ -90,8 +90,9 @@ def test_short_plan_reports_unmet_goal() -> None:
     result = run(PLAN[:3])
     assert not result.valid and result.steps_applied == 3 and result.failing_step is None
     assert result.goal_unmet == ("(on a b)", "(not (busy arm))")
-    assert result.message == ("plan applied but 2 goal literals are false: "
-                              "(on a b), (not (busy arm))")
+    assert result.message == (
+        "plan applied but 2 goal literals are false: (on a b), (not (busy arm))"
+    )
     assert run(PLAN[:2]).goal_unmet == ("(on a b)", "(clear s1)")
     assert run([]).steps_applied == 0
 
@@ -105,13 +106,17 @@ def test_add_wins_over_delete() -> None:
 @pytest.mark.parametrize(
     ("step", "message"),
     [
-        (("fly", "a", "s1"), "step 2 (fly a s1): unknown action 'fly'; valid: pick, place, "
-                             "regrip"),
-        (("pick", "a"), "step 2 (pick a): action 'pick' takes 2 argument(s) "
-                        "(?b - block ?s - surface), got 1"),
+        (("fly", "a", "s1"), "step 2 (fly a s1): unknown action 'fly'; valid: pick, place, regrip"),
+        (
+            ("pick", "a"),
+            "step 2 (pick a): action 'pick' takes 2 argument(s) (?b - block ?s - surface), got 1",
+        ),
         (("pick", "z", "s1"), "step 2 (pick z s1): unknown object 'z'"),
-        (("pick", "s1", "a"), "step 2 (pick s1 a): object 's1' has type 'slot' but parameter "
-                              "?b of 'pick' needs type 'block'"),
+        (
+            ("pick", "s1", "a"),
+            "step 2 (pick s1 a): object 's1' has type 'slot' but parameter "
+            "?b of 'pick' needs type 'block'",
+        ),
         (("pick", "arm", "a"), "object 'arm' has type 'robot'"),
     ],
 )
@@ -131,8 +136,11 @@ def test_validate_files(tmp_path: Path) -> None:
     (tmp_path / "sas_plan").write_text("\n".join(lines) + "\n; cost = 4 (unit cost)\n")
     files = [tmp_path / n for n in ("domain.pddl", "problem.pddl", "sas_plan")]
     assert validate_files(*files).valid
-    (tmp_path / "problem.pddl").write_text(PROBLEM.replace(
-        "(and (on a b) (on b c) (clear s1) (clear s2) (not (busy arm)))", "(on b c)"))
+    (tmp_path / "problem.pddl").write_text(
+        PROBLEM.replace(
+            "(and (on a b) (on b c) (clear s1) (clear s2) (not (busy arm)))", "(on b c)"
+        )
+    )
     (tmp_path / "sas_plan").write_text("; empty plan\n")
     result = validate_files(*files)
     assert result.goal_unmet == ("(on b c)",) and result.steps_applied == 0
