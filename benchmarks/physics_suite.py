@@ -3,7 +3,12 @@
 Prints success per suite and object count, the failure reasons, and the median macro-step
 and episode wall times (targets: ≤ 0.5 s per step, ≤ 5 s per five-object episode).
 
+For plans that violate the ground-truth affordances (``--method utamp1``), it also
+compares where physics failed with the first violating step
+(`check_against_ground_truth`): at that step, earlier, later, or not at all.
+
     python benchmarks/physics_suite.py [--seeds 3] [--stride 1] [--suites pick-place,sliding]
+                                       [--method utamp2-gt|utamp1|...]
 """
 
 from __future__ import annotations
@@ -15,8 +20,23 @@ import statistics
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-from utamp_gym.sim.execute import run_episode
+from utamp_gym.planning.crosscheck import check_against_ground_truth
+from utamp_gym.sim.execute import EpisodeResult, run_episode
 from utamp_gym.suites import suite_scenes
+
+
+def agreement(scene, r: EpisodeResult) -> str:
+    """Where physics failed relative to the plan's first ground-truth violation."""
+    check = check_against_ground_truth(scene, r.plan)
+    violated = None if check.valid else (check.failing_step or len(r.plan) + 1) - 1  # 0-based
+    failed = None if r.success else r.failure["step"]
+    if violated is None:
+        return "no violation, physics succeeded" if r.success else "no violation, physics failed"
+    if failed is None:
+        return "violation, physics succeeded"
+    if failed == violated:
+        return "violation, physics failed at that step"
+    return f"violation, physics failed {'earlier' if failed < violated else 'later'}"
 
 
 def main() -> None:
@@ -31,6 +51,8 @@ def main() -> None:
     reasons: collections.Counter[str] = collections.Counter()
     step_times: list[float] = []
     episode_times: dict[int, list[float]] = collections.defaultdict(list)
+    agree: collections.Counter[str] = collections.Counter()
+    unexpected: list[str] = []
     for suite in args.suites.split(","):
         for scene in suite_scenes(suite)[:: args.stride]:
             for seed in range(args.seeds):
@@ -40,6 +62,11 @@ def main() -> None:
                 step_times += [s.timings.get("wall_s", 0.0) for s in r.steps]
                 if r.failure:
                     reasons[str(r.failure["reason"]).split(":")[0]] += 1
+                if r.solved:
+                    how = agreement(scene, r)
+                    agree[how] += 1
+                    if how.startswith("violation, physics succeeded"):
+                        unexpected.append(f"{scene.name} seed {seed}")
                 print(f"{scene.name} seed {seed}: {'ok' if r.success else r.failure}", flush=True)
 
     print(f"\n## Physics success, {args.method}, {args.seeds} seed(s)")
@@ -49,6 +76,11 @@ def main() -> None:
     print("\n## Failure reasons")
     for reason, count in reasons.most_common() or [("none", 0)]:
         print(f"- {reason}: {count}")
+    print("\n## Physical failure vs first ground-truth violation (solved plans)")
+    for how, count in sorted(agree.items()):
+        print(f"- {how}: {count}")
+    for name in unexpected:
+        print(f"  - succeeded despite a violation: {name}")
     if step_times:
         print(f"\nmedian macro step {statistics.median(step_times):.3f} s wall (target 0.5 s)")
     for n, ts in sorted(episode_times.items()):
