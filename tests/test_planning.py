@@ -8,7 +8,7 @@ import pytest
 
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
 from utamp_gym.planning import fast_downward
-from utamp_gym.planning.crosscheck import check_against_ground_truth
+from utamp_gym.planning.crosscheck import affordance_violations, check_against_ground_truth
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene import scene_from_dict
 from utamp_gym.suites import resolve_scene, suite_scenes
@@ -107,3 +107,19 @@ def test_unknown_method_lists_valid_ones() -> None:
         UnknownNameError, match="valid: utamp1, utamp2-gt, utamp2-noisy, utamp2-rules"
     ):
         plan_scene(resolve_scene("kitchen-demo"), "magic")
+
+
+def test_affordance_violations_lists_every_step_that_ignores_the_ground_truth() -> None:
+    scene = resolve_scene("kitchen-demo")
+    gt = plan_scene(scene, "utamp2-gt")
+    assert affordance_violations(scene, gt.plan) == []
+    backwards = [gt.plan[1], gt.plan[0]]  # invalid by state (place first), not by affordance
+    assert affordance_violations(scene, backwards) == []
+    u1 = plan_scene(scene, "utamp1", timeout=60)
+    bad = affordance_violations(scene, u1.plan)
+    first = check_against_ground_truth(scene, u1.plan)
+    assert bad and bad[0] == (first.failing_step - 1, first.failed_precondition)
+    body = "(pick-support board board-body on left right back on slot3 under on)"
+    assert affordance_violations(scene, [gt.plan[0], body]) == [
+        (1, "(canGraspFrom board board-body on left right)")
+    ]

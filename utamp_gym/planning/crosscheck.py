@@ -12,16 +12,47 @@ from collections.abc import Sequence
 
 from utamp_gym.planning.methods import ground_truth_for
 from utamp_gym.scene.model import Scene
-from utamp_gym.symbolic.pddl import parse_domain, parse_plan, parse_problem
+from utamp_gym.symbolic.pddl import Domain, Problem, parse_domain, parse_plan, parse_problem
 from utamp_gym.symbolic.problem import build_problem, domain_text
-from utamp_gym.symbolic.validate import ValidationResult, validate_plan
+from utamp_gym.symbolic.validate import ValidationResult, holds, validate_plan
 
 
-def check_against_ground_truth(scene: Scene, plan: Sequence[str]) -> ValidationResult:
-    """Replay `plan` in U-TAMP-2 with the scene's ground-truth affordances."""
+def _ground_truth_task(scene: Scene) -> tuple[Domain, Problem]:
     domain = parse_domain(domain_text("utamp2"), source="utamp2.pddl")
     problem = parse_problem(
         build_problem(scene, ground_truth_for(scene), "utamp2").text,
         source=f"{scene.name} (ground truth)",
     )
+    return domain, problem
+
+
+def affordance_violations(scene: Scene, plan: Sequence[str]) -> list[tuple[int, str]]:
+    """Every step (0-based) whose static U-TAMP-2 preconditions are false under the ground
+    truth, with the first such literal: the affordances each action ignores.
+
+    Unlike `check_against_ground_truth`, which stops at the first failure, this looks at
+    every step (static facts do not depend on the state reached), so a physical failure
+    can be matched to the violation it stems from. Steps not in the domain are skipped.
+    """
+    domain, problem = _ground_truth_task(scene)
+    fluent = domain.fluent_predicates()
+    init = frozenset(problem.init)
+    out = []
+    for i, step in enumerate(parse_plan("\n".join(plan))):
+        action = domain.actions.get(step[0])
+        if action is None or action.arity != len(step) - 1:
+            continue
+        pre = action.instantiate(step[1:])[0]
+        bad = next(
+            (lit for lit in pre if lit.atom.predicate not in fluent and not holds(lit, init)),
+            None,
+        )
+        if bad is not None:
+            out.append((i, domain.show(bad)))
+    return out
+
+
+def check_against_ground_truth(scene: Scene, plan: Sequence[str]) -> ValidationResult:
+    """Replay `plan` in U-TAMP-2 with the scene's ground-truth affordances."""
+    domain, problem = _ground_truth_task(scene)
     return validate_plan(domain, problem, parse_plan("\n".join(plan)))
