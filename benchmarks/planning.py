@@ -1,12 +1,13 @@
 """Planning benchmark: our fast path vs Fast Downward's own driver, per object count.
 
 For every pick-place scene (or every k-th with --stride) and both domains, plan with
-the default fast path (our grounder + SAS + search binary, in this process) and with
-`fast-downward.py --alias lama-first` on the same PDDL files, in the same run. Prints
+the fast path (our grounder + SAS + search binary, in this process) and with
+`fast-downward.py` running the same search on the same PDDL files, in the same run. Prints
 median and mean ± std of the planning time per object count, the ratio of ours to the
 driver, and which U-TAMP-1 plans violate the ground-truth affordances.
 
-    python benchmarks/planning.py [--stride 1] [--suite pick-place] [--json out.json]
+    python benchmarks/planning.py [--stride 1] [--suite pick-place] [--search astar-lmcut]
+                                  [--json out.json]
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 from utamp_gym.planning.crosscheck import check_against_ground_truth
-from utamp_gym.planning.fast_downward import solve_with_driver
+from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS, solve_with_driver
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.suites import suite_scenes
 
@@ -37,6 +38,7 @@ def main() -> None:
     ap.add_argument("--suite", default="pick-place")
     ap.add_argument("--stride", type=int, default=1, help="use every k-th scene")
     ap.add_argument("--timeout", type=float, default=120.0)
+    ap.add_argument("--search", choices=SEARCH_CONFIGS, default=DEFAULT_SEARCH)
     ap.add_argument("--json", help="also write the raw rows here")
     args = ap.parse_args()
 
@@ -47,11 +49,11 @@ def main() -> None:
             for method in METHODS:
                 if method == "utamp1" and args.suite == "sliding":
                     continue
-                ours = plan_scene(scene, method, timeout=args.timeout)
+                ours = plan_scene(scene, method, timeout=args.timeout, search=args.search)
                 d, p = Path(tmp, "domain.pddl"), Path(tmp, "problem.pddl")
                 d.write_text(ours.domain)
                 p.write_text(ours.problem)
-                driver = solve_with_driver(d, p, timeout=args.timeout)
+                driver = solve_with_driver(d, p, search=args.search, timeout=args.timeout)
                 violation = None
                 if method == "utamp1" and ours.solved:
                     check = check_against_ground_truth(scene, ours.plan)

@@ -150,7 +150,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from utamp_gym.planning.fast_downward import SEARCH_CONFIGS
+    from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
     from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
     from utamp_gym.suites import SUITES
 
@@ -172,7 +172,7 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--method", choices=METHODS, default="utamp2-gt")
     plan.add_argument("--seed", type=int, default=0)
     plan.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
-    plan.add_argument("--search", choices=SEARCH_CONFIGS, default="lama-first")
+    plan.add_argument("--search", choices=SEARCH_CONFIGS, default=DEFAULT_SEARCH)
     plan.add_argument(
         "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
     )

@@ -21,7 +21,7 @@ from utamp_gym.affordances.facts import Fact
 from utamp_gym.env.atoms import scene_atoms
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.errors import PlanningError, UnknownNameError
-from utamp_gym.planning.fast_downward import SEARCH_CONFIGS, solve
+from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS, solve
 from utamp_gym.planning.methods import DEFAULT_NOISE, affordances_for, method_spec
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import parse_domain
@@ -60,7 +60,7 @@ class PlannerPolicy:
         env: gym.Env[Any, Any],
         method: str = "utamp2-gt",
         *,
-        search: str = "lama-first",
+        search: str = DEFAULT_SEARCH,
         timeout: float = 30.0,
         noise: float = DEFAULT_NOISE,
         seed: int = 0,

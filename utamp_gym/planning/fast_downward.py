@@ -36,6 +36,7 @@ from types import ModuleType
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
 
 __all__ = [
+    "DEFAULT_SEARCH",
     "SEARCH_CONFIGS",
     "TRANSLATORS",
     "PlanResult",
@@ -58,6 +59,10 @@ _SEARCH_ARGS: dict[str, tuple[str, ...]] = {
 }
 SEARCH_CONFIGS: tuple[str, ...] = tuple(_SEARCH_ARGS)
 """Valid ``search`` names for :func:`solve` (lama-first: satisficing; astar-*: optimal)."""
+DEFAULT_SEARCH = "astar-lmcut"
+"""Optimal plans: on five-object scenes lama-first's plans are up to 3x longer (36 steps
+against 12), which triples the physics episode, while A* with LM-cut plans in about the
+same time (~0.06 s)."""
 
 # Exit codes of the search binary / driver (driver/returncodes.py). Note the order:
 # 11 means *proved* unsolvable, 12 means an incomplete search gave up.
@@ -321,7 +326,7 @@ def solve(
     domain: str,
     problem: str,
     *,
-    search: str = "lama-first",
+    search: str = DEFAULT_SEARCH,
     timeout: float = 30.0,
     translator: str = "utamp",
 ) -> PlanResult:
@@ -405,22 +410,30 @@ def solve_with_driver(
     domain_path: str | os.PathLike[str],
     problem_path: str | os.PathLike[str],
     *,
-    alias: str = "lama-first",
+    search: str = DEFAULT_SEARCH,
+    alias: str | None = None,
     timeout: float = 30.0,
 ) -> PlanResult:
-    """Plan with the official ``fast-downward.py --alias ALIAS`` driver (for benchmarks).
+    """Plan with the official ``fast-downward.py`` driver (for benchmarks).
 
-    Same result and time-out semantics as :func:`solve`; reads PDDL files, not texts.
+    It runs the same search arguments as ``solve(search=...)``, or ``--alias ALIAS`` if
+    given. Same result and time-out semantics as :func:`solve`; reads PDDL files.
     """
     _check_timeout(timeout)
+    if alias is None and search not in _SEARCH_ARGS:
+        raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
     _, driver = downward_paths()
     files = [Path(p).resolve() for p in (domain_path, problem_path)]
     for path in files:
         if not path.is_file():
             raise PddlError(f"PDDL file not found: {path}")
     with tempfile.TemporaryDirectory(prefix="utamp_fd_driver_") as workdir:
-        what = f"Fast Downward driver (--alias {alias})"
-        cmd = [sys.executable, str(driver), "--alias", alias, *map(str, files)]
+        if alias is not None:
+            what = f"Fast Downward driver (--alias {alias})"
+            cmd = [sys.executable, str(driver), "--alias", alias, *map(str, files)]
+        else:
+            what = f"Fast Downward driver ({search})"
+            cmd = [sys.executable, str(driver), *map(str, files), *_SEARCH_ARGS[search]]
         start = time.perf_counter()
         code, stdout, stderr = _run(cmd, workdir, None, timeout, what, timeout)
         wall = time.perf_counter() - start

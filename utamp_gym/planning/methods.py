@@ -20,7 +20,7 @@ from utamp_gym.affordances.facts import Fact, Scores, load_ground_truth, restric
 from utamp_gym.affordances.noisy import detect_affordances
 from utamp_gym.affordances.rules import derive_affordances
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
-from utamp_gym.planning.fast_downward import solve
+from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, solve
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.problem import build_problem, domain_text
@@ -146,7 +146,7 @@ def plan_scene(
     *,
     seed: int = 0,
     timeout: float = 30.0,
-    search: str = "lama-first",
+    search: str = DEFAULT_SEARCH,
     noise: float = DEFAULT_NOISE,
     rng: np.random.Generator | None = None,
 ) -> PlanOutcome:
