@@ -93,6 +93,18 @@ def test_execution_stops_at_the_first_physical_failure():
     assert unsolved.failure["step"] is None and "not planned" in unsolved.failure["reason"]
 
 
+@pytest.mark.parametrize("scene", ["pick-place/037", "pick-place/082", "pick-place/099"])
+def test_utamp1_fails_physically_at_a_step_that_ignores_an_affordance(scene):
+    """Physics, not a table, finds the flaw: the failing step is one the ground truth forbids."""
+    from utamp_gym.planning.crosscheck import affordance_violations
+    from utamp_gym.suites import resolve_scene
+
+    r = run_episode(scene, method="utamp1", seed=0)
+    assert r.solved and not r.success
+    violating = dict(affordance_violations(resolve_scene(scene), r.plan))
+    assert r.failure["step"] in violating, (r.failure, violating)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("suite", ["pick-place", "sliding"])
 def test_whole_suite_executes(suite, record_property):
