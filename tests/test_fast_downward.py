@@ -283,8 +283,11 @@ def test_timeout_kills_driver_process_group(tmp_path):
 
 
 def test_interrupt_kills_search_process():
-    # a real Ctrl-C (SIGINT to this process) while the search binary runs
-    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    # a real Ctrl-C (SIGINT) while the search binary runs. Sent to the main thread: a
+    # process-directed signal may land on a helper thread left by an earlier test, and
+    # then the main thread's wait is not interrupted.
+    main = threading.main_thread().ident
+    timer = threading.Timer(0.5, signal.pthread_kill, (main, signal.SIGINT))
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
