@@ -283,17 +283,18 @@ def test_timeout_kills_driver_process_group(tmp_path):
 
 
 def test_interrupt_kills_search_process():
-    # a real Ctrl-C (SIGINT) while the search binary runs. Sent to the main thread: a
-    # process-directed signal may land on a helper thread left by an earlier test, and
-    # then the main thread's wait is not interrupted.
-    main = threading.main_thread().ident
-    timer = threading.Timer(0.5, signal.pthread_kill, (main, signal.SIGINT))
+    # a real Ctrl-C (SIGINT to this process) while the search binary runs. Python leaves
+    # SIGINT ignored if it started ignored (a background job of a non-interactive shell,
+    # as under `nohup make test &`), so install the interactive handler for the test.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
             fd.solve(DOMAIN, BIG_PROBLEM, search="astar-blind", timeout=30)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert downward_children() == []
 
 
