@@ -74,6 +74,7 @@ class _Step:
     atom: Atom
     use_delta: bool
     checks: tuple[Literal, ...]  # checks whose variables are all bound after this step
+    args: tuple[tuple[str, bool], ...]  # (argument, is it a variable), precomputed for `_join`
 
 
 def _estimate(atom: Atom, bound: set[str], atoms: Mapping[str, _Index]) -> float:
@@ -83,13 +84,10 @@ def _estimate(atom: Atom, bound: set[str], atoms: Mapping[str, _Index]) -> float
         return 0.0
     best = float(len(idx.tuples))
     for i, a in enumerate(atom.args):
-        if not a.startswith("?") or a in bound:
-            distinct = len(idx.values[i]) or 1
-            best = (
-                min(best, len(idx.tuples) / distinct)
-                if a.startswith("?")
-                else min(best, float(len(idx.by.get((i, a), ()))))
-            )
+        if a[0] != "?":
+            best = min(best, float(len(idx.by.get((i, a), ()))))
+        elif a in bound:
+            best = min(best, len(idx.tuples) / (len(idx.values[i]) or 1))
     return best
 
 
@@ -119,12 +117,10 @@ def _plan(
             if c not in done and all(a in bound or not a.startswith("?") for a in c.atom.args)
         )
         done |= set(ready)
-        steps.append(_Step(schema.positive[i], i == seed, ready))
+        atom = schema.positive[i]
+        args = tuple((a, a[0] == "?") for a in atom.args)
+        steps.append(_Step(atom, i == seed, ready, args))
     return steps, tuple(c for c in schema.checks if c not in done)
-
-
-def _bind(atom: Atom, binding: Mapping[str, str]) -> list[str | None]:
-    return [binding.get(a) if a.startswith("?") else a for a in atom.args]
 
 
 def _holds_static(lit: Literal, binding: Mapping[str, str], static: Mapping[str, _Index]) -> bool:
@@ -166,18 +162,19 @@ def _join(
         idx = (delta if step.use_delta else atoms).get(step.atom.predicate)
         if idx is None:
             return
-        pattern = _bind(step.atom, binding)
+        args, checks = step.args, step.checks
+        pattern = [binding.get(a) if var else a for a, var in args]
         if None not in pattern:  # fully bound: a membership test
             if tuple(pattern) in idx.tuples and all(
-                _holds_static(c, binding, static) for c in step.checks
+                _holds_static(c, binding, static) for c in checks
             ):
                 yield from rec(k + 1)
             return
         for tup in list(idx.candidates(pattern)):
             added = []
             ok = True
-            for a, v in zip(step.atom.args, tup, strict=True):
-                if a.startswith("?"):
+            for (a, var), v in zip(args, tup, strict=True):
+                if var:
                     cur = binding.get(a)
                     if cur is None:
                         binding[a] = v
@@ -188,7 +185,7 @@ def _join(
                 elif a != v:
                     ok = False
                     break
-            if ok and all(_holds_static(c, binding, static) for c in step.checks):
+            if ok and (not checks or all(_holds_static(c, binding, static) for c in checks)):
                 yield from rec(k + 1)
             for a in added:
                 del binding[a]
