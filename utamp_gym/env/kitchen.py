@@ -15,8 +15,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from utamp_gym.backend import (
+    DEFAULT_BACKEND,
+    DEFAULT_POSE_NOISE,
+    MacroResult,
+    PhysicsBackend,
+    backend_factory,
+)
 from utamp_gym.env.atoms import InitialAtoms, parse_atom
-from utamp_gym.env.backend import DEFAULT_BACKEND, MacroResult, PhysicsBackend, backend_factory
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.poses import SymbolicPoses
 from utamp_gym.env.render import SchematicRenderer
@@ -126,6 +132,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         backend: str | Callable[..., PhysicsBackend] = DEFAULT_BACKEND,
         backend_kwargs: Mapping[str, Any] | None = None,
         record_timings: bool = True,
+        masks: str = "affordances",
+        disturbance: float = 0.0,
+        pose_noise: float = DEFAULT_POSE_NOISE,
     ) -> None:
         kwargs: dict[str, Any] = {
             "suite": suite, "objects": objects, "grounding": grounding, "domain": domain,
@@ -134,6 +143,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             "reward_shaping": reward_shaping, "render_mode": render_mode, "camera": camera,
             "image_size": image_size, "render_size": render_size, "backend": backend,
             "backend_kwargs": dict(backend_kwargs or {}), "record_timings": record_timings,
+            "masks": masks, "disturbance": disturbance, "pose_noise": pose_noise,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option
         self.render_mode = render_mode
@@ -159,7 +169,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         self._held: str | None = None
         self._backend: PhysicsBackend | None = None
         if opts.grounding == "physics":
-            self._backend = backend_factory(opts.backend)(**opts.backend_kwargs)
+            factory = backend_factory(opts.backend)
+            self._backend = factory(pose_noise=opts.pose_noise, **opts.backend_kwargs)
 
     # ------------------------------------------------------------------ public helpers
     @property

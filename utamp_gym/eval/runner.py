@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError
 from utamp_gym.eval.explain import explain_unsolvable
-from utamp_gym.eval.records import PLAN_SEPARATOR, Key, ResultRow, noise_label
+from utamp_gym.eval.records import PLAN_SEPARATOR, Key, ResultRow, row_key
 from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import (
@@ -43,10 +43,30 @@ class EvalTask:
     noise: float | None = None  # utamp2-noisy only
     timeout: float = DEFAULT_TIMEOUT
     explain: bool = True
+    closed_loop: bool = False
+    disturbance: float = 0.0
+    pose_noise: float | None = None  # physics only
 
     @property
     def key(self) -> Key:
-        return (self.scene, self.method, self.seed, self.grounding, noise_label(self.noise))
+        return row_key(
+            self.scene,
+            self.method,
+            self.seed,
+            self.grounding,
+            self.noise,
+            self.closed_loop,
+            self.disturbance,
+            self.pose_noise,
+        )
+
+    def settings(self) -> dict[str, object]:
+        """The row columns that repeat the task's settings."""
+        return {
+            "closed_loop": self.closed_loop,
+            "disturbance": self.disturbance,
+            "pose_noise": self.pose_noise,
+        }
 
 
 @dataclass(frozen=True)
@@ -128,6 +148,7 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         affordance_f1=None if s is None else s.f1,
         valid_gt=valid_gt,
         plan=PLAN_SEPARATOR.join(planned.plan),
+        **task.settings(),  # type: ignore[arg-type]
     )
 
 
@@ -158,6 +179,7 @@ def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> Result
         affordance_recall=None,
         affordance_f1=None,
         crashed=True,
+        **task.settings(),  # type: ignore[arg-type]
     )
 
 

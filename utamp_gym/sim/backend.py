@@ -1,4 +1,4 @@
-"""`MujocoBackend`: the physics backend of the Gym env (see `utamp_gym.env.backend`).
+"""`MujocoBackend`: the physics backend of the Gym env (see `utamp_gym.backend`).
 
 `reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose,
 draws the initial pose noise from the given generator and lets everything settle;
@@ -15,8 +15,9 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from utamp_gym.env.backend import MacroResult
+from utamp_gym.backend import DEFAULT_POSE_NOISE, MacroResult
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
+from utamp_gym.perception.state import FLOOR, Grasp, PhysicalState
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.model import Scene
@@ -27,6 +28,7 @@ from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top, stack_from_poses
 
 CAMERA = "overview"
+FLOOR_BELOW = -0.05  # m: an unsupported object this far below the table top fell off it
 FrameSink = Callable[[np.ndarray], None]
 
 
@@ -42,12 +44,14 @@ class MujocoBackend:
         *,
         pos_noise: float = 0.003,
         yaw_noise_deg: float = 2.0,
+        pose_noise: float = DEFAULT_POSE_NOISE,
         settle_s: float = 0.5,
         frame_sink: FrameSink | None = None,
         frame_period: float = 0.1,
         frame_size: tuple[int, int] = (480, 360),
     ):
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
+        self.pose_noise = pose_noise
         self.frame_sink, self.frame_period, self.frame_size = frame_sink, frame_period, frame_size
         self._kin: PandaKinematics | None = None
         self._state: SimState | None = None
@@ -83,6 +87,25 @@ class MujocoBackend:
         except (GroundingError, UnknownNameError) as exc:
             return MacroResult(False, f"invalid action {action}: {exc}", Timings().as_dict(0.0))
         return run_skill(st, act)
+
+    def physical_state(self) -> PhysicalState:
+        """Poses, what carries each object (contact forces), containment and the grasp."""
+        st = self._require()
+        stack = stack_from_poses(st.world, st.data)
+        supports: dict[str, str | None] = {}
+        for name, support in stack.items():
+            below_table = st.data.xpos[st.world.body_ids[name]][2] < FLOOR_BELOW
+            supports[name] = FLOOR if support is None and below_table else support
+        on_top = {
+            n: s not in (None, FLOOR) and rests_on_top(st.world, st.data, n, s)
+            for n, s in supports.items()
+        }
+        held = None
+        if st.held is not None and st.arm.holds_something():
+            sym = st.held.symbols
+            held = Grasp(sym.obj, sym.member, sym.palm, sym.finger1, sym.finger2)
+        poses = {n: tuple(float(v) for v in p) for n, p in self.object_poses().items()}
+        return PhysicalState(poses, supports, on_top, held, st.arm.gap())
 
     def object_poses(self) -> dict[str, np.ndarray]:
         """Object name -> [x, y, z, qw, qx, qy, qz] of its frame in the world."""

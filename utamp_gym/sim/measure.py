@@ -16,7 +16,7 @@ import numpy as np
 
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim.control import ArmDriver
-from utamp_gym.sim.decode import pose_of, support_point, world_aabb
+from utamp_gym.sim.decode import GraspSymbols, pose_of, support_point, world_aabb
 from utamp_gym.sim.world import World, object_orientation, rests_on_top, stack_from_poses
 
 MOVED = 0.02  # m, another object moving this far was disturbed
@@ -38,6 +38,7 @@ class Held:
     body: int
     tcp_t_obj: np.ndarray
     opening: float
+    symbols: GraspSymbols  # the grasp's member, palm and finger parts
 
 
 @dataclass

@@ -17,7 +17,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from utamp_gym.env.backend import MacroResult
+from utamp_gym.backend import MacroResult
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim.control import LinePath, Timings, ignoring
 from utamp_gym.sim.decode import (
@@ -124,7 +124,7 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     arm.move_line(approach, *APPROACH)
     gap = arm.close_gripper()
     tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, sym.obj)
-    st.held = Held(sym.obj, sym.member, st.world.body_ids[sym.obj], tcp_t_obj, g.opening)
+    st.held = Held(sym.obj, sym.member, st.world.body_ids[sym.obj], tcp_t_obj, g.opening, sym)
     if not arm.holds_something():
         raise SkillFailure(
             f"grasp failed: the fingers closed on nothing at the {sym.member} of {sym.obj} "
