@@ -140,6 +140,7 @@ def _hollow(t: ObjectType, top: PartAttrs, bottom: PartAttrs) -> list[Prim]:
 
 
 def _body_prims(t: ObjectType) -> list[Prim]:
+    """The body member: hollow, capped, a plate in a rim or solid (see the module doc)."""
     name, round_ = t.body.name, t.body.geom == "cylinder"
     lo, hi = np.asarray(t.body.box.min), np.asarray(t.body.box.max)
     xy, half, height = (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2, hi[2] - lo[2]
