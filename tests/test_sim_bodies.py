@@ -29,6 +29,9 @@ pytestmark = pytest.mark.physics
 TOL = 0.001  # m
 CATALOGUE = load_catalogue().merged(load_catalogue(asset_path("objects", "extra.toml")).types)
 KINDS = sorted(n for n, t in CATALOGUE.types.items() if t.movable)
+SIZED_TOPS = [n for n in KINDS if CATALOGUE[n].parts["on"].shape == "flat"
+              and CATALOGUE[n].parts["on"].size is not None]  # fmt: skip
+WITH_EDGES = [n for n in KINDS if any(m.kind == "edge" for m in CATALOGUE[n].members.values())]
 FAR = 1.0  # m, rays start this far outside the object
 
 
@@ -128,11 +131,12 @@ def test_top_surface_at_the_declared_height(probe: Probe) -> None:
         assert centre == pytest.approx(height, abs=TOL)
 
 
-def test_usable_surface_has_the_declared_size(probe: Probe) -> None:
+@pytest.mark.parametrize("kind", SIZED_TOPS)
+def test_usable_surface_has_the_declared_size(kind: str) -> None:
+    probe = Probe(CATALOGUE[kind])
     t = probe.t
     top = t.parts["on"]
-    if top.shape != "flat" or top.size is None:
-        pytest.skip("no declared usable size on a flat top")
+    assert top.size is not None
     height = t.surface_height("on")
     (cx, cy), half = t.surface_center("on"), np.asarray(top.size) / 2
     face = np.asarray(t.body.box.size[:2]) / 2
@@ -201,13 +205,12 @@ def test_every_member_fills_its_box(probe: Probe) -> None:
             assert reach == pytest.approx(face, abs=TOL), (m.name, axis, sign)
 
 
-def test_edges_are_body_material(probe: Probe) -> None:
+@pytest.mark.parametrize("kind", WITH_EDGES)
+def test_edges_are_body_material(kind: str) -> None:
     """An edge member inside the body is wall or rim: the body's top is at the edge's top
     there, and the wall spans the edge across its thin horizontal axis."""
-    t = probe.t
-    edges = [m for m in t.members.values() if m.kind == "edge"]
-    if not edges:
-        pytest.skip("no edge members")
+    probe = Probe(CATALOGUE[kind])
+    edges = [m for m in probe.t.members.values() if m.kind == "edge"]
     for m in edges:
         c = m.box.center
         assert probe.down(c[0], c[1]) == pytest.approx(m.box.max[2], abs=TOL), m.name
