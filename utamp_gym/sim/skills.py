@@ -3,10 +3,11 @@
 Each skill decodes its symbols against the *current* simulated poses (`decode`),
 grounds them with IK and OMPL (`control.ArmDriver`) and runs the motion through the
 position servos. Success is then measured, never assumed: the gap of the closed
-fingers, how far the object rose with the hand, whether it stayed in the grasp, what
-it rests on after release (`stack_from_poses`, `rests_on_top`), whether anything else
-moved. The symbolic layer is not consulted. Failures come back as a `MacroResult`
-with a reason naming the object.
+fingers, how far the object rose with the hand, whether it stayed in the grasp, the
+load on the hand from the joint torques (`payload`: over the Panda's 3 kg, or a joint at
+its torque limit, fails), what it rests on after release (`stack_from_poses`,
+`rests_on_top`), whether anything else moved. The symbolic layer is not consulted.
+Failures come back as a `MacroResult` with a reason naming the object.
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from utamp_gym.sim.measure import (
     snapshot,
     verify_on,
 )
+from utamp_gym.sim.payload import hold_and_measure, payload_failure
 from utamp_gym.sim.world import stack_from_poses
 
 APPROACH = (0.25, 1.0)  # m/s, m/s^2: pre-grasp -> grasp, lift, retreat
@@ -59,6 +61,7 @@ MAX_TILT_DEG = 15.0  # held object rotation while lifting that counts as pivotin
 DROP_SLIP, DROP_TILT_DEG = 0.05, 30.0  # ... during transport: the object was dropped
 REGRASP_SLIP, REGRASP_TILT_DEG = 0.003, 1.0  # ... during transport: re-aim the placement
 SLIDE_TOL = 0.02  # m, slid footprint centre within this of the space centre
+CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measured
 
 
 # ------------------------------------------------------------------ shared phases
@@ -174,12 +177,15 @@ def pick(st: SimState, act: MacroAction) -> None:
     finally:
         near.detach()
     arm.move_line(path, *APPROACH)
-    arm.step(round(0.15 / arm.dt))
+    load = hold_and_measure(arm)
     hand_rise = arm.tcp()[2, 3] - start_tcp[2, 3]
     obj_rise = obj_pose(st, sym.obj)[2, 3] - start_obj[2, 3]
     slip, tilt = grasp_drift(st, held)
     if not arm.holds_something():
         raise SkillFailure(f"{sym.obj} slipped out of the grasp while lifting")
+    overload = payload_failure(sym.obj, load, while_="lifting")
+    if overload:
+        raise SkillFailure(overload)
     if obj_rise < 0.5 * hand_rise or tilt > MAX_TILT_DEG or slip > MAX_SLIP:
         how = (
             "it stayed down"
@@ -190,7 +196,8 @@ def pick(st: SimState, act: MacroAction) -> None:
         )
         raise SkillFailure(
             f"{sym.obj} is not liftable by its {sym.member}: {how} "
-            f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm)"
+            f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm, "
+            f"bearing {load.describe()} of it)"
         )
     moved = disturbed(st, before)
     if moved:
@@ -232,6 +239,9 @@ def place(st: SimState, act: MacroAction) -> None:
             f"{name} dropped during transport (moved {slip * 100:.1f} cm, {tilt:.0f} deg "
             "in the hand)"
         )
+    overload = payload_failure(name, hold_and_measure(arm, CARRY_HOLD_S), while_="carrying")
+    if overload:
+        raise SkillFailure(overload)
     if slip > REGRASP_SLIP or tilt > REGRASP_TILT_DEG:  # it turned in the hand: re-aim
         held.tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, name)
         up = _plan_place(st, held, act)
