@@ -92,21 +92,22 @@ def hand_wrench(
 def hold_and_measure(arm: ArmDriver, seconds: float = HOLD_S) -> LoadReading:
     """Step the physics `seconds` with the current setpoints and estimate the hand's load.
 
-    The wrench is averaged over the second half of the window (after the settling
-    transient); a joint counts as saturated if it is at its limit for `SATURATED_SHARE`
+    The external torques are averaged over the second half of the window (after the
+    settling transient) and turned into a wrench with the Jacobian at its end (the arm
+    holds still); a joint counts as saturated if it is at its limit for `SATURATED_SHARE`
     of the window (a single contact impulse does not).
     """
     model, data, ids = arm.model, arm.data, arm.ids
     limits = joint_torque_limits(model, ids)
     n = max(2, round(seconds / arm.dt))
     at_limit = np.zeros(len(limits))
-    wrenches = []
+    tau_ext = np.zeros(len(limits))
     for k in range(n):
         arm.step(1)
         at_limit += np.abs(data.qfrc_actuator[ids.arm_dof_adr]) >= SATURATED * limits
         if k >= n // 2:
-            wrenches.append(hand_wrench(model, data, ids, external_torques(data, ids)))
-    wrench = np.mean(wrenches, axis=0)
+            tau_ext += external_torques(data, ids)
+    wrench = hand_wrench(model, data, ids, tau_ext / (n - n // 2))
     saturated = tuple(int(j) + 1 for j in np.flatnonzero(at_limit >= SATURATED_SHARE * n))
     gravity = float(np.linalg.norm(model.opt.gravity))
     return LoadReading(wrench[:3], wrench[3:], saturated, limits, gravity)
