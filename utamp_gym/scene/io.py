@@ -12,7 +12,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import tomli_w
 
 from utamp_gym.errors import SceneError
@@ -104,14 +103,15 @@ def scene_from_dict(
         p = f"slots[{i}]"
         pos = vec(s.get("position"), 2, file, f"{p}.position")
         if "size" in s:
-            half = np.asarray(vec(s.get("size"), 2, file, f"{p}.size", positive=True)) / 2
-            lo, hi = np.asarray(pos) - half, np.asarray(pos) + half
+            size = vec(s.get("size"), 2, file, f"{p}.size", positive=True)
+            lo = [c - d / 2 for c, d in zip(pos, size, strict=True)]
+            hi = [c + d / 2 for c, d in zip(pos, size, strict=True)]
         else:
-            lo = np.asarray(vec(s.get("min"), 2, file, f"{p}.min"))
-            hi = np.asarray(vec(s.get("max"), 2, file, f"{p}.max"))
-            if np.any(lo >= hi):
+            lo = list(vec(s.get("min"), 2, file, f"{p}.min"))
+            hi = list(vec(s.get("max"), 2, file, f"{p}.max"))
+            if any(a >= b for a, b in zip(lo, hi, strict=True)):
                 raise SceneError("min must be below max", file=file, field=p)
-        region = Box((*lo.tolist(), 0.0), (*hi.tolist(), 0.0))
+        region = Box((float(lo[0]), float(lo[1]), 0.0), (float(hi[0]), float(hi[1]), 0.0))
         slot = Slot(_name(s.get("name"), file, f"{p}.name"), pos, region)  # type: ignore[arg-type]
         if not region.contains_xy(Box((*pos, 0.0), (*pos, 0.0))):
             raise SceneError(
