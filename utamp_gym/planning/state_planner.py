@@ -26,7 +26,7 @@ from types import MappingProxyType
 from typing import NamedTuple
 
 from utamp_gym.deadline import Deadline, check_timeout
-from utamp_gym.errors import UnknownNameError
+from utamp_gym.errors import PddlError, UnknownNameError
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS, PlanResult, search_sas
 from utamp_gym.planning.sas import SasTask, build_sas
 from utamp_gym.symbolic.pddl import Atom, Domain, Literal, Problem, cached_domain
@@ -205,6 +205,11 @@ class StatePlanner:
         out = []
         for text in texts:
             atom = parse_atom(text)
+            if atom.predicate not in self.domain.predicates:
+                raise PddlError(
+                    f"{text}: unknown predicate '{atom.predicate}'; declared: "
+                    f"{', '.join(sorted(self.domain.predicates))}"
+                )
             if (atom.predicate in self._fluent) != fluent:
                 side = "fluent" if fluent else "static"
                 raise ValueError(
