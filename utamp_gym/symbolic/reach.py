@@ -13,9 +13,10 @@ resolved against the initial state and become plain add and delete effects. This
 Fast Downward's translator computes, specialised to our subset and fast enough to run on
 every planning call.
 
-`Grounder` computes a domain's join orders once, from the shapes of the literals (so they
-suit every task), and keeps them between calls; `reachable_ops` grounds once with a fresh
-grounder. A `Deadline` is checked inside the joins.
+Join orders come from the shapes of the literals alone (so one order suits every task);
+they are computed once per process and kept between calls. `Grounder` grounds tasks of one
+domain; `reachable_ops` grounds once with a fresh grounder. A `Deadline` is checked inside
+the joins.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from __future__ import annotations
 from collections import defaultdict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import lru_cache
 from operator import itemgetter
 
 from utamp_gym.deadline import Deadline
@@ -138,38 +140,38 @@ class _Step:
 Plan = tuple[tuple[_Step, ...], tuple[Literal, ...], tuple[str, ...]]  # steps, late, unbound
 
 
-def _score(atom: Atom, bound: set[str]) -> tuple[float, int, bool]:
-    """How cheap joining `atom` next is expected to be (smaller is cheaper): the share of its
-    arguments still free, then their number; static group relations before fluent atoms."""
-    free = {a for a in atom.args if a[0] == "?" and a not in bound}
-    known = sum(1 for a in atom.args if a[0] != "?" or a in bound)
-    return 1.0 - known / (len(atom.args) or 1), len(free), atom.predicate[0] != "#"
-
-
+@lru_cache(maxsize=4096)
 def _plan(join: _Join, seed: int | None) -> Plan:
     """A fixed join order from the literals' shapes alone (no statistics, so one order
     serves every task of the domain): the seed (delta) literal first; then a literal whose
     variables are all bound (a membership test), else a static group relation sharing a bound
-    variable (an exact filter), else the literal with the fewest free arguments."""
+    variable (an exact filter), else the literal with the smallest share of free arguments
+    (then the fewest; static relations first). A pure function of hashable data, remembered
+    per process: every grounder of a domain shares its orders."""
+    shapes = [
+        (frozenset(_variables(a)), a.predicate[0] == "#", len(a.args), a) for a in join.positive
+    ]
     remaining = list(range(len(join.positive)))
     order: list[int] = []
     bound: set[str] = set()
+
+    def score(i: int) -> tuple[float, int, bool]:
+        variables, is_group, arity, atom = shapes[i]
+        free = len(variables - bound)
+        known = sum(1 for a in atom.args if a[0] != "?" or a in bound)
+        return 1.0 - known / (arity or 1), free, not is_group
+
     if seed is not None:
         order.append(seed)
         remaining.remove(seed)
-        bound |= set(_variables(join.positive[seed]))
+        bound |= shapes[seed][0]
     while remaining:
-        tests = [i for i in remaining if set(_variables(join.positive[i])) <= bound]
-        connected = [
-            i
-            for i in remaining
-            if join.positive[i].predicate[0] == "#" and bound & set(join.positive[i].args)
-        ]
-        pool = tests or connected or remaining
-        best = min(pool, key=lambda i: _score(join.positive[i], bound))
+        tests = [i for i in remaining if shapes[i][0] <= bound]
+        connected = [i for i in remaining if shapes[i][1] and shapes[i][0] & bound]
+        best = min(tests or connected or remaining, key=score)
         order.append(best)
         remaining.remove(best)
-        bound |= set(_variables(join.positive[best]))
+        bound |= shapes[best][0]
     steps, done = [], set()
     bound = set()
     for i in order:
@@ -245,12 +247,13 @@ def _join(
     static, deadline = ctx.static, ctx.deadline
     binding: dict[str, str] = {}
     out: list[dict[str, str]] = []
-    tables = []
+    sources = []
     for step in steps:
         idx = (delta if step.use_delta else atoms).get(step.atom.predicate)
         if idx is None:
             return out
-        tables.append(idx.lookup(step.consts, step.positions))
+        sources.append(idx)
+    tables: list[dict[Key, list[Tuple]] | None] = [None] * len(steps)  # fetched when reached
     n_steps, ticks = len(steps), 0
 
     def finish(j: int) -> None:
@@ -272,8 +275,11 @@ def _join(
         if deadline is not None and not ticks & _CHECK_EVERY:
             deadline.check("grounding")
         step = steps[k]
+        table = tables[k]
+        if table is None:
+            table = tables[k] = sources[k].lookup(step.consts, step.positions)
         getter = step.getter
-        matches = tables[k].get(() if getter is None else getter(binding))
+        matches = table.get(() if getter is None else getter(binding))
         if not matches:
             return
         free, repeats, checks = step.free, step.repeats, step.checks
