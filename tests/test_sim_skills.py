@@ -171,7 +171,7 @@ def _on(sim, name: str):
 
 @physics
 def test_backend_protocol_and_initial_state(backend, demo):
-    from utamp_gym.env.backend import PhysicsBackend
+    from utamp_gym.backend import PhysicsBackend
 
     assert isinstance(backend, PhysicsBackend)
     with pytest.raises(SimulationError, match="reset"):

@@ -1,7 +1,8 @@
 """utamp_gym: a Gymnasium suite for U-TAMP-2 kitchen-table organisation on a MuJoCo Panda.
 
 Layers, each in its own sub-package:
-scene -> affordances -> symbolic -> planning -> robot/sim -> env -> eval / rl.
+scene -> affordances -> perception -> symbolic -> planning -> robot/sim -> env -> eval / rl
+(`utamp_gym.backend` is the contract between sim and env).
 """
 
 import itertools

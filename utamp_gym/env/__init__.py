@@ -7,7 +7,7 @@ Import the modules directly; this package imports nothing and registers nothing
 * `kitchen` – `UTampKitchenEnv` (its docstring documents spaces, reward and options);
 * `universe` / `atoms` – the grounded action universe and the scenes' initial atoms;
 * `state`, `poses`, `task`, `render` – symbolic state and mask, symbolic poses, reward and
-  spaces, the schematic renderer; `backend` – the physics backend protocol;
+  spaces, the schematic renderer (the physics backend protocol is `utamp_gym.backend`);
 * `wrappers` (`SymbolicActionWrapper`), `planner_policy` (`PlannerPolicy`),
   `dm_adapter` (`DmEnvAdapter`).
 """

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from utamp_gym.env.backend import DEFAULT_BACKEND
+from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, MAX_POSE_NOISE
 from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
@@ -22,6 +22,9 @@ from utamp_gym.symbolic.problem import DOMAINS
 
 GROUNDINGS = ("physics", "symbolic")
 RENDER_MODES = ("rgb_array",)
+#: what `action_masks()` allows: U-TAMP-2 preconditions under the env's affordances, the
+#: U-TAMP-1 object-centric (geometric) preconditions only, or every action of the scene
+MASKS = ("affordances", "geometric", "none")
 MIN_OBJECTS = 2
 
 
@@ -35,6 +38,13 @@ def _choice(kind: str, value: Any, valid: Sequence[str]) -> str:
     if not isinstance(value, str) or value not in valid:
         raise UnknownNameError(kind, str(value), valid)
     return value
+
+
+def _unit(name: str, value: Any, high: float = 1.0) -> float:
+    """A finite number in [0, high]."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= high:
+        raise ValueError(f"{name} must be a number in [0, {high:g}], got {value!r}")
+    return float(value)
 
 
 def _size(name: str, value: Any) -> tuple[int, int]:
@@ -71,6 +81,9 @@ class EnvOptions:
     backend: str | Callable[..., Any] = DEFAULT_BACKEND
     backend_kwargs: Mapping[str, Any] = field(default_factory=dict)
     record_timings: bool = True
+    masks: str = "affordances"
+    disturbance: float = 0.0
+    pose_noise: float = DEFAULT_POSE_NOISE
 
     def __post_init__(self) -> None:
         if self.suite is not None:
@@ -89,10 +102,14 @@ class EnvOptions:
         _choice("grounding", self.grounding, GROUNDINGS)
         _choice("domain", self.domain, DOMAINS)
         _choice("affordance source", self.affordances, AFFORDANCE_SOURCES)
-        if isinstance(self.noise, bool) or not isinstance(self.noise, int | float):
-            raise ValueError(f"noise must be a number in [0, 1], got {self.noise!r}")
-        if not 0.0 <= float(self.noise) <= 1.0:
-            raise ValueError(f"noise must be in [0, 1], got {self.noise!r}")
+        _unit("noise", self.noise)
+        _choice("masks", self.masks, MASKS)
+        object.__setattr__(self, "disturbance", _unit("disturbance", self.disturbance))
+        if self.disturbance > 0 and self.grounding != "physics":
+            raise ValueError("disturbance needs grounding='physics' (faults are physical)")
+        object.__setattr__(
+            self, "pose_noise", _unit("pose_noise (m)", self.pose_noise, MAX_POSE_NOISE)
+        )
         if self.num_objects is not None and (
             isinstance(self.num_objects, bool)
             or not isinstance(self.num_objects, int)

@@ -12,6 +12,8 @@ only happens on a failing step.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 from utamp_gym.env.atoms import EpisodeAtoms
@@ -34,6 +36,7 @@ class SymbolicState:
         self._ext = np.zeros(2 * half, np.intp)
         self._mask = np.zeros(universe.n_actions, bool)
         self._tables: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.unrepresented: tuple[str, ...] = ()  # perceived atoms outside the universe
 
     def reset(self, atoms: EpisodeAtoms, cache_key: str | None = None) -> None:
         """Start an episode: the scene's static atoms fix which ops can ever apply.
@@ -48,8 +51,30 @@ class SymbolicState:
                 self._tables[cache_key] = table
         self._flat, self._ptr = table
         self._static = atoms.static
+        self.unrepresented = ()
         self.bits = self.universe.state_bits(atoms.fluent)
         self._goal = self.universe.state_bits(atoms.goal)
+        self._refresh()
+
+    def observe(self, fluent: Iterable[str], static: frozenset[str]) -> None:
+        """Set the state to perceived atoms (physics grounding, after every step).
+
+        `static` replaces the episode's static atoms when it changed (a toppled object loses
+        its orientation atoms); fluent atoms outside the universe cannot be represented and
+        are left out (`unrepresented` lists them).
+        """
+        if static != self._static:
+            self._flat, self._ptr = self._table(static)
+            self._static = static
+        index = self.universe.fluent_index
+        bits, extra = 0, []
+        for atom in fluent:
+            j = index.get(atom)
+            if j is None:
+                extra.append(atom)
+            else:
+                bits |= 1 << j
+        self.bits, self.unrepresented = bits, tuple(sorted(extra))
         self._refresh()
 
     def _table(self, static: frozenset[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -91,8 +116,8 @@ class SymbolicState:
         return self._ext[: len(self.universe.fluent_atoms)].astype(np.int8)
 
     def true_atoms(self) -> list[str]:
-        """The fluent atoms that hold, as lower-case PDDL."""
-        return self.universe.atoms_of(self.bits)
+        """The fluent atoms that hold, as lower-case PDDL (`unrepresented` ones last)."""
+        return [*self.universe.atoms_of(self.bits), *self.unrepresented]
 
     @property
     def static_atoms(self) -> frozenset[str]:

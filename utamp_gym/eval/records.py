@@ -19,12 +19,36 @@ from typing import Any
 GROUNDINGS = ("physics", "symbolic")
 PLAN_SEPARATOR = " ; "
 
-Key = tuple[str, str, int, str, str]  # scene, method, seed, grounding, noise
+#: scene, method, seed, grounding, noise, closed_loop, disturbance, pose_noise
+Key = tuple[str, str, int, str, str, bool, str, str]
 
 
 def noise_label(noise: float | None) -> str:
-    """The noise part of a row key: ``""`` for methods without noise, else ``f"{p:g}"``."""
+    """A number's part of a row key: ``""`` for None (not applicable), else ``f"{p:g}"``."""
     return "" if noise is None else f"{noise:g}"
+
+
+def row_key(
+    scene: str,
+    method: str,
+    seed: int,
+    grounding: str,
+    noise: float | None,
+    closed_loop: bool,
+    disturbance: float,
+    pose_noise: float | None,
+) -> Key:
+    """The identity of one run: two rows with equal keys are the same run."""
+    return (
+        scene,
+        method,
+        seed,
+        grounding,
+        noise_label(noise),
+        closed_loop,
+        noise_label(disturbance),
+        noise_label(pose_noise),
+    )
 
 
 @dataclass(frozen=True)
@@ -33,7 +57,10 @@ class ResultRow:
 
     `valid_gt` is whether the plan is valid under the ground-truth U-TAMP-2 model (None
     without a plan); `crashed` marks rows recorded for a run that raised or whose worker
-    process died.
+    process died. `closed_loop`: the planner policy acted in the env and replanned from the
+    perceived state (`n_replans` times) instead of executing one plan open-loop;
+    `disturbance`: the probability of an injected fault per macro step (`n_faults` happened);
+    `pose_noise`: the robot's pose-estimation noise (m; None in symbolic grounding).
     """
 
     scene: str
@@ -56,10 +83,24 @@ class ResultRow:
     valid_gt: bool | None = None
     crashed: bool = False
     plan: str = ""
+    closed_loop: bool = False
+    disturbance: float = 0.0
+    pose_noise: float | None = None
+    n_faults: int = 0
+    n_replans: int = 0
 
     @property
     def key(self) -> Key:
-        return (self.scene, self.method, self.seed, self.grounding, noise_label(self.noise))
+        return row_key(
+            self.scene,
+            self.method,
+            self.seed,
+            self.grounding,
+            self.noise,
+            self.closed_loop,
+            self.disturbance,
+            self.pose_noise,
+        )
 
     def to_csv(self) -> dict[str, str]:
         return {k: _fmt(v) for k, v in asdict(self).items()}
@@ -87,6 +128,11 @@ class ResultRow:
             valid_gt=None if d.get("valid_gt", "") == "" else _bool(d["valid_gt"]),
             crashed=_bool(d.get("crashed") or "false"),
             plan=d.get("plan", ""),
+            closed_loop=_bool(d.get("closed_loop") or "false"),
+            disturbance=float(d.get("disturbance") or 0.0),
+            pose_noise=_opt_float(d.get("pose_noise", "")),
+            n_faults=int(d.get("n_faults") or 0),
+            n_replans=int(d.get("n_replans") or 0),
         )
 
 
@@ -164,7 +210,17 @@ class ResultsFile:
 
 
 def _order(r: ResultRow) -> tuple[Any, ...]:
-    return (r.suite, r.grounding, r.method, r.noise or 0.0, r.scene, r.seed)
+    return (
+        r.suite,
+        r.grounding,
+        r.method,
+        r.noise or 0.0,
+        r.closed_loop,
+        r.disturbance,
+        r.pose_noise or 0.0,
+        r.scene,
+        r.seed,
+    )
 
 
 def _parse(text: str) -> tuple[list[ResultRow], bool]:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError
 from utamp_gym.eval.explain import explain_unsolvable
-from utamp_gym.eval.records import PLAN_SEPARATOR, Key, ResultRow, noise_label
+from utamp_gym.eval.records import PLAN_SEPARATOR, Key, ResultRow, row_key
 from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import (
@@ -43,10 +43,30 @@ class EvalTask:
     noise: float | None = None  # utamp2-noisy only
     timeout: float = DEFAULT_TIMEOUT
     explain: bool = True
+    closed_loop: bool = False
+    disturbance: float = 0.0
+    pose_noise: float | None = None  # physics only
 
     @property
     def key(self) -> Key:
-        return (self.scene, self.method, self.seed, self.grounding, noise_label(self.noise))
+        return row_key(
+            self.scene,
+            self.method,
+            self.seed,
+            self.grounding,
+            self.noise,
+            self.closed_loop,
+            self.disturbance,
+            self.pose_noise,
+        )
+
+    def settings(self) -> dict[str, object]:
+        """The row columns that repeat the task's settings."""
+        return {
+            "closed_loop": self.closed_loop,
+            "disturbance": self.disturbance,
+            "pose_noise": self.pose_noise,
+        }
 
 
 @dataclass(frozen=True)
@@ -84,11 +104,54 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
     return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts)
 
 
-def _run(task: EvalTask, start: float) -> ResultRow:
+def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
+    from utamp_gym.eval.closed_loop import run_closed_loop
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(task.scene)
-    exec_time = 0.0
+    noise = DEFAULT_NOISE if task.noise is None else task.noise
+    out = run_closed_loop(
+        task.scene,
+        task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        disturbance=task.disturbance,
+        pose_noise=task.pose_noise,
+        noise=noise,
+        timeout=task.timeout,
+    )
+    return ResultRow(
+        scene=scene.name,
+        suite=_suite_of(scene.name),
+        n_objects=scene.n_objects,
+        method=task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        noise=task.noise,
+        solved=bool(out.actions) or out.success,
+        success=out.success,
+        failure_reason=out.failure,
+        plan_length=len(out.actions),
+        planning_time_s=out.planning_time_s,
+        execution_time_s=out.execution_time_s,
+        wall_time_s=time.perf_counter() - start,
+        affordance_precision=None,
+        affordance_recall=None,
+        affordance_f1=None,
+        plan=PLAN_SEPARATOR.join(out.actions),
+        n_faults=out.n_faults,
+        n_replans=out.n_replans,
+        **task.settings(),  # type: ignore[arg-type]
+    )
+
+
+def _run(task: EvalTask, start: float) -> ResultRow:
+    from utamp_gym.suites import resolve_scene
+
+    if task.closed_loop:
+        return _run_closed_loop(task, start)
+    scene = resolve_scene(task.scene)
+    exec_time, n_faults = 0.0, 0
     planned = _plan(scene, task)
     success, failure = False, ""
     valid_gt = None
@@ -101,8 +164,16 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         else:
             from utamp_gym.sim.execute import execute_plan
 
-            ex = execute_plan(scene, planned.plan, task.seed)
+            assert task.pose_noise is not None
+            ex = execute_plan(
+                scene,
+                planned.plan,
+                task.seed,
+                pose_noise=task.pose_noise,
+                disturbance=task.disturbance,
+            )
             success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
+            n_faults = ex.n_faults
     else:
         failure = f"not solved: {planned.reason}"
         if task.explain and planned.facts is not None:
@@ -128,6 +199,8 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         affordance_f1=None if s is None else s.f1,
         valid_gt=valid_gt,
         plan=PLAN_SEPARATOR.join(planned.plan),
+        n_faults=n_faults,
+        **task.settings(),  # type: ignore[arg-type]
     )
 
 
@@ -158,6 +231,7 @@ def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> Result
         affordance_recall=None,
         affordance_f1=None,
         crashed=True,
+        **task.settings(),  # type: ignore[arg-type]
     )
 
 

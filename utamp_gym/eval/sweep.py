@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
 from utamp_gym.errors import UnknownNameError, UtampError
 from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile
 from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EVAL_METHODS, EvalTask, failure_row, run_task
@@ -47,6 +48,9 @@ class SweepConfig:
     noise: tuple[float, ...] = (DEFAULT_NOISE,)
     timeout: float = DEFAULT_TIMEOUT
     explain: bool = True
+    closed_loop: bool = False
+    disturbance: float = 0.0
+    pose_noise: float = DEFAULT_POSE_NOISE  # physics only (symbolic rows record None)
 
     def __post_init__(self) -> None:
         for m in self.methods:
@@ -58,6 +62,19 @@ class SweepConfig:
             raise UtampError("--seeds and --limit must be at least 1")
         if not self.noise or any(not 0.0 <= p <= 1.0 for p in self.noise):
             raise UtampError(f"noise levels must be in [0, 1], got {list(self.noise)}")
+        if not 0.0 <= self.disturbance <= 1.0:
+            raise UtampError(f"--disturbance must be in [0, 1], got {self.disturbance}")
+        if self.disturbance > 0 and self.grounding != "physics":
+            raise UtampError("--disturbance needs --grounding physics (faults are physical)")
+        if self.closed_loop and any(m in VLM_METHODS for m in self.methods):
+            raise UtampError(
+                "--closed-loop runs the planner policy; it does not support "
+                + ", ".join(m for m in self.methods if m in VLM_METHODS)
+            )
+        if not 0.0 <= self.pose_noise <= MAX_POSE_NOISE:
+            raise UtampError(
+                f"--pose-noise must be in [0, {MAX_POSE_NOISE}] m, got {self.pose_noise}"
+            )
 
 
 @dataclass
@@ -90,7 +107,16 @@ def plan_tasks(cfg: SweepConfig) -> tuple[list[EvalTask], list[str]]:
             for noise in levels:
                 for seed in range(cfg.seeds):
                     task = EvalTask(
-                        scene.name, method, seed, cfg.grounding, noise, cfg.timeout, cfg.explain
+                        scene.name,
+                        method,
+                        seed,
+                        cfg.grounding,
+                        noise,
+                        cfg.timeout,
+                        cfg.explain,
+                        closed_loop=cfg.closed_loop,
+                        disturbance=cfg.disturbance,
+                        pose_noise=cfg.pose_noise if cfg.grounding == "physics" else None,
                     )
                     cost = scene.n_objects * (20 if method == "utamp1" else 1)
                     cost *= 50 if method in VLM_METHODS else 1
@@ -217,6 +243,9 @@ def write_outputs(report: SweepReport) -> dict[str, Any]:
     context = {
         "suite": cfg.suite,
         "grounding": cfg.grounding,
+        "closed_loop": cfg.closed_loop,
+        "disturbance": cfg.disturbance,
+        "pose_noise_m": cfg.pose_noise if cfg.grounding == "physics" else None,
         "methods_requested": list(cfg.methods),
         "seeds": cfg.seeds,
         "scenes": len({r.scene for r in report.rows}),

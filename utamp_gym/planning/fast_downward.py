@@ -228,10 +228,26 @@ def _kill_group(proc: subprocess.Popen) -> None:
             time.sleep(0.002)
 
 
+_PLAN_PIPE_BYTES = 1 << 20  # a plan pipe this large never fills up (plans take kilobytes)
+
+
 def _drain(fd: int, chunks: list[bytes]) -> None:
-    """Read `fd` to its end (run in a thread: the plan pipe must never fill up)."""
+    """Read `fd` to its end."""
     while chunk := os.read(fd, 65536):
         chunks.append(chunk)
+
+
+def _roomy_pipe() -> tuple[int, int, bool]:
+    """(read end, write end, whether the pipe holds `_PLAN_PIPE_BYTES`). If it does, the
+    plan is read after the search ends; otherwise a thread must drain it meanwhile."""
+    r, w = os.pipe()
+    try:
+        import fcntl
+
+        roomy = fcntl.fcntl(w, fcntl.F_SETPIPE_SZ, _PLAN_PIPE_BYTES) >= _PLAN_PIPE_BYTES
+    except (ImportError, AttributeError, OSError):  # not Linux, or pipe-max-size is smaller
+        roomy = False
+    return r, w, roomy
 
 
 def _run(
@@ -248,9 +264,9 @@ def _run(
     error or interrupt. Returns (exit code, stdout, stderr, plan): with `plan_pipe`, the
     search binary writes its plan to a pipe (``--internal-plan-file /dev/fd/N``), so no
     file is written at all; otherwise plan is None."""
-    cmd, plan_r, plan_w = list(cmd), -1, -1
+    cmd, plan_r, plan_w, roomy = list(cmd), -1, -1, False
     if plan_pipe:
-        plan_r, plan_w = os.pipe()
+        plan_r, plan_w, roomy = _roomy_pipe()
         cmd += ["--internal-plan-file", f"/dev/fd/{plan_w}"]
     chunks: list[bytes] = []
     reader = None
@@ -268,8 +284,9 @@ def _run(
                 if plan_pipe:
                     os.close(plan_w)
                     plan_w = -1
-                    reader = threading.Thread(target=_drain, args=(plan_r, chunks), daemon=True)
-                    reader.start()
+                    if not roomy:
+                        reader = threading.Thread(target=_drain, args=(plan_r, chunks), daemon=True)
+                        reader.start()
                 try:
                     out, err = proc.communicate(stdin, timeout=max(timeout, 0.0))
                 except subprocess.TimeoutExpired:
@@ -286,6 +303,8 @@ def _run(
             os.close(plan_w)
         if reader is not None:
             reader.join()  # the child is gone, so its end of the pipe is closed
+        elif plan_r >= 0 and plan_w < 0:
+            _drain(plan_r, chunks)  # the child is gone: all it wrote is in the pipe
         if plan_r >= 0:
             os.close(plan_r)
     plan = b"".join(chunks).decode("utf-8", "replace") if plan_pipe else None
@@ -340,10 +359,12 @@ def solve(
     search: str = DEFAULT_SEARCH,
     timeout: float = 30.0,
     translator: str = "utamp",
+    exclude: frozenset[str] = frozenset(),
 ) -> PlanResult:
     """Plan for PDDL ``domain``/``problem`` texts: in-process translation, then the binary.
 
     ``search`` is one of :data:`SEARCH_CONFIGS`, ``translator`` one of :data:`TRANSLATORS`.
+    ``exclude``: ground actions (PDDL text) the plan must not use (our translator only).
     ``timeout`` (s) bounds parsing, grounding, SAS writing and search; exceeding it raises
     :class:`PlanningTimeout` naming the phase. (Fast Downward's own translator cannot be
     interrupted: with ``translator="fd"`` the limit is checked when it returns.) An
@@ -354,6 +375,8 @@ def solve(
         raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
     if translator not in TRANSLATORS:
         raise UnknownNameError("translator", translator, TRANSLATORS)
+    if exclude and translator != "utamp":
+        raise ValueError("exclude needs translator='utamp'")
     deadline = Deadline.after(timeout)
     if translator == "utamp":
         from utamp_gym.planning.state_planner import StatePlanner, problem_atoms
@@ -363,7 +386,9 @@ def solve(
         prob = parse_problem(problem, source="problem")
         deadline.check("grounding")
         planner = StatePlanner(dom, search=search, timeout=timeout)
-        return planner.plan(*problem_atoms(dom, prob), deadline=deadline, source=prob.source)
+        return planner.plan(
+            *problem_atoms(dom, prob), exclude=exclude, deadline=deadline, source=prob.source
+        )
     start = time.perf_counter()
     sas, reason = _translate(domain, problem, timeout)
     translate_time = time.perf_counter() - start

@@ -1,11 +1,13 @@
-"""The physics backend the env drives in ``grounding="physics"``: a protocol, not a class.
+"""The contract between a physics backend and the envs: a protocol and the types it exchanges.
 
-Why a protocol: the env only needs these calls, so the MuJoCo backend
-(`DEFAULT_BACKEND`, written separately) and any other simulator can be swapped in through the
-``backend`` option without the env importing MuJoCo.
+Why a module below both `env/` and `sim/`: the env only needs these calls, so the MuJoCo
+backend (`DEFAULT_BACKEND`) and any other simulator can be swapped in through the ``backend``
+option without the env importing MuJoCo, and the simulator never imports the env.
 
-The env constructs the backend once, as ``factory(**backend_kwargs)``, and calls `reset`
-with the sampled scene and a generator derived from the env's RNG at every episode start.
+The env constructs the backend once, as ``factory(pose_noise=..., **backend_kwargs)``, and
+calls `reset` with the sampled scene and a generator derived from the env's RNG at every
+episode start. After `reset` and after every `execute` it reads `physical_state()` and
+perceives the symbolic state from it (`utamp_gym.perception`).
 """
 
 from __future__ import annotations
@@ -18,9 +20,26 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from utamp_gym.errors import UnknownNameError
+from utamp_gym.perception.state import PhysicalState
 from utamp_gym.scene.model import Scene
 
 DEFAULT_BACKEND = "utamp_gym.sim.backend:MujocoBackend"
+#: Standard deviation (m) of the robot's object-position estimates (env option `pose_noise`);
+#: the yaw estimate's standard deviation scales with it (`yaw_noise_deg`).
+DEFAULT_POSE_NOISE = 0.002
+MAX_POSE_NOISE = 0.05
+
+
+def yaw_noise_deg(pose_noise: float) -> float:
+    """Yaw estimation noise (deg) for a position noise (m): 2 deg per 5 mm."""
+    return 2.0 * pose_noise / 0.005
+
+
+#: The injected faults (issue "closed loop"): a push moves an object resting on the table or
+#: on the tower by a few centimetres; a drop opens the gripper while it carries an object; a
+#: belief fault offsets the robot's estimate of one object's pose (it acts on the offset
+#: estimate until it grasps that object and re-estimates it).
+FAULT_KINDS = ("push", "drop", "belief")
 
 
 @dataclass(frozen=True)
@@ -32,6 +51,18 @@ class MacroResult:
     timings: Mapping[str, float] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class Fault:
+    """An injected fault: its kind (one of `FAULT_KINDS`), the object and what happened."""
+
+    kind: str
+    obj: str
+    detail: str
+
+    def __str__(self) -> str:
+        return f"{self.kind} {self.obj}: {self.detail}"
+
+
 @runtime_checkable
 class PhysicsBackend(Protocol):
     """What the env needs from a simulator (see the module docstring)."""
@@ -39,6 +70,10 @@ class PhysicsBackend(Protocol):
     def reset(self, scene: Scene, rng: np.random.Generator) -> None: ...
 
     def execute(self, action: str) -> MacroResult: ...
+
+    def physical_state(self) -> PhysicalState:
+        """Poses, supports, containment and the grasp, as simulated now."""
+        ...
 
     def object_poses(self) -> dict[str, np.ndarray]:
         """Object name -> ``[x, y, z, qw, qx, qy, qz]`` in the world frame."""
@@ -55,6 +90,15 @@ class PhysicsBackend(Protocol):
     def render(self, width: int, height: int) -> np.ndarray: ...
 
     def close(self) -> None: ...
+
+
+@runtime_checkable
+class Disturbable(Protocol):
+    """A backend that can inject faults (needed by the env option ``disturbance`` > 0)."""
+
+    def disturb(self, rng: np.random.Generator) -> Fault | None:
+        """Inject one fault of `FAULT_KINDS` chosen with `rng` (None if none applies)."""
+        ...
 
 
 def backend_factory(spec: str | Callable[..., PhysicsBackend]) -> Callable[..., PhysicsBackend]:
