@@ -36,7 +36,7 @@ class Literal(NamedTuple):
 
 
 def _sub(a: Atom, sub: Mapping[str, str]) -> Atom:
-    return Atom(a.predicate, tuple(map(sub.get, a.args, a.args)))
+    return tuple.__new__(Atom, (a.predicate, tuple(map(sub.get, a.args, a.args))))
 
 
 def _holds(lit: Literal, facts: Collection[Atom]) -> bool:

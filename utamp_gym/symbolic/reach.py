@@ -82,7 +82,10 @@ class _Index:
             getter = itemgetter(*positions) if positions else None
             self._specs.append((consts, getter, table))
             for args in self.tuples:
-                if all(args[p] == v for p, v in consts):
+                for p, v in consts:
+                    if args[p] != v:
+                        break
+                else:
                     table.setdefault(() if getter is None else getter(args), []).append(args)
         return table
 
@@ -364,8 +367,11 @@ def _schema(action: Action, fluent: frozenset[str]) -> _Schema:
     )
 
 
+_new_atom = tuple.__new__  # builds an Atom without its Python-level __new__
+
+
 def _sub(atom: Atom, binding: Mapping[str, str]) -> Atom:
-    return Atom(atom.predicate, tuple(map(binding.get, atom.args, atom.args)))
+    return _new_atom(Atom, (atom.predicate, tuple(map(binding.get, atom.args, atom.args))))
 
 
 class Grounder:
