@@ -153,36 +153,9 @@ class StatePlanner:
             if isinstance(objects, Mapping)
             else dict.fromkeys(objects, self.object_type)
         )
-        static_key, goal_key = frozenset(static_atoms), tuple(goal_atoms)
-        key = (frozenset(objs.items()), static_key, goal_key)
+        key = (frozenset(objs.items()), frozenset(static_atoms), tuple(goal_atoms))
         state = frozenset(self._atoms(fluent_atoms, fluent=True))
-        found = self._cache.get(key)
-        task = fixed = None
-        if found is not None:
-            self._cache.move_to_end(key)
-            for i, (cached, fixed_atoms) in enumerate(found.tasks):
-                if cached.covers(state, fixed_atoms) is None:
-                    task, fixed = cached, fixed_atoms
-                    found.tasks.insert(0, found.tasks.pop(i))
-                    break
-            else:
-                self._uncovered += 1
-        if task is None:
-            found = found or _KeyTasks(
-                frozenset(self._atoms(static_key, fluent=False)),
-                tuple(parse_literal(g) for g in goal_key),
-            )
-            task, fixed = self._ground(objs, found, state, deadline, source)
-            found.tasks.insert(0, (task, fixed))
-            del found.tasks[self._max_tasks :]
-            self._cache[key] = found
-            self._cache.move_to_end(key)
-            while len(self._cache) > self._max_keys:
-                self._cache.popitem(last=False)
-            self._groundings += 1
-        else:
-            self._hits += 1
-        assert found is not None
+        task, found = self._task(key, objs, state, deadline, source)
         if not task.solvable:
             elapsed = time.perf_counter() - start
             return PlanResult(False, (), None, elapsed, elapsed, 0.0, UNREACHABLE, None)
@@ -201,6 +174,44 @@ class StatePlanner:
         return result
 
     # ------------------------------------------------------------------ internals
+    def _task(
+        self,
+        key: tuple[frozenset[tuple[str, str]], frozenset[str], tuple[str, ...]],
+        objects: dict[str, str],
+        state: frozenset[Atom],
+        deadline: Deadline,
+        source: str,
+    ) -> tuple[SasTask, _KeyTasks]:
+        """A cached task of `key` that covers `state`, else a new grounding (then cached)."""
+        found = self._cache.get(key)
+        if found is not None:
+            self._cache.move_to_end(key)
+            for i, (task, fixed) in enumerate(found.tasks):
+                if task.covers(state, fixed) is None:
+                    found.tasks.insert(0, found.tasks.pop(i))  # most recently used first
+                    self._hits += 1
+                    return task, found
+            self._uncovered += 1
+        else:
+            found = _KeyTasks(
+                frozenset(self._atoms(key[1], fluent=False)),
+                tuple(parse_literal(g) for g in key[2]),
+            )
+        init = found.static | state
+        problem = Problem(
+            source, self.domain.name, MappingProxyType(objects), init, found.goal, source
+        )
+        ops, _ = self._grounder.ground(problem, deadline)
+        task = build_sas(ops, init, found.goal, deadline)
+        found.tasks.insert(0, (task, frozenset(a for a in state if a not in task.changing)))
+        del found.tasks[self._max_tasks :]
+        self._cache[key] = found
+        self._cache.move_to_end(key)
+        while len(self._cache) > self._max_keys:
+            self._cache.popitem(last=False)
+        self._groundings += 1
+        return task, found
+
     def _atoms(self, texts: Iterable[str], *, fluent: bool) -> list[Atom]:
         out = []
         for text in texts:
@@ -218,22 +229,6 @@ class StatePlanner:
                 )
             out.append(atom)
         return out
-
-    def _ground(
-        self,
-        objects: dict[str, str],
-        key: _KeyTasks,
-        state: frozenset[Atom],
-        deadline: Deadline,
-        source: str,
-    ) -> tuple[SasTask, frozenset[Atom]]:
-        init = key.static | state
-        problem = Problem(
-            source, self.domain.name, MappingProxyType(objects), init, key.goal, source
-        )
-        ops, _ = self._grounder.ground(problem, deadline)
-        task = build_sas(ops, init, key.goal, deadline)
-        return task, frozenset(a for a in state if a not in task.changing)
 
 
 def problem_atoms(
