@@ -1,17 +1,23 @@
 """The `utamp` command line: scenes, plan, validate, run, eval, train.
 
-Exit codes: 0 success (also for `plan` when the scene is unsolvable: see `solved`),
-1 an invalid plan (`validate`), 2 bad input (unknown scene, malformed file, ...).
+Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
+see `solved` and `timed_out`), 1 an invalid plan (`validate`), 2 bad input (unknown scene,
+malformed file, bad option value, ...), 130 interrupted (Ctrl-C).
+
+Each subcommand imports what it needs when it runs; `utamp plan` imports neither Gymnasium
+nor the physics stack (the RL parser and the env registration load only for the
+subcommands that use them).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from utamp_gym.errors import UtampError
 
@@ -34,17 +40,19 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
+    from utamp_gym.deadline import Deadline
     from utamp_gym.planning.methods import plan_scene
     from utamp_gym.suites import resolve_scene
 
+    deadline = Deadline.after(args.timeout)  # bounds the whole command, scene lookup included
     scene = resolve_scene(args.scene)
     outcome = plan_scene(
         scene,
         args.method,
         seed=args.seed,
-        timeout=args.timeout,
         search=args.search,
         noise=args.noise,
+        deadline=deadline,
     )
     if args.out:
         out = Path(args.out)
@@ -58,6 +66,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         if args.explain:
             data["explanation"] = explanation
         print(json.dumps(data, indent=2))
+    elif outcome.timed_out:
+        print(f"{scene.name} [{args.method}]: timed out during {outcome.phase}: {outcome.reason}")
     elif outcome.solved:
         print(
             f"{scene.name} [{args.method}]: {outcome.plan_length} steps, "
@@ -189,6 +199,34 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     return 1
 
 
+MAX_TIMEOUT_S = 86400.0
+"""The largest accepted ``--timeout`` (one day): anything longer is a typo."""
+LIGHT_COMMANDS = ("scenes", "plan", "validate")
+"""Subcommands that never build an env: the Gymnasium env ids are not registered for them."""
+TRAIN_HELP = "train an RL baseline (MaskablePPO, PPO or DQN)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """Reports a usage error as one line on stderr and exits 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def timeout_seconds(text: str) -> float:
+    """``--timeout`` values: a positive, finite number of seconds up to `MAX_TIMEOUT_S`."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT_S):
+        raise argparse.ArgumentTypeError(
+            f"must be a positive number of seconds, at most {MAX_TIMEOUT_S:g} (one day); "
+            f"got {text!r}"
+        )
+    return value
+
+
 def _probability(text: str) -> float:
     value = _finite(text)
     if not 0.0 <= value <= 1.0:
@@ -236,14 +274,16 @@ def _add_physics_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand. Options whose modules are heavy (``train``: the RL and
+    env stack; the physics options of ``run`` and ``eval``: the backend) are only added when
+    `command` is that subcommand or None (all), so `utamp plan` stays light."""
     from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
     from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
     from utamp_gym.suites import SUITES
 
-    parser = argparse.ArgumentParser(prog="utamp", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="utamp", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="cmd", required=True)
-
     scenes = sub.add_parser("scenes", help="list or show benchmark scenes")
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
     lst = ssub.add_parser("list", help="scene names, one per line")
@@ -258,7 +298,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     plan.add_argument("--method", choices=METHODS, default="utamp2-gt")
     plan.add_argument("--seed", type=int, default=0)
-    plan.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
+    plan.add_argument(
+        "--timeout",
+        type=timeout_seconds,
+        default=30.0,
+        help="time limit of the whole command (s, at most one day)",
+    )
     plan.add_argument("--search", choices=SEARCH_CONFIGS, default=DEFAULT_SEARCH)
     plan.add_argument(
         "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
@@ -280,7 +325,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0, help="pose noise, IK restarts and OMPL seed")
     run.add_argument("--video", help="write an MP4 (or .gif) of the episode here")
     run.add_argument("--json", action="store_true", help="print one JSON object")
-    _add_physics_options(run)
+    if command in (None, "run"):  # its defaults come from the physics backend (numpy)
+        _add_physics_options(run)
     run.add_argument(
         "--closed-loop",
         action="store_true",
@@ -313,11 +359,12 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument(
         "--sweep-noise", help="comma-separated noise levels for utamp2-noisy (success vs F1)"
     )
-    ev.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
+    ev.add_argument("--timeout", type=timeout_seconds, default=30.0, help="planner time limit (s)")
     ev.add_argument(
         "--no-explain", action="store_true", help="do not explain unsolved U-TAMP-2 runs"
     )
-    _add_physics_options(ev)
+    if command in (None, "eval"):
+        _add_physics_options(ev)
     ev.add_argument(
         "--closed-loop",
         action="store_true",
@@ -327,20 +374,32 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
     ev.add_argument("--out", required=True, help="output directory (re-use it to resume)")
     ev.set_defaults(func=_cmd_eval)
-    from utamp_gym.rl.cli import add_train_parser
+    if command in (None, "train"):
+        from utamp_gym.rl.cli import add_train_parser
 
-    add_train_parser(sub)
+        add_train_parser(sub)
+    else:  # listed in `utamp --help`; its options load with `utamp train`
+        sub.add_parser("train", help=TRAIN_HELP)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one subcommand; returns the exit code (see the module docstring)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
     try:
+        args = build_parser(command).parse_args(argv)
+        if args.cmd not in LIGHT_COMMANDS:
+            from utamp_gym.env.registry import register_envs
+
+            register_envs()
         return int(args.func(args))
     except UtampError as exc:
         print(f"utamp: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # planner processes were killed on the way out
+        print("utamp: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # e.g. `utamp scenes list | head`
         sys.stderr.close()
         return 0

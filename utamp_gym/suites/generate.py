@@ -246,14 +246,17 @@ def suite_facts(suite: str) -> frozenset[Fact]:
     return facts | {f for f in derived if set(fact_types(f)) & set(new.types)}
 
 
+Configuration = tuple[dict[str, str], list[list[str]]]  # (orientation per object, stacks)
+
+
 @cache
-def _suite_cached(suite: str) -> tuple[tuple[Scene, ...], SuiteStats]:
+def _kept(suite: str) -> tuple[tuple[Configuration, ...], SuiteStats]:
+    """The suite's configurations in their stable order, and its statistics (no scenes are
+    built: `_scene` builds one on demand)."""
     spec = SPECS[suite]
     facts = suite_facts(suite)
-    catalogue = load_catalogue()
-    new_types = extra_catalogue().types if suite == "extra" else {}
     types = dict((*spec.movables, TRAY))
-    kept: list[tuple[dict[str, str], list[list[str]]]] = []
+    kept: list[Configuration] = []
     enumerated = trivial = unachievable = 0
     for orient, stacks in _configurations(facts, spec):
         if spec.sliding and next(s for s in stacks if s[0] == TRAY[0]) != [TRAY[0]]:
@@ -268,44 +271,64 @@ def _suite_cached(suite: str) -> tuple[tuple[Scene, ...], SuiteStats]:
             continue
         kept.append((orient, stacks))
     kept.sort(key=lambda c: (len(c[0]), sorted(c[0].items()), [s for s in c[1]]))
-    scenes = []
-    for i, (orient, stacks) in enumerate(kept):
-        data = _scene_dict(f"{suite}/{i:03d}", orient, stacks, spec)
-        used = sorted({types[o] for o in orient} & set(new_types))
-        if used:  # the scene carries the types the default catalogue does not know
-            data["types"] = {n: type_to_dict(new_types[n]) for n in used}
-        scenes.append(scene_from_dict(data, file=f"<suite {suite}>", catalogue=catalogue))
     by_n: dict[int, int] = {}
-    for s in scenes:
-        by_n[s.n_objects] = by_n.get(s.n_objects, 0) + 1
-    return tuple(scenes), SuiteStats(
-        suite, enumerated, trivial, unachievable, len(scenes), dict(sorted(by_n.items()))
+    for orient, _ in kept:  # every object of a configuration has an orientation
+        by_n[len(orient)] = by_n.get(len(orient), 0) + 1
+    stats = SuiteStats(
+        suite, enumerated, trivial, unachievable, len(kept), dict(sorted(by_n.items()))
     )
+    return tuple(kept), stats
+
+
+@cache
+def _catalogue() -> Catalogue:
+    """The packaged catalogue, shared by every suite scene."""
+    return load_catalogue()
+
+
+@cache
+def _scene(suite: str, index: int) -> Scene:
+    spec = SPECS[suite]
+    orient, stacks = _kept(suite)[0][index]
+    data = _scene_dict(f"{suite}/{index:03d}", orient, stacks, spec)
+    if suite == "extra":  # the scene carries the types the default catalogue does not know
+        new_types = extra_catalogue().types
+        types = dict((*spec.movables, TRAY))
+        used = sorted({types[o] for o in orient} & set(new_types))
+        if used:
+            data["types"] = {n: type_to_dict(new_types[n]) for n in used}
+    return scene_from_dict(data, file=f"<suite {suite}>", catalogue=_catalogue())
+
+
+def _check_suite(suite: str) -> None:
+    if suite not in SUITES:
+        raise UnknownNameError("suite", suite, SUITES)
 
 
 def suite_scenes(suite: str) -> tuple[Scene, ...]:
     """All scenes of a suite, in their stable order."""
-    if suite not in SUITES:
-        raise UnknownNameError("suite", suite, SUITES)
-    return _suite_cached(suite)[0]
+    _check_suite(suite)
+    return tuple(_scene(suite, i) for i in range(len(_kept(suite)[0])))
 
 
 def suite_stats(suite: str) -> SuiteStats:
-    if suite not in SUITES:
-        raise UnknownNameError("suite", suite, SUITES)
-    return _suite_cached(suite)[1]
+    _check_suite(suite)
+    return _kept(suite)[1]
 
 
 def all_scene_names(suite: str | None = None) -> list[str]:
+    """Names of the scenes of one suite (default: all suites), without building them."""
     suites = SUITES if suite is None else (suite,)
-    return [s.name for name in suites for s in suite_scenes(name)]
+    for name in suites:
+        _check_suite(name)
+    return [f"{name}/{i:03d}" for name in suites for i in range(len(_kept(name)[0]))]
 
 
 def get_scene(name: str) -> Scene:
-    """A suite scene by its stable name, e.g. ``pick-place/017``."""
-    suite = name.split("/", 1)[0]
-    if suite in SUITES:
-        for s in suite_scenes(suite):
-            if s.name == name:
-                return s
+    """A suite scene by its stable name, e.g. ``pick-place/017`` (only that scene is built)."""
+    suite, _, number = name.partition("/")
+    if suite in SUITES and len(number) == 3 and number.isdigit():
+        index = int(number)
+        if index < len(_kept(suite)[0]):
+            return _scene(suite, index)
     raise UnknownNameError("scene", name, all_scene_names())
