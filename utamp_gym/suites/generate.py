@@ -35,7 +35,6 @@ from functools import cache
 from typing import Any
 
 from utamp_gym.affordances.facts import Fact, fact_types, load_ground_truth
-from utamp_gym.affordances.rules import derive_affordances
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
 from utamp_gym.scene.catalogue import Catalogue, load_catalogue, type_to_dict
@@ -240,6 +239,8 @@ def suite_facts(suite: str) -> frozenset[Fact]:
     facts = load_ground_truth()
     if suite != "extra":
         return facts
+    from utamp_gym.affordances.rules import derive_affordances  # numpy: off `utamp plan`'s path
+
     new = extra_catalogue()
     types = [*load_catalogue().types.values(), *new.types.values()]
     derived = derive_affordances(types)
