@@ -212,7 +212,16 @@ class RayExecutor:
         try:
             ray.init(address=address, **quiet)
         except (ConnectionError, ValueError, RuntimeError) as exc:
-            raise UtampError(f"cannot connect to the Ray cluster at {address!r}: {exc}") from None
+            hint = ""
+            if os.environ.get("RAY_AUTH_MODE", "").lower() != "token":
+                hint = (
+                    "; if the cluster uses token authentication (`ray start --head` of recent "
+                    "Ray, e.g. 2.60, enables it), set RAY_AUTH_MODE=token and copy the head's "
+                    "~/.ray/auth_token here"
+                )
+            raise UtampError(
+                f"cannot connect to the Ray cluster at {address!r}: {exc}{hint}"
+            ) from None
 
     def _stream(
         self,
