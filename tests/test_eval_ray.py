@@ -202,3 +202,14 @@ def test_interrupted_ray_sweep_resumes_with_the_local_executor(
     assert (resumed.ran, resumed.resumed) == (2, 2)
     assert len(resumed.rows) == 4 and all(r.success for r in resumed.rows)
     assert ray.is_initialized()  # an instance the caller started is left running
+
+
+def _cube(x: int) -> int:
+    return x**3
+
+
+def test_generic_tasks_with_several_cpus_each(ray_instance: object) -> None:
+    """The interface training reuses: any picklable function, tasks reserving 2 CPUs."""
+    got: list[int] = []
+    RayExecutor(task_cpus=2).run(_cube, list(range(5)), got.append, lambda t, r: -1)
+    assert sorted(got) == [0, 1, 8, 27, 64]

@@ -171,17 +171,21 @@ class RayExecutor:
     connecting to a cluster. If Ray is already initialised in this process (a test, a
     benchmark, a notebook), that instance is used and left running. A task whose worker
     dies is re-run by Ray up to `max_retries` times; an exception raised by the task
-    itself is not retried (it would raise again).
+    itself is not retried (it would raise again). Each task reserves `task_cpus` CPUs
+    (an evaluation run is single-threaded; a training run may want more).
     """
 
     address: str | None = None
     num_cpus: int | None = None
     max_retries: int = RAY_RETRIES
+    task_cpus: float = 1.0
 
     def __post_init__(self) -> None:
         import_ray()  # fail before any work when the extra is missing
         if self.max_retries < 0:
             raise UtampError(f"max_retries must be at least 0, got {self.max_retries}")
+        if self.task_cpus <= 0:
+            raise UtampError(f"task_cpus must be positive, got {self.task_cpus}")
 
     def run(
         self,
@@ -231,9 +235,10 @@ class RayExecutor:
         record: Callable[[R], None],
         failed: Callable[[T, str], R],
     ) -> None:
-        remote = ray.remote(_call).options(num_cpus=1, max_retries=self.max_retries)
+        remote = ray.remote(_call).options(num_cpus=self.task_cpus, max_retries=self.max_retries)
         fn_ref = ray.put(fn)
-        ahead = max(RAY_MIN_INFLIGHT, 4 * int(ray.cluster_resources().get("CPU", 1)))
+        slots = ray.cluster_resources().get("CPU", 1) / self.task_cpus
+        ahead = max(RAY_MIN_INFLIGHT, 4 * int(slots))
         todo: Iterator[T] = iter(tasks)
         pending: dict[Any, T] = {}
 
@@ -270,8 +275,10 @@ def make_executor(
     workers: int | None = None,
     ray_address: str | None = None,
     max_retries: int = RAY_RETRIES,
+    task_cpus: float = 1.0,
 ) -> Executor:
-    """The executor called `name` (``local`` or ``ray``); `workers` sizes a local Ray too."""
+    """The executor called `name` (``local`` or ``ray``); `workers` sizes a local Ray too,
+    `max_retries` and `task_cpus` are Ray's (see `RayExecutor`)."""
     if name == "local":
         if ray_address:
             raise UtampError("--ray-address needs --executor ray")
@@ -279,5 +286,5 @@ def make_executor(
     if name == "ray":
         if workers is not None and workers < 1:
             raise UtampError(f"--workers must be at least 1 with --executor ray, got {workers}")
-        return RayExecutor(ray_address, workers, max_retries)
+        return RayExecutor(ray_address, workers, max_retries, task_cpus)
     raise UnknownNameError("executor", name, EXECUTORS)
