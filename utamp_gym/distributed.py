@@ -248,13 +248,18 @@ class RayExecutor:
                 if len(pending) >= ahead:
                     return
 
-        submit()
-        while pending:
-            done, _ = ray.wait(list(pending), num_returns=1)
-            for ref in done:
-                task = pending.pop(ref)
-                record(self._result(ray, ref, task, failed))
+        try:
             submit()
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                for ref in done:
+                    task = pending.pop(ref)
+                    record(self._result(ray, ref, task, failed))
+                submit()
+        except BaseException:  # Ctrl-C or a failing `record`: stop the runs in flight
+            for ref in pending:
+                ray.cancel(ref, force=True)
+            raise
 
     def _result(self, ray: ModuleType, ref: Any, task: T, failed: Callable[[T, str], R]) -> R:
         try:
