@@ -198,3 +198,17 @@ def test_merge_conflicts_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixt
     _copy_with_changed_row(tmp_path / "a", tmp_path / "p", "grounding", "physics")
     with pytest.raises(UtampError, match="several groundings"):
         merge_outputs(tmp_path / "m5", [tmp_path / "a", tmp_path / "p"])
+
+
+def test_interrupted_eval_exits_130_with_a_resume_hint(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import utamp_gym.eval.sweep as sweep
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sweep, "run_sweep", interrupted)
+    assert main([*SYMBOLIC, "--limit", "1", "--out", str(tmp_path)]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted" in err and "to resume" in err and "Traceback" not in err

@@ -116,7 +116,15 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         shard=None if args.shard is None else parse_shard(args.shard),
     )
     executor = make_executor(args.executor, workers=args.workers, ray_address=args.ray_address)
-    report = run_sweep(cfg, args.out, progress=not args.quiet, executor=executor)
+    try:
+        report = run_sweep(cfg, args.out, progress=not args.quiet, executor=executor)
+    except KeyboardInterrupt:
+        print(
+            f"utamp eval: interrupted; finished runs are in {Path(args.out) / 'results.csv'}: "
+            "run the same command (with either executor) to resume",
+            file=sys.stderr,
+        )
+        return 130
     summary = write_outputs(report)
     if not args.quiet:
         sys.stdout.write(to_markdown(summary))
