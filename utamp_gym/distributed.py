@@ -219,9 +219,9 @@ class RayExecutor:
             hint = ""
             if os.environ.get("RAY_AUTH_MODE", "").lower() != "token":
                 hint = (
-                    "; if the cluster uses token authentication (`ray start --head` of recent "
-                    "Ray, e.g. 2.60, enables it), set RAY_AUTH_MODE=token and copy the head's "
-                    "~/.ray/auth_token here"
+                    "; if the cluster uses token authentication (Ray 2.60's `ray start "
+                    "--head` enables it when ~/.ray/auth_token exists), copy the head's "
+                    "~/.ray/auth_token here and set RAY_AUTH_MODE=token"
                 )
             raise UtampError(
                 f"cannot connect to the Ray cluster at {address!r}: {exc}{hint}"
