@@ -60,29 +60,40 @@ def wait_until(predicate: object, timeout: float, what: str) -> None:
     pytest.fail(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
+def _start_xvfb(fbdir: str) -> tuple[subprocess.Popen[bytes], Display]:
+    """Start Xvfb on a free display number, its screen mirrored into `fbdir`."""
+    read_fd, write_fd = os.pipe()
+    proc = subprocess.Popen(
+        [
+            "Xvfb", "-displayfd", str(write_fd), "-screen", "0",
+            f"{SCREEN[0]}x{SCREEN[1]}x24", "-fbdir", fbdir, "-nolisten", "tcp",
+        ],
+        pass_fds=(write_fd,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    os.close(write_fd)
+    with os.fdopen(read_fd) as pipe:
+        number = pipe.readline().strip()
+    if not number:
+        proc.wait()
+        pytest.skip(f"Xvfb did not start (exit code {proc.returncode})")
+    return proc, Display(f":{number}", Path(fbdir) / "Xvfb_screen0")
+
+
 @contextmanager
 def virtual_display() -> Iterator[Display]:
-    """Start Xvfb (skip the test if it is not installed), yield it, stop it."""
+    """A private Xvfb for windows of *child* processes; stopped when the block ends.
+
+    (A process that opened a Tk window itself must keep its display until it exits: Tk
+    never closes the connection, and a vanished server kills the process.)
+    """
     if shutil.which("Xvfb") is None:
         pytest.skip("Xvfb is not installed (Debian: apt-get install -y xvfb)")
     with tempfile.TemporaryDirectory(prefix="utamp-xvfb-") as tmp:
-        read_fd, write_fd = os.pipe()
-        proc = subprocess.Popen(
-            [
-                "Xvfb", "-displayfd", str(write_fd), "-screen", "0",
-                f"{SCREEN[0]}x{SCREEN[1]}x24", "-fbdir", tmp, "-nolisten", "tcp",
-            ],
-            pass_fds=(write_fd,),
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )  # fmt: skip
-        os.close(write_fd)
+        proc, display = _start_xvfb(tmp)
         try:
-            with os.fdopen(read_fd) as pipe:
-                number = pipe.readline().strip()
-            if not number:
-                pytest.skip(f"Xvfb did not start (exit code {proc.poll()})")
-            yield Display(f":{number}", Path(tmp) / "Xvfb_screen0")
+            yield display
         finally:
             proc.terminate()
             try:
@@ -90,3 +101,17 @@ def virtual_display() -> Iterator[Display]:
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
+
+
+def process_display() -> Display | None:
+    """An Xvfb that outlives this process's windows: a watchdog shell stops it (and removes
+    its framebuffer directory) once this process has exited. None without Xvfb."""
+    if shutil.which("Xvfb") is None:
+        return None
+    tmp = tempfile.mkdtemp(prefix="utamp-xvfb-")
+    proc, display = _start_xvfb(tmp)
+    watchdog = (
+        f"while kill -0 {os.getpid()} 2>/dev/null; do sleep 1; done; kill {proc.pid}; rm -rf {tmp}"
+    )
+    subprocess.Popen(["sh", "-c", watchdog], start_new_session=True)
+    return display
