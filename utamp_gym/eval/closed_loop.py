@@ -69,7 +69,9 @@ def run_closed_loop(
     n_faults, failure, success = 0, "", False
     execution = 0.0
     try:
-        obs, info = env.reset(seed=seed)
+        start = time.perf_counter()
+        obs, info = env.reset(seed=seed)  # counted as execution, as in `execute_plan`
+        execution += time.perf_counter() - start
         for _ in range(max_steps):
             try:
                 action = policy(obs, info)

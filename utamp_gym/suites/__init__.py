@@ -18,12 +18,15 @@ def packaged_scene_names() -> list[str]:
 
 def resolve_scene(ref: str) -> Scene:
     """A scene from a suite name (``pick-place/017``), a packaged name or a file path."""
-    valid = [*packaged_scene_names(), *all_scene_names()]
-    if ref.split("/", 1)[0] in SUITES and not Path(ref).exists():
+    suite = ref.split("/", 1)[0]
+    if suite in SUITES and not Path(ref).exists():
         try:
             return get_scene(ref)
-        except UnknownNameError:
-            raise UnknownNameError("scene", ref, valid) from None
+        except UnknownNameError:  # list that suite's scenes (the first 40 are shown)
+            raise UnknownNameError(
+                "scene", ref, [*packaged_scene_names(), *all_scene_names(suite)]
+            ) from None
+    valid = [*packaged_scene_names(), *all_scene_names()]
     if ref in packaged_scene_names():
         return load_scene(assets_dir() / "scenes" / f"{ref}.toml")
     path = Path(ref)
