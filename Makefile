@@ -33,9 +33,8 @@ test-all: $(STAMP)
 # The core package on mujoco 4 without the dm extra (only dm-control caps mujoco below 4):
 # a second venv gets `pip install ".[dev]"` (a built wheel, not editable) and the physics
 # tests run from tests/ against that installed copy (tests/test_dm_control.py skips).
-MJ4_TESTS := test_extras.py test_robot_kinematics.py test_robot_mjcf.py test_robot_grasp.py \
-	test_robot_motion.py test_sim_world.py test_sim_skills.py test_sim_run.py \
-	test_closed_loop.py test_dm_control.py
+MJ4_TESTS := test_extras.py test_robot_*.py test_sim_*.py test_closed_loop.py test_extra_suite.py \
+	test_dm_control.py
 test-mujoco4:
 	test -x $(MJ4)/bin/python || $(PYTHON) -m venv $(MJ4)
 	$(MJ4)/bin/pip install --quiet --upgrade pip
