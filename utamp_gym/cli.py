@@ -1,4 +1,4 @@
-"""The `utamp` command line: scenes, plan, validate, run, eval, train.
+"""The `utamp` command line: scenes, plan, validate, run, view, eval, train.
 
 Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
 see `solved` and `timed_out`), 1 an invalid plan (`validate`), 2 bad input (unknown scene,
@@ -305,6 +305,30 @@ def _run_closed_loop(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    """Open a scene in a window until it is closed (MuJoCo's viewer, or the schematic)."""
+    from utamp_gym.env.viewer import require_display
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene(args.scene)
+    require_display("utamp view", "utamp run --video PATH (a headless video)")
+    if args.symbolic:
+        from utamp_gym.env.viewer import show_schematic
+
+        show_schematic(scene)
+        return 0
+    import mujoco.viewer
+    import numpy as np
+
+    from utamp_gym.sim.backend import MujocoBackend
+
+    backend = MujocoBackend()
+    backend.reset(scene, np.random.default_rng(args.seed))
+    # MuJoCo's viewer runs the physics; the servos hold the arm at its ready pose
+    mujoco.viewer.launch(backend.model, backend.data, show_left_ui=False, show_right_ui=False)
+    return 0
+
+
 def _cmd_validate(args: argparse.Namespace) -> int:
     from utamp_gym.symbolic.validate import validate_files
 
@@ -451,6 +475,22 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         help="act with the planner policy in the env, replanning from the perceived state",
     )
     run.set_defaults(func=_cmd_run)
+
+    view = sub.add_parser(
+        "view",
+        help="open a scene interactively: MuJoCo's viewer (physics runs), or --symbolic",
+        description="Open SCENE in a window until it is closed. Default: MuJoCo's "
+        "interactive viewer on the simulated scene with the Panda at its ready pose (the "
+        "physics runs; double-click an object, then Ctrl + right-drag pushes it; Tab and "
+        "Shift+Tab show the viewer's panels). --symbolic: the labelled top-down "
+        "schematic of the scene's declared state. Needs a display (DISPLAY).",
+    )
+    view.add_argument(
+        "scene", help="suite scene (pick-place/017), packaged scene or scene-file path"
+    )
+    view.add_argument("--symbolic", action="store_true", help="the labelled schematic instead")
+    view.add_argument("--seed", type=int, default=0, help="initial pose noise (physics view)")
+    view.set_defaults(func=_cmd_view)
 
     val = sub.add_parser("validate", help="check a plan against a domain and problem")
     val.add_argument("domain")
