@@ -75,8 +75,34 @@ def key_shard(key: Key, n: int) -> int:
     return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big") % n
 
 
+class RunIdentity:
+    """What names one run: the `key` shared by a task (`EvalTask`) and its row."""
+
+    scene: str
+    method: str
+    seed: int
+    grounding: str
+    noise: float | None
+    closed_loop: bool
+    disturbance: float
+    pose_noise: float | None
+
+    @property
+    def key(self) -> Key:
+        return row_key(
+            self.scene,
+            self.method,
+            self.seed,
+            self.grounding,
+            self.noise,
+            self.closed_loop,
+            self.disturbance,
+            self.pose_noise,
+        )
+
+
 @dataclass(frozen=True)
-class ResultRow:
+class ResultRow(RunIdentity):
     """One evaluated run. Times in seconds; `plan` holds the actions joined by `` ; ``.
 
     `valid_gt` is whether the plan is valid under the ground-truth U-TAMP-2 model (None
@@ -112,19 +138,6 @@ class ResultRow:
     pose_noise: float | None = None
     n_faults: int = 0
     n_replans: int = 0
-
-    @property
-    def key(self) -> Key:
-        return row_key(
-            self.scene,
-            self.method,
-            self.seed,
-            self.grounding,
-            self.noise,
-            self.closed_loop,
-            self.disturbance,
-            self.pose_noise,
-        )
 
     def to_csv(self) -> dict[str, str]:
         return {k: _fmt(v) for k, v in asdict(self).items()}
