@@ -15,14 +15,18 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from types import MappingProxyType
 
 import numpy as np
 
 from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
-from utamp_gym.sim.control import LinePath, Timings, allowing, ignoring
+from utamp_gym.robot.collision import CollisionChecker
+from utamp_gym.sim.bodies import BODY_PREFIX
+from utamp_gym.sim.control import ArmDriver, LinePath, Timings, allowing, ignoring
 from utamp_gym.sim.decode import (
+    FINGER_CLEARANCE,
     MAX_OPENING,
     GraspPose,
     GraspSymbols,
@@ -68,6 +72,7 @@ CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measur
 #: joint torques) at the place pose means it landed early; the arm backs up, looks again and
 #: aims anew, at most `PLACE_ATTEMPTS` times
 CONTACT_N = 5.0
+UNCERTAINTY_SIGMAS = 3.0  # the fingers open this many pose-noise deviations wider a side
 PLACE_ATTEMPTS = 3
 
 
@@ -82,9 +87,10 @@ def _plan_grasp(
     """
     arm, world = st.arm, st.world
     t = world.scene.type_of(sym.obj)
-    geoms = world.geom_ids[sym.obj]
+    geoms = _member_geoms(st, sym.obj, sym.member)
     tried = []
     candidates = grasp_candidates(t, sym, st.estimate(sym.obj), prefer_x=arm.tcp()[:3, 0])
+    noise = 0.0 if st.estimator is None else st.estimator.noise
     if candidates[0].width > MAX_OPENING:
         raise SkillFailure(
             f"cannot grasp {sym.obj} by its {sym.member}: it is {candidates[0].width * 100:.0f} cm"
@@ -94,30 +100,56 @@ def _plan_grasp(
         near = arm.sync(arm.near, gap=g.opening)
         with ignoring(near, geoms):
             for q in arm.ik_solutions(g.tcp, near.is_valid):
-                try:
-                    back = arm.line(
-                        q,
-                        g.tcp,
-                        g.pregrasp[:3, 3] - g.tcp[:3, 3],
-                        near.is_valid,
-                        what="the approach",
-                    )
-                    up = arm.line(
-                        q,
-                        g.tcp,
-                        np.array([0.0, 0.0, lift]),
-                        near.is_valid,
-                        what=f"lifting {sym.obj}",
-                    )
-                except GroundingError as exc:
-                    tried.append(str(exc))
-                    continue
-                return g, back.reversed(), up
+                # the widest opening that fits: room for the error of the pose estimate
+                for opening in _openings(g, noise):
+                    wide = replace(g, opening=opening)
+                    arm.sync(near, gap=opening)
+                    try:
+                        if not near.is_valid(q):
+                            continue
+                        back, up = _approach_and_lift(arm, wide, q, lift, sym.obj, near)
+                    except GroundingError as exc:
+                        tried.append(str(exc))
+                        continue
+                    finally:
+                        arm.sync(near, gap=g.opening)  # the IK search goes on at the narrowest
+                    return wide, back.reversed(), up
         tried.append("no collision-free IK solution")
     raise GroundingError(
         f"IK infeasible: cannot grasp {sym.obj} by its {sym.member} with the palm on "
         f"'{sym.palm}' ({'; '.join(dict.fromkeys(tried))})"
     )
+
+
+def _member_geoms(st: SimState, obj: str, member: str) -> list[int]:
+    """The geoms realising `member` of `obj` (the fingers may touch them, not the rest of the
+    object: a finger must not land on a tray's rim next to its handle); all of the object's
+    geoms if the member has none of its own (an edge realised by the body's wall)."""
+    prefix = f"{BODY_PREFIX}{obj}/{member}"
+    names = st.world.info.geom_names[obj]
+    own = [
+        g
+        for g, name in zip(st.world.geom_ids[obj], names, strict=True)
+        if name == prefix or name.startswith(prefix + "/")
+    ]
+    return own or list(st.world.geom_ids[obj])
+
+
+def _openings(g: GraspPose, noise: float) -> tuple[float, ...]:
+    """Pre-grasp finger openings to try, widest first: room for 3 standard deviations of the
+    pose estimate's error on each side (within the hand's opening), then the member's width
+    plus `FINGER_CLEARANCE` a side (`GraspPose.opening`)."""
+    wide = min(MAX_OPENING, g.width + 2 * (FINGER_CLEARANCE + UNCERTAINTY_SIGMAS * noise))
+    return (wide, g.opening) if wide > g.opening + 1e-9 else (g.opening,)
+
+
+def _approach_and_lift(
+    arm: ArmDriver, g: GraspPose, q: np.ndarray, lift: float, obj: str, near: CollisionChecker
+) -> tuple[LinePath, LinePath]:
+    """(path grasp -> pre-grasp, lift path) from grasp configuration `q`, or GroundingError."""
+    back = arm.line(q, g.tcp, g.pregrasp[:3, 3] - g.tcp[:3, 3], near.is_valid, what="the approach")
+    up = arm.line(q, g.tcp, np.array([0.0, 0.0, lift]), near.is_valid, what=f"lifting {obj}")
+    return back, up
 
 
 def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPose, LinePath, Held]:
