@@ -15,6 +15,7 @@ import argparse
 import json
 import math
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -44,7 +45,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from utamp_gym.planning.methods import plan_scene
     from utamp_gym.suites import resolve_scene
 
-    deadline = Deadline.after(args.timeout)  # bounds the whole command, scene lookup included
+    # Bounds the whole command: counted from `main`'s start (argument parsing and the
+    # planner's imports included), not from when planning begins.
+    deadline = Deadline.after(args.timeout, getattr(args, "started", None))
     scene = resolve_scene(args.scene)
     outcome = plan_scene(
         scene,
@@ -513,10 +516,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one subcommand; returns the exit code (see the module docstring)."""
+    started = time.perf_counter()
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     try:
         args = build_parser(command).parse_args(argv)
+        args.started = started
         if args.cmd not in LIGHT_COMMANDS:
             from utamp_gym.env.registry import register_envs
 

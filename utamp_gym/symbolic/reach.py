@@ -33,6 +33,7 @@ from utamp_gym.symbolic.pddl import Action, Atom, Domain, Literal, Problem
 
 Tuple = tuple[str, ...]
 _CHECK_EVERY = 255  # join steps between two deadline checks (a mask: 2**k - 1)
+_CHECK_OPS = 31  # ground operators between two deadline checks (a mask: 2**k - 1)
 
 
 @dataclass(frozen=True)
@@ -456,6 +457,8 @@ class Grounder:
                         for a in add:
                             if a.args not in atoms[a.predicate].tuples:
                                 new[a.predicate].add(a.args)
+                        if deadline is not None and not len(ops) & _CHECK_OPS:
+                            deadline.check("grounding")  # effects can be costly (forall/when)
             if deadline is not None:
                 deadline.check("grounding")
             for pred, idx in new.items():
