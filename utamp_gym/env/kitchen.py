@@ -24,6 +24,7 @@ from utamp_gym.backend import (
 )
 from utamp_gym.env.atoms import InitialAtoms, parse_atom
 from utamp_gym.env.options import EnvOptions, action_id
+from utamp_gym.env.outcome import OutcomeModel
 from utamp_gym.env.poses import SymbolicPoses
 from utamp_gym.env.render import SchematicRenderer
 from utamp_gym.env.state import SymbolicState
@@ -95,6 +96,12 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5) restricts the scenes, ``scene`` fixes one (suite, packaged or file
       name); ``reset(options={"scene": name})`` picks the scene of one episode;
+    * ``masks``: "affordances" (default: the U-TAMP-2 precondition under the env's affordances),
+      "geometric" (U-TAMP-2 without affordance literals, over a larger action space that has
+      e.g. side grasps and picks of the tray; `utamp_gym.env.universe`) or "none" (that action
+      space, every action whose objects are in the scene). Physics decides what the mask
+      allows; symbolic grounding decides it with the outcome model (`utamp_gym.env.outcome`:
+      the ground-truth U-TAMP-2 precondition; a failure names the false affordance);
     * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array"),
       ``camera`` (adds ``image``), ``image_size`` / ``render_size`` ((height, width));
     * physics only: ``backend`` ("module:Class" or a callable, built as
@@ -155,7 +162,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             len(opts.objects),
             opts.image_size if opts.camera else None,
         )
-        self._state = SymbolicState(self.universe)
+        self._state = SymbolicState(self.universe, opts.masks)
+        # masks geometric/none: the outcome model decides symbolic steps the mask allows
+        self._outcome = OutcomeModel(self.universe) if opts.masks != "affordances" else None
         self._poses = SymbolicPoses(opts.objects)
         self._renderer = SchematicRenderer(opts.objects)
         self._task = KitchenTask(
@@ -223,6 +232,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         atoms = self._initial_atoms(scene, self.np_random)
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
         self._poses.reset(scene)
+        if self._outcome is not None:
+            self._outcome.reset(scene)
         self._renderer.reset(scene)
         if self._backend is not None:
             self._backend.reset(scene, np.random.default_rng(self.np_random.integers(2**63)))
@@ -236,7 +247,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         failure: str | None = None
         macro: MacroResult | None = None
         timings: dict[str, float] = {}
-        if not self._state.applicable(a):
+        if not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
             failure = self._state.failure(a)
         elif self._backend is not None:
             start = time.perf_counter()
@@ -245,12 +256,14 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
                 timings = {**macro.timings, "step_s": time.perf_counter() - start}
             else:  # wall-clock times would make info trajectories differ between runs
                 macro = replace(macro, timings={})
-            if macro.success:
-                self._apply(a)
-            else:
+            if not macro.success:
                 failure = macro.reason or f"{self.universe.actions[a]} failed in simulation"
-        else:
-            self._apply(a)
+            elif self._state.applicable(a):  # masks "none": else its effects are unknown
+                self._apply(a)
+        else:  # masks geometric/none: the outcome model (ground truth) decides
+            failure = None if self._outcome is None else self._outcome.failure(self._state, a)
+            if failure is None:
+                self._apply(a)
         goal, height = self._progress(self.options.reward_shaping)
         reward, terminated = self._task.outcome(
             goal=goal, failed=failure is not None, tower_height=height
