@@ -206,7 +206,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument(
         "--methods",
         help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2-vlm, "
-        "vlm-planner (default: the first four; utamp2-noisy alone with --sweep-noise)",
+        "vlm-planner, rl:PATH (a model.zip from `utamp train`; its env options come from the "
+        "model) (default: the first four; utamp2-noisy alone with --sweep-noise)",
     )
     ev.add_argument("--seeds", type=int, default=1, help="seeds 0..K-1 per scene and method")
     ev.add_argument(
