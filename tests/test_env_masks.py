@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 import warnings
 
 import gymnasium as gym
@@ -200,3 +201,14 @@ def test_forbidden_actions_reach_the_simulator_in_physics() -> None:
         assert (info["failure_reason"] is None) == info["macro_result"].success
     finally:
         env.close()
+
+
+def test_pickle_round_trip_keeps_the_outcome_model() -> None:
+    env = geometric()
+    _, info = env.reset(seed=0, options={"scene": "pick-place/004"})
+    clone = pickle.loads(pickle.dumps(env))
+    side = first(env, SIDE_GRASP, info["action_mask"])
+    for e in (env, clone):
+        _, _, _, _, step_info = e.step(side)
+        assert step_info["failure_reason"].startswith("canGraspFrom(salt, salt-body, left")
+    assert clone.true_atoms() == env.true_atoms()

@@ -26,8 +26,9 @@ from functools import lru_cache
 import numpy as np
 
 from utamp_gym.env.atoms import parse_atom
+from utamp_gym.env.geometric import GEOMETRIC_DROPPED
 from utamp_gym.env.state import SymbolicState
-from utamp_gym.env.universe import GEOMETRIC_DROPPED, Universe, UniverseKey, ground_universe
+from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
 from utamp_gym.planning.methods import ground_truth_for
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import Domain, Literal, parse_domain
@@ -97,6 +98,18 @@ class OutcomeModel:
         self._ok = np.ones(universe.n_actions, bool)
         self._truth: frozenset[str] = frozenset()
 
+    def __getstate__(self) -> dict[str, object]:
+        """Pickle the universe (and its truth table) by key, as `SymbolicState` does."""
+        state = self.__dict__.copy()
+        state["universe"], state["_table"] = self.universe.key, None
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        key = state["universe"]
+        assert isinstance(key, UniverseKey)
+        state["universe"], state["_table"] = ground_universe(key), _truth_table(key)
+        self.__dict__.update(state)
+
     def reset(self, scene: Scene) -> None:
         """Start an episode in `scene`: its ground-truth affordances decide from now on."""
         cached = self._scenes.get(scene.name)
@@ -121,6 +134,11 @@ class OutcomeModel:
         geometric (the state's reason) or affordance (named, "... (ground truth)")."""
         if not state.applicable(i):
             return state.failure(i)
+        return self.affordance_failure(i)
+
+    def affordance_failure(self, i: int) -> str | None:
+        """The first ground-truth affordance literal of action `i` that is false (None: all
+        hold), as in `failure`, without looking at the geometric precondition."""
         if self._ok[i]:
             return None
         for lit in self._table.literals[i]:

@@ -19,19 +19,9 @@ violated fluent literals is a gather and an `np.add.reduceat` over all ops at on
 state is a Python int (bit j = atom j of `fluent_atoms`); effects are `add_bits`/`del_bits`.
 
 Precondition sets (`UniverseKey.preconditions`): ``"affordances"`` grounds the key's domain
-as written. ``"geometric"`` grounds `geometric_domain`: U-TAMP-2's actions with every
-affordance literal dropped from the preconditions (`GEOMETRIC_DROPPED`) and U-TAMP-1's
-object-centric grasp constraint added, so the actions are those the object-centric (U-TAMP-1)
-constraints allow, e.g. side and body grasps of the shaker, lifting the tray, placing on round
-tops, with U-TAMP-2's effects and its slide action. `isSupportable` is dropped as well: the
-paper introduces it with the other affordances (Sec. IV, Table I) and U-TAMP-1 has no such
-predicate. (With orientations kept by pick and place it decides nothing in our suites: an
-object only ever rests on the part it stands on in its initial, allowed orientation.)
-Without the affordances, relaxed reachability over the union of scenes reaches many ops that
-no real state allows, so the geometric grounding also prunes with two invariants: `IMPLIED`
-literals, and exactly-one groups (`_exclusive_groups`: e.g. a part of an object touches one
-thing) whose two atoms no op can require together. Neither changes the mask of a reachable
-state. (The affordance universes are left exactly as they were: their action ids are fixed.)
+as written; ``"geometric"`` grounds `geometric.geometric_domain` (U-TAMP-2 without affordance
+literals) and prunes ops no real state allows (`geometric.prune`). The affordance universes
+are left exactly as they were: their action ids are fixed.
 
 Caching: `ground_universe` is a `functools.lru_cache` (bounded) on a pure function of the
 frozen, hashable `UniverseKey`; the result is immutable (read-only arrays, tuples, ints), so
@@ -41,7 +31,6 @@ each process (e.g. an async vector env worker) grounds once per key, in 0.2-5 s.
 
 from __future__ import annotations
 
-from collections import defaultdict
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -51,13 +40,14 @@ import numpy as np
 
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
 from utamp_gym.env.atoms import parse_atom, scene_atoms, universe_facts
+from utamp_gym.env.geometric import geometric_domain, prune
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene, suite_scenes
-from utamp_gym.symbolic.pddl import Atom, Domain, Literal, Problem, parse_domain
+from utamp_gym.symbolic.pddl import Domain, Literal, Problem, parse_domain
 from utamp_gym.symbolic.problem import domain_text, goal_atoms
-from utamp_gym.symbolic.reach import GroundOp, reachable_ops
+from utamp_gym.symbolic.reach import reachable_ops
 
 #: the macro actions whose pose effects the envs model: name -> (moved object, target) params
 ROLES: Mapping[str, tuple[str, str]] = MappingProxyType(
@@ -70,15 +60,6 @@ ROLES: Mapping[str, tuple[str, str]] = MappingProxyType(
 _AFFORDANCE_PREDS = frozenset(p.lower() for p in AFFORDANCE_PREDICATES)
 #: which preconditions a universe's actions are grounded (and masked) with
 PRECONDITIONS = ("affordances", "geometric")
-#: the affordance predicates (Table I) the geometric preconditions leave out: all six
-GEOMETRIC_DROPPED = _AFFORDANCE_PREDS
-#: U-TAMP-1's StableGrasp without affordances: palm next to finger 1, the fingers opposite
-GRASP_GEOMETRY = ("(isAdjacent ?o1-hp ?o1-hf1)", "(isOpposite ?o1-hf1 ?o1-hf2)")
-#: true in every reachable state (what an object rests on touches it with its up-facing
-#: part), stated so that grounding drops picks out of impossible two-object cycles
-IMPLIED = MappingProxyType(
-    {"pick-support": ("(force ?obj2 ?o2-o1)",), "slide-support": ("(force ?obj2 ?o2-o1)",)}
-)
 
 
 @dataclass(frozen=True)
@@ -211,31 +192,6 @@ def _preconditions(universe: Universe, i: int) -> tuple[Literal, ...]:
     return universe.domain.actions[name].instantiate(args)[0]
 
 
-@lru_cache(maxsize=1)
-def geometric_domain() -> Domain:
-    """U-TAMP-2 without affordance literals, plus U-TAMP-1's grasp geometry (module docstring).
-
-    Effects are U-TAMP-2's, so an action's outcome, when it succeeds, is the same in both.
-    """
-    domain = parse_domain(domain_text("utamp2"), source="utamp2.pddl")
-
-    def literals(atoms: Iterable[str]) -> tuple[Literal, ...]:
-        return tuple(Literal(parse_atom(a), True) for a in atoms)  # keeps the ?variables
-
-    actions = {}
-    for name, act in domain.actions.items():
-        kept = tuple(lit for lit in act.precondition if lit.atom.predicate not in GEOMETRIC_DROPPED)
-        grasps = any(lit.atom.predicate == "isgraspfrom" and not lit.positive for lit in kept)
-        extra = literals((*(GRASP_GEOMETRY if grasps else ()), *IMPLIED.get(name, ())))
-        actions[name] = replace(act, precondition=kept + extra)
-    return replace(
-        domain,
-        name="utamp2-geometric",
-        actions=MappingProxyType(actions),
-        source="utamp2.pddl without affordance preconditions",
-    )
-
-
 def universe_domain(key: UniverseKey) -> Domain:
     """The domain whose preconditions a universe's actions are grounded with."""
     if key.preconditions == "geometric":
@@ -283,75 +239,6 @@ def _uniform_predicates(
     return frozenset(p for p, ok in preds.items() if ok)
 
 
-def _exclusive_groups(
-    ops: Sequence[GroundOp], inits: Sequence[tuple[frozenset[str], frozenset[str]]]
-) -> dict[Atom, int]:
-    """Atom -> group id, for groups of which exactly one atom holds in every reachable state.
-
-    A group is the atoms sharing a predicate and all arguments but the last (as in
-    `planning.sas`): exactly one holds initially in every scene that has the objects they
-    name (`inits`: (fluent atoms, objects) per scene), and every op that makes one true
-    requires and deletes another; no op requires one to be false. (By induction, an op
-    requiring two of them never applies, so it cannot break the group.)
-    """
-    candidates: dict[tuple[str, tuple[str, ...]], set[Atom]] = defaultdict(set)
-    touching: dict[Atom, list[int]] = defaultdict(list)  # atom -> ops mentioning it
-    for i, op in enumerate(ops):
-        for a in {*op.pre, *op.add, *op.delete}:
-            touching[a].append(i)
-            if a.args:
-                candidates[(a.predicate, a.args[:-1])].add(a)
-    negated = {a for op in ops for a in op.pre_neg}
-    groups: dict[Atom, int] = {}
-    for (_, prefix), members in candidates.items():
-        if len(members) < 2 or members & negated:
-            continue
-        texts = {str(a) for a in members}
-        if any(len(texts & fluent) != 1 for fluent, objs in inits if set(prefix) <= objs):
-            continue
-        relevant = {i for a in members for i in touching[a]}
-        if all(_keeps_one(ops[i], members) for i in relevant):
-            gid = len(set(groups.values()))
-            groups.update(dict.fromkeys(members, gid))
-    return groups
-
-
-def _keeps_one(op: GroundOp, members: set[Atom]) -> bool:
-    """Whether `op` keeps exactly one of `members` true (or can never apply)."""
-    required = [a for a in op.pre if a in members]
-    if len(required) > 1:
-        return True
-    made = [a for a in op.add if a in members and a not in op.pre]
-    lost = [a for a in op.delete if a in members and a not in op.add]
-    return len(made) == len(lost) <= 1 and all(a in op.pre for a in lost)
-
-
-def _possible(op: GroundOp, groups: Mapping[Atom, int]) -> bool:
-    """False if `op` requires two atoms of one exclusive group (it can never apply)."""
-    seen: dict[int, Atom] = {}
-    for a in op.pre:
-        g = groups.get(a)
-        if g is not None and seen.setdefault(g, a) != a:
-            return False
-    return True
-
-
-def _reachable(ops: Sequence[GroundOp], init: Iterable[Atom]) -> list[GroundOp]:
-    """The ops whose positive fluent preconditions are reachable (delete relaxation) from
-    `init` using only `ops`: pruning impossible ops can cut off atoms only they added."""
-    reached = set(init)
-    pending = list(ops)
-    while True:
-        ready = [op for op in pending if all(a in reached for a in op.pre)]
-        if not ready:
-            break
-        pending = [op for op in pending if not all(a in reached for a in op.pre)]
-        for op in ready:
-            reached.update(op.add)
-    lost = {id(op) for op in pending}
-    return [op for op in ops if id(op) not in lost]
-
-
 @lru_cache(maxsize=16)
 def ground_universe(key: UniverseKey) -> Universe:
     """Ground the universe of `key` (cached: see the module docstring)."""
@@ -388,8 +275,7 @@ def ground_universe(key: UniverseKey) -> Universe:
     )
     ops, reached, _ = reachable_ops(_relaxed_domain(domain, uniform), problem)
     if key.preconditions == "geometric":
-        groups = _exclusive_groups(ops, inits)
-        ops = _reachable([op for op in ops if _possible(op, groups)], problem.init)
+        ops = prune(ops, inits, problem.init)
         reached = set(problem.init) | {a for op in ops for a in op.add}
     fluent_atoms = tuple(sorted({str(a) for a in reached if a.predicate in fluent_preds} | goals))
     static_atoms = tuple(sorted(union_static))
