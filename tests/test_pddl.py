@@ -188,3 +188,78 @@ def test_packaged_domains_parse(name: str) -> None:
     d = parse_domain(path.read_text(), source=str(path))
     assert {"pick-support", "place-support"} <= set(d.actions)
     assert d.show(Atom("canlift", ("a", "b"))) in ("(canLift a b)", "(canlift a b)")
+
+
+# a blocksworld action whose (static) condition picks what else becomes clear
+COND = DOMAIN.replace(
+    "(fitsOn ?b - block ?s - surface))",
+    "(fitsOn ?b - block ?s - surface) (glued ?b - block ?c - block))",
+).replace(
+    "(and (not (holding arm ?b)) (holding arm ?b))))",
+    "(and (not (holding arm ?b)) (holding arm ?b)\n"
+    "      (forall (?c - block) (when (and (glued ?b ?c) (not (= ?c ?b))) (clear ?c)))\n"
+    "      (when (glued ?b ?b) (not (busy arm))))))",
+)
+
+
+def test_conditional_effects_resolve_against_static_facts() -> None:
+    d = parse_domain(COND)
+    regrip = d.actions["regrip"]
+    forall, when = regrip.cond_effects
+    assert forall.variables == (("?c", "block"),) and when.variables == ()
+    assert [str(lit) for lit in forall.condition] == ["(glued ?b ?c)", "(not (= ?c ?b))"]
+    assert forall.add == (Atom("clear", ("?c",)),) and when.delete == (Atom("busy", ("arm",)),)
+    assert d.condition_predicates() == {"glued"}
+    assert "glued" not in d.fluent_predicates()
+    facts = {Atom("glued", ("a", "b")), Atom("glued", ("a", "a")), Atom("glued", ("c", "b"))}
+    _, add, dele = regrip.instantiate(["a"], facts)
+    assert set(add) == {Atom("holding", ("arm", "a")), Atom("clear", ("b",))}
+    assert Atom("busy", ("arm",)) in dele
+    _, add, dele = regrip.instantiate(["b"], facts)  # b is glued to nothing
+    assert add == (Atom("holding", ("arm", "b")),) and dele == (Atom("holding", ("arm", "b")),)
+    assert regrip.instantiate(["a"])[1] == (Atom("holding", ("arm", "a")),)  # no facts given
+
+
+@pytest.mark.parametrize(
+    ("effect", "expected"),
+    [
+        ("(forall (?c - block) (clear ?c))", "unsupported conditional effect in effect of"),
+        (
+            "(forall (?c - block) (when (not (glued ?b ?c)) (clear ?c)))",
+            "forall variable '?c' in effect of 'regrip' must occur in a positive condition",
+        ),
+        (
+            "(forall (?c - block) (when (fitsOn ?b ?c) (clear ?c)))",  # fitsOn ?c: a surface
+            "forall variable '?c' in effect of 'regrip' must occur in a positive condition "
+            "literal at an argument of type 'block'",
+        ),
+        (
+            "(forall (?c - block) (when (and (glued ?b ?c) (clear ?c)) (busy arm)))",
+            "condition (clear ?c) uses the fluent predicate 'clear'",
+        ),
+        ("(forall (?b - block) (when (glued ?b ?b) (clear ?b)))", "'?b' in effect of 'regrip' is"),
+        (
+            "(forall (?c - block) (when (glued ?b ?c) (forall (?d - block) (clear ?d))))",
+            "unsupported 'forall' in a when in effect of 'regrip'",
+        ),
+        ("(when (glued ?b ?z) (clear ?b))", "unknown variable '?z'"),
+    ],
+)
+def test_unsupported_conditional_effects_raise(effect: str, expected: str) -> None:
+    text = COND.replace(
+        "(forall (?c - block) (when (and (glued ?b ?c) (not (= ?c ?b))) (clear ?c)))", effect
+    )
+    with pytest.raises(PddlError) as err:
+        parse_domain(text, source="dom.pddl")
+    assert expected in str(err.value) and "dom.pddl:" in str(err.value)
+
+
+def test_utamp2_slide_brings_every_member_into_the_workspace() -> None:
+    from utamp_gym.symbolic.problem import domain_text
+
+    d = parse_domain(domain_text("utamp2"))
+    assert ":conditional-effects" in d.requirements
+    (member,) = d.actions["slide-support"].cond_effects
+    assert member.variables == (("?m", "obj"),)
+    assert [str(lit) for lit in member.condition] == ["(ismember ?obj1 ?m)"]
+    assert member.add == (Atom("oc", ("in", "workspace", "?m")),)

@@ -63,7 +63,8 @@ def test_round_trip_through_toml(tmp_path: Path) -> None:
         (lambda d: d["workspace"].update(min=[0, 0]), "workspace.min", "3 numbers"),
         (lambda d: d["slots"][1].update(position=[5.0, 5.0]), "slots[1].position", "outside"),
         (lambda d: d.update(colour="red"), "colour", "unknown field"),
-        (lambda d: d.pop("name"), "name", "non-empty"),
+        (lambda d: d.pop("name"), "name", "missing required field"),
+        (lambda d: d.update(name=""), "name", "non-empty"),
         (lambda d: d.update(goal_base="fridge"), "goal_base", "valid: tray"),
     ],
 )

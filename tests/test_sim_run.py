@@ -19,7 +19,7 @@ pytestmark = pytest.mark.physics
 
 EPISODE_KEYS = {
     "scene", "method", "seed", "solved", "plan", "success", "failure", "final_stack",
-    "object_poses", "planning_time_s", "execution_time_s", "wall_time_s", "steps",
+    "object_poses", "planning_time_s", "execution_time_s", "wall_time_s", "n_faults", "steps",
 }  # fmt: skip
 
 

@@ -26,7 +26,7 @@ from utamp_gym.scene.model import Scene
 DEFAULT_BACKEND = "utamp_gym.sim.backend:MujocoBackend"
 #: Standard deviation (m) of the robot's object-position estimates (env option `pose_noise`);
 #: the yaw estimate's standard deviation scales with it (`yaw_noise_deg`).
-DEFAULT_POSE_NOISE = 0.005
+DEFAULT_POSE_NOISE = 0.002
 MAX_POSE_NOISE = 0.05
 
 

@@ -105,6 +105,9 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         noise=noise,
         timeout=args.timeout,
         explain=not args.no_explain,
+        closed_loop=args.closed_loop,
+        disturbance=args.disturbance,
+        pose_noise=args.pose_noise,
     )
     report = run_sweep(cfg, args.out, workers=args.workers, progress=not args.quiet)
     summary = write_outputs(report)
@@ -122,7 +125,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from utamp_gym.sim.execute import run_episode
     from utamp_gym.suites import resolve_scene
 
-    result = run_episode(resolve_scene(args.scene), args.method, seed=args.seed, video=args.video)
+    if args.closed_loop:
+        return _run_closed_loop(args)
+    result = run_episode(
+        resolve_scene(args.scene),
+        args.method,
+        seed=args.seed,
+        video=args.video,
+        pose_noise=args.pose_noise,
+        disturbance=args.disturbance,
+    )
     data = result.to_dict()
     if args.json:
         data.pop("steps", None)
@@ -138,6 +150,34 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_closed_loop(args: argparse.Namespace) -> int:
+    from dataclasses import asdict
+
+    from utamp_gym.eval.closed_loop import run_closed_loop
+    from utamp_gym.suites import resolve_scene
+
+    if args.video:
+        raise UtampError("--video records open-loop runs only (drop --closed-loop)")
+    name = resolve_scene(args.scene).name
+    result = run_closed_loop(
+        args.scene,
+        args.method,
+        seed=args.seed,
+        disturbance=args.disturbance,
+        pose_noise=args.pose_noise,
+    )
+    if args.json:
+        print(json.dumps({"scene": name, "method": args.method, **asdict(result)}, indent=2))
+        return 0
+    status = "success" if result.success else f"failure: {result.failure}"
+    print(f"{name} [{args.method}, seed {args.seed}, closed loop]: {status}")
+    print(
+        f"  {len(result.actions)} actions, {result.n_replans} replans, {result.n_faults} faults,"
+        f" planning {result.planning_time_s:.3f} s, execution {result.execution_time_s:.2f} s"
+    )
+    return 0
+
+
 def _cmd_validate(args: argparse.Namespace) -> int:
     from utamp_gym.symbolic.validate import validate_files
 
@@ -147,6 +187,53 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         return 0
     print(result.message, file=sys.stderr)
     return 1
+
+
+def _probability(text: str) -> float:
+    value = _finite(text)
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be a probability in [0, 1], got {text}")
+    return value
+
+
+def _pose_noise(text: str) -> float:
+    from utamp_gym.backend import MAX_POSE_NOISE
+
+    value = _finite(text)
+    if not 0.0 <= value <= MAX_POSE_NOISE:
+        raise argparse.ArgumentTypeError(f"must be in [0, {MAX_POSE_NOISE}] metres, got {text}")
+    return value
+
+
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+    return value
+
+
+def _add_physics_options(parser: argparse.ArgumentParser) -> None:
+    """--pose-noise and --disturbance (physics execution)."""
+    from utamp_gym.backend import DEFAULT_POSE_NOISE
+
+    parser.add_argument(
+        "--pose-noise",
+        type=_pose_noise,
+        default=DEFAULT_POSE_NOISE,
+        metavar="M",
+        help="std of the robot's object-position estimates in metres (yaw scales with it; "
+        f"default {DEFAULT_POSE_NOISE})",
+    )
+    parser.add_argument(
+        "--disturbance",
+        type=_probability,
+        default=0.0,
+        metavar="P",
+        help="probability of an injected fault (push, drop, wrong belief) per macro action",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -193,6 +280,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0, help="pose noise, IK restarts and OMPL seed")
     run.add_argument("--video", help="write an MP4 (or .gif) of the episode here")
     run.add_argument("--json", action="store_true", help="print one JSON object")
+    _add_physics_options(run)
+    run.add_argument(
+        "--closed-loop",
+        action="store_true",
+        help="act with the planner policy in the env, replanning from the perceived state",
+    )
     run.set_defaults(func=_cmd_run)
 
     val = sub.add_parser("validate", help="check a plan against a domain and problem")
@@ -224,6 +317,13 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
     ev.add_argument(
         "--no-explain", action="store_true", help="do not explain unsolved U-TAMP-2 runs"
+    )
+    _add_physics_options(ev)
+    ev.add_argument(
+        "--closed-loop",
+        action="store_true",
+        help="run the planner policy in the env (perceive, replan; at most "
+        "utamp_gym.eval.closed_loop.MAX_STEPS macro actions) instead of plan-then-execute",
     )
     ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
     ev.add_argument("--out", required=True, help="output directory (re-use it to resume)")

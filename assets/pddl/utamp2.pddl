@@ -4,7 +4,7 @@
 ; free spaces and the virtual objects hand, air and workspace. Parts are the six
 ; sides of a bounding box plus its inside.
 (define (domain utamp2)
-  (:requirements :strips :typing :negative-preconditions)
+  (:requirements :strips :typing :negative-preconditions :conditional-effects)
   (:types obj part)
   (:constants hand air workspace - obj
               on under left right front back in - part)
@@ -90,7 +90,8 @@
       (not (oc ?o2-o1 ?obj2 air)) (oc ?o2-o1 ?obj2 ?obj1)))
 
   ; Grasp an object that cannot be lifted and slide it across its support ?obj2 into
-  ; the adjacent free ?space; the hand is free afterwards.
+  ; the adjacent free ?space; the hand is free afterwards. The object and all its
+  ; members are then in the workspace.
   (:action slide-support
     :parameters (?obj1 - obj ?o1-mem - obj ?o1-hp - part ?o1-hf1 - part ?o1-hf2 - part
                  ?o1-base - part ?obj2 - obj ?o1-o2 - part ?o2-o1 - part
@@ -127,5 +128,7 @@
     :effect (and
       (not (oc in ?space air)) (oc in ?space ?obj1)
       (not (oc ?o1-space ?obj1 ?space)) (not (oc ?space-o1 ?space ?obj1))
-      (oc in workspace ?obj1)))
+      (oc in workspace ?obj1)
+      ; sliding brings every member of ?obj1 into the workspace with it
+      (forall (?m - obj) (when (isMember ?obj1 ?m) (oc in workspace ?m)))))
 )

@@ -18,19 +18,20 @@ from gymnasium import spaces
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_POSE_NOISE,
-    MacroResult,
     PhysicsBackend,
     backend_factory,
 )
 from utamp_gym.env.atoms import InitialAtoms, parse_atom
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.outcome import OutcomeModel
+from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
 from utamp_gym.env.poses import SymbolicPoses
 from utamp_gym.env.render import SchematicRenderer
 from utamp_gym.env.state import SymbolicState
-from utamp_gym.env.task import KitchenTask, home_joints, observation_space, tower_complete
+from utamp_gym.env.task import KitchenTask, home_joints, observation_space
 from utamp_gym.env.universe import Universe, ground_universe
 from utamp_gym.errors import UnknownNameError
+from utamp_gym.perception.abstraction import Perception
 from utamp_gym.planning.methods import DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
 
@@ -72,21 +73,22 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per object newly
     on the tower (over the episode's best) and −0.01 per failed action (`utamp_gym.env.task`).
 
-    **Termination** – ``terminated`` at the goal: in symbolic grounding the PDDL goal (hand
-    empty, every slot but the tray's clear, so everything is one tower on the tray); in
-    physics grounding every object in one tower on the tray as measured by the backend's
-    `stacked_on_tray()`. It also terminates at a dead end, when no action is applicable after
-    a step (possible with noisy or rule-based affordances; an episode may even start at one,
-    and then its first step terminates it). With ``terminate_on_failure=True`` a failed
-    action terminates too.
+    **Termination** – ``terminated`` at the goal: the PDDL goal (hand empty, every slot but
+    the tray's clear, so everything is one tower on the tray) holds in the symbolic state (in
+    physics grounding: the perceived one, with every object perceived). It also terminates at
+    a dead end, when no action is applicable after a step (possible with noisy or rule-based
+    affordances; an episode may even start at one, and then its first step terminates it),
+    and in physics grounding when an object has no symbol (see below). With
+    ``terminate_on_failure=True`` a failed action terminates too.
     ``truncated`` comes from Gymnasium's ``TimeLimit`` (``max_episode_steps`` of the env file,
     or ``gym.make(..., max_episode_steps=N)``).
 
     **Info** – ``action`` (PDDL string or None after reset), ``action_mask``,
-    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times and
-    ``step_s``, unless ``record_timings=False``; symbolic: always empty, so info trajectories
-    are reproducible), ``macro_result`` (physics: the `MacroResult`; symbolic: None),
-    ``scene`` (name).
+    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times,
+    ``perceive_s`` and ``step_s``, unless ``record_timings=False``; symbolic: always empty, so
+    info trajectories are reproducible), ``macro_result`` (physics: the `MacroResult`;
+    symbolic: None), ``unexpected_atoms``, ``anomalies``, ``fault`` (see the closed loop
+    below), ``scene`` (name).
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
@@ -104,13 +106,26 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       the ground-truth U-TAMP-2 precondition; a failure names the false affordance);
     * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array"),
       ``camera`` (adds ``image``), ``image_size`` / ``render_size`` ((height, width));
+    * ``masks``: "affordances" (default) | "geometric" | "none" (what `action_masks()` allows);
     * physics only: ``backend`` ("module:Class" or a callable, built as
-      ``backend(**backend_kwargs)``) and ``record_timings`` (wall-clock times in info).
+      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (wall-clock times in
+      info), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
+      (m, standard deviation of the robot's object-position estimates; `utamp_gym.backend`).
 
-    In physics grounding an action's symbolic precondition is checked first (failing fast with
-    the reason); then the backend executes it; on success its symbolic effects are applied, on
-    a physical failure ``failure_reason`` is the backend's and the symbolic state is left as it
-    was (nothing is re-derived from the simulator, which may then disagree with it).
+    **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
+    and after every executed step (success or failure) it is *perceived* from the simulator
+    (`utamp_gym.perception`), and ``symbolic``, `action_masks()`, ``info["action_mask"]``,
+    `true_atoms()`, `static_atoms` (orientation atoms) and termination follow it. An action
+    whose precondition is false in the perceived state fails fast with the reason, without
+    reaching the simulator. ``info["unexpected_atoms"]`` lists, sorted, ``"+ATOM"`` (perceived,
+    not predicted) and ``"-ATOM"`` (predicted by the action's effect, not perceived); it is
+    empty when the step went as planned (always in symbolic grounding). An object with no
+    symbol (toppled, fallen off the table, outside every slot, resting inside another object)
+    has no atoms of its own, so no action involves it; ``info["anomalies"]`` maps it to the
+    reason, and the episode terminates (the goal can no longer be reached).
+    ``disturbance`` p: after each executed macro action, with probability p (from the env's
+    RNG), one fault of `utamp_gym.backend.FAULT_KINDS` is injected; ``info["fault"]`` describes
+    it (None otherwise).
 
     **Rendering** – "rgb_array": the simulator's camera in physics grounding, a top-down
     schematic (`utamp_gym.env.render`) in symbolic grounding.
@@ -176,10 +191,13 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         )
         self._scene: Scene | None = None
         self._held: str | None = None
+        self._declared_static: frozenset[str] = frozenset()
         self._backend: PhysicsBackend | None = None
+        self._physics: PhysicalGrounding | None = None
         if opts.grounding == "physics":
             factory = backend_factory(opts.backend)
             self._backend = factory(pose_noise=opts.pose_noise, **opts.backend_kwargs)
+            self._physics = PhysicalGrounding(self._backend, opts.disturbance)
 
     # ------------------------------------------------------------------ public helpers
     @property
@@ -231,12 +249,14 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         self._scene, self._held = scene, None
         atoms = self._initial_atoms(scene, self.np_random)
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
+        self._declared_static = atoms.static
         self._poses.reset(scene)
         if self._outcome is not None:
             self._outcome.reset(scene)
         self._renderer.reset(scene)
-        if self._backend is not None:
-            self._backend.reset(scene, np.random.default_rng(self.np_random.integers(2**63)))
+        if self._physics is not None:
+            rng = np.random.default_rng(self.np_random.integers(2**63))
+            self._observe(self._physics.reset(scene, rng))
         self._task.initialize_episode(self._progress(self.options.reward_shaping)[1])
         return self._observation(), self._info(None, None, {}, None)
 
@@ -245,21 +265,28 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._scene is None:
             raise RuntimeError("call reset() before step()")
         failure: str | None = None
-        macro: MacroResult | None = None
+        executed: Executed | None = None
         timings: dict[str, float] = {}
+        unexpected: list[str] = []
         if not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
             failure = self._state.failure(a)
-        elif self._backend is not None:
+        elif self._physics is not None:
             start = time.perf_counter()
-            macro = self._backend.execute(self.universe.actions[a])
+            predicted = self._predicted(a)
+            executed = self._physics.execute(self.universe.actions[a], self.np_random)
+            self._observe(executed.perception)
+            unexpected = unexpected_atoms(predicted, executed.perception.atoms)
+            macro = executed.macro
             if self.options.record_timings:
-                timings = {**macro.timings, "step_s": time.perf_counter() - start}
+                timings = {
+                    **macro.timings,
+                    "perceive_s": executed.perceive_s,
+                    "step_s": time.perf_counter() - start,
+                }
             else:  # wall-clock times would make info trajectories differ between runs
-                macro = replace(macro, timings={})
+                executed = replace(executed, macro=replace(macro, timings={}))
             if not macro.success:
                 failure = macro.reason or f"{self.universe.actions[a]} failed in simulation"
-            elif self._state.applicable(a):  # masks "none": else its effects are unknown
-                self._apply(a)
         else:  # masks geometric/none: the outcome model (ground truth) decides
             failure = None if self._outcome is None else self._outcome.failure(self._state, a)
             if failure is None:
@@ -268,8 +295,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         reward, terminated = self._task.outcome(
             goal=goal, failed=failure is not None, tower_height=height
         )
-        terminated = terminated or self._state.dead_end()
-        info = self._info(a, failure, timings, macro)
+        terminated = terminated or self._state.dead_end() or bool(self._anomalies())
+        info = self._info(a, failure, timings, executed, unexpected)
         return self._observation(), reward, terminated, False, info
 
     @property
@@ -287,7 +314,29 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._backend is not None:
             self._backend.close()  # kept: a closed env must not silently turn symbolic
 
+    @property
+    def perception(self) -> Perception | None:
+        """The last perceived state (physics grounding; None in symbolic grounding)."""
+        return None if self._physics is None else self._physics.perception
+
     # ------------------------------------------------------------------ internals
+    def _observe(self, perception: Perception) -> None:
+        """Physics grounding: the symbolic state becomes the perceived one."""
+        static = perceived_static(self._declared_static, perception)
+        self._state.observe(perception.fluent, static)
+        self._held = perception.held
+
+    def _predicted(self, a: int) -> frozenset[str]:
+        """Atoms action `a` is predicted to yield: its successor; atoms outside the universe
+        and orientation atoms unchanged."""
+        assert self.perception is not None
+        fluent = self.universe.atoms_of(self.universe.successor(self._state.bits, a))
+        return frozenset((*fluent, *self._state.unrepresented)) | self.perception.orientation
+
+    def _anomalies(self) -> dict[str, str]:
+        perception = self.perception
+        return {} if perception is None else dict(perception.anomalies)
+
     def _apply(self, a: int) -> None:
         self._state.apply(a)
         kind, obj, target = self.universe.roles[a]
@@ -300,12 +349,12 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     def _progress(self, need_height: bool) -> tuple[bool, int]:
         """(goal reached, objects on the tower; 0 unless `need_height`), measured once."""
         base = self.scene.tower_base
-        if self._backend is None:
+        perception = self.perception
+        if perception is None:
             height = len(self._poses.tower(base)) if need_height else 0
             return self._state.goal_reached(), height
-        tower = self._backend.stacked_on_tray()
-        goal = tower_complete(tower, base, self.scene.object_names)
-        return goal, len([o for o in tower if o != base])
+        goal = self._state.goal_reached() and not perception.anomalies
+        return goal, len(perception.tower(base))
 
     def _observation(self) -> Obs:
         if self._backend is None:
@@ -338,14 +387,19 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         a: int | None,
         failure: str | None,
         timings: dict[str, float],
-        macro: MacroResult | None,
+        executed: Executed | None = None,
+        unexpected: list[str] | None = None,
     ) -> dict[str, Any]:
+        fault = None if executed is None or executed.fault is None else str(executed.fault)
         return {
             "action": None if a is None else self.universe.actions[a],
             "action_mask": self._state.mask(),
             "failure_reason": failure,
             "timings": dict(timings),
-            "macro_result": macro,
+            "macro_result": None if executed is None else executed.macro,
+            "unexpected_atoms": list(unexpected or []),
+            "anomalies": self._anomalies(),
+            "fault": fault,
             "scene": self.scene.name,
         }
 

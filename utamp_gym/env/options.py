@@ -110,6 +110,8 @@ class EnvOptions:
                 f"preconditions); domain {self.domain!r} has none, use masks='affordances'"
             )
         object.__setattr__(self, "disturbance", _unit("disturbance", self.disturbance))
+        if self.disturbance > 0 and self.grounding != "physics":
+            raise ValueError("disturbance needs grounding='physics' (faults are physical)")
         object.__setattr__(
             self, "pose_noise", _unit("pose_noise (m)", self.pose_noise, MAX_POSE_NOISE)
         )

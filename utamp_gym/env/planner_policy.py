@@ -1,16 +1,24 @@
 """`PlannerPolicy`: Fast Downward as a closed-loop policy for the kitchen envs.
 
 Why: a planning baseline must act in the same env as learned agents. The policy plans from the
-*current* symbolic state (the ``symbolic`` observation plus the scene's static atoms, written
-out as a PDDL problem), follows the plan, and replans whenever the observed state is not the
-one the plan predicted (a failed action, a physical failure, a new episode, or an exhausted
-plan). Every planner call's wall time (problem writing, grounding and search) is appended to
-`planning_times`.
+*current* symbolic state (the ``symbolic`` observation plus the env's static atoms, written
+out as a PDDL problem; in physics grounding both are perceived from the simulator), follows
+the plan, and replans whenever the observed state is not the one the plan predicted (a failed
+action, a physical surprise, a new episode, or an exhausted plan).
+
+It never loops: an action that failed (``info["failure_reason"]``) from a state is banned from
+that state for the rest of the episode, and the next plan from it avoids the banned actions;
+after `MAX_BANS` different failures from one state it gives up with a `PlanningError` naming
+that state. Plans are cached per (scene, state, static atoms, bans), so replanning from a
+state seen before costs nothing. Every planner call's wall time (problem writing, grounding
+and search) is appended to `planning_times`; `n_replans` counts the plans made this episode
+after its first.
 """
 
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -20,6 +28,7 @@ import numpy as np
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.env.atoms import scene_atoms
 from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.env.physics import perceived_static
 from utamp_gym.errors import PlanningError, UnknownNameError
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS, solve
 from utamp_gym.planning.methods import DEFAULT_NOISE, affordances_for, method_spec
@@ -41,6 +50,13 @@ def state_problem(
     lines.extend(f"    {g}" for g in goal_atoms(scene))
     lines += ["  ))", ")"]
     return "\n".join(lines) + "\n"
+
+
+#: different failed actions from one state after which the policy gives up
+MAX_BANS = 3
+#: plans kept in the per-state cache
+PLAN_CACHE_SIZE = 4096
+_State = tuple[str, int, frozenset[str]]  # scene, fluent bits, static atoms
 
 
 class PlannerPolicy:
@@ -82,20 +98,34 @@ class PlannerPolicy:
         self._fluent = domain.fluent_predicates()
         self._rng = np.random.default_rng(seed)
         self._facts: dict[str, frozenset[Fact]] = {}
+        self._cache: OrderedDict[tuple[_State, frozenset[int]], tuple[int, ...]] = OrderedDict()
+        self.n_replans = 0
+        self.bans: dict[_State, set[int]] = {}
         self._plan: list[int] = []
         self._expected: int | None = None
+        self._last: tuple[_State, int] | None = None
 
     def reset(self) -> None:
-        """Forget the current plan (the next call plans afresh)."""
-        self._plan, self._expected = [], None
+        """Start a new episode: forget the plan, the bans and the replan count."""
+        self._plan, self._expected, self._last = [], None, None
+        self.bans, self.n_replans = {}, 0
 
     def __call__(self, obs: Mapping[str, np.ndarray], info: Mapping[str, Any] | None = None) -> int:
         universe = self.env.universe
+        if info is not None and info.get("action") is None:  # the first step of an episode
+            self.reset()
         bits = sum(1 << int(j) for j in np.flatnonzero(obs["symbolic"]))
-        if bits != self._expected or not self._plan:
-            self._replan(bits)
+        state = (self.env.scene.name, bits, self.env.static_atoms)
+        if self._last is not None and info is not None and info.get("failure_reason"):
+            before, failed = self._last
+            self.bans.setdefault(before, set()).add(failed)
+        if bits != self._expected or not self._plan or self._plan[0] in self.bans.get(state, ()):
+            if self._expected is not None:
+                self.n_replans += 1
+            self._plan = list(self._plan_from(state))
         action = self._plan.pop(0)
         self._expected = universe.successor(bits, action)
+        self._last = (state, action)
         return action
 
     # ------------------------------------------------------------------ internals
@@ -110,24 +140,52 @@ class PlannerPolicy:
                 scene, self.spec.affordances, self._rng, self.noise
             )[0]
         facts = self._facts[scene.name]
-        return scene_atoms(scene, facts, self.spec.domain, self._fluent)[0]
+        static = scene_atoms(scene, facts, self.spec.domain, self._fluent)[0]
+        perception = self.env.perception  # physics: orientation atoms as perceived
+        return static if perception is None else perceived_static(static, perception)
 
-    def _replan(self, bits: int) -> None:
+    def _plan_from(self, state: _State) -> tuple[int, ...]:
+        """A plan from `state` avoiding its banned actions (cached), or `PlanningError`."""
+        banned = frozenset(self.bans.get(state, ()))
+        universe = self.env.universe
+        if len(banned) >= MAX_BANS:
+            failed = ", ".join(sorted(universe.actions[a] for a in banned))
+            raise PlanningError(
+                f"giving up on {state[0]}: {len(banned)} actions failed from the same state "
+                f"({failed}); state: {' '.join(universe.atoms_of(state[1]))}"
+            )
+        key = (state, banned)
+        plan = self._cache.get(key)
+        if plan is None:
+            plan = self._replan(state[1], frozenset(universe.actions[a] for a in banned))
+            self._cache[key] = plan
+            if len(self._cache) > PLAN_CACHE_SIZE:
+                self._cache.popitem(last=False)
+        else:
+            self._cache.move_to_end(key)
+        return plan
+
+    def _replan(self, bits: int, exclude: frozenset[str]) -> tuple[int, ...]:
         env, universe = self.env, self.env.universe
         scene = env.scene
         start = time.perf_counter()
         objects = scene_atoms(scene, (), self.spec.domain, self._fluent)[2]
         atoms = [*self._static_atoms(scene), *universe.atoms_of(bits)]
         problem = state_problem(scene, objects, atoms, self.spec.domain)
-        result = solve(self._domain_text, problem, search=self.search, timeout=self.timeout)
+        result = solve(
+            self._domain_text, problem, search=self.search, timeout=self.timeout, exclude=exclude
+        )
         self.planning_times.append(time.perf_counter() - start)
         if not result.solved:
-            raise PlanningError(f"no plan from the current state of {scene.name}: {result.reason}")
+            avoiding = f" avoiding {', '.join(sorted(exclude))}" if exclude else ""
+            raise PlanningError(
+                f"no plan from the current state of {scene.name}{avoiding}: {result.reason}"
+            )
         if not result.plan:
             raise PlanningError(f"the goal of {scene.name} already holds: nothing to do")
         self.plans.append(result.plan)
         try:
-            self._plan = [universe.index(step) for step in result.plan]
+            return tuple(universe.index(step) for step in result.plan)
         except UnknownNameError as exc:
             raise PlanningError(
                 f"plan step '{exc.name}' is not in the env's action space "

@@ -17,6 +17,8 @@ the precondition, whatever is shown: an op the mask allows may still not be appl
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 from utamp_gym.env.atoms import EpisodeAtoms
@@ -47,6 +49,7 @@ class SymbolicState:
         self._tables: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._present = np.zeros(universe.n_actions, bool)  # masks "none": objects in scene
         self._presence: dict[str, np.ndarray] = {}
+        self.unrepresented: tuple[str, ...] = ()  # perceived atoms outside the universe
 
     def reset(self, atoms: EpisodeAtoms, cache_key: str | None = None) -> None:
         """Start an episode: the scene's static atoms fix which ops can ever apply.
@@ -68,8 +71,30 @@ class SymbolicState:
                 if cache_key is not None:
                     self._presence[cache_key] = present
             self._present = present
+        self.unrepresented = ()
         self.bits = self.universe.state_bits(atoms.fluent)
         self._goal = self.universe.state_bits(atoms.goal)
+        self._refresh()
+
+    def observe(self, fluent: Iterable[str], static: frozenset[str]) -> None:
+        """Set the state to perceived atoms (physics grounding, after every step).
+
+        `static` replaces the episode's static atoms when it changed (a toppled object loses
+        its orientation atoms); fluent atoms outside the universe cannot be represented and
+        are left out (`unrepresented` lists them).
+        """
+        if static != self._static:
+            self._flat, self._ptr = self._table(static)
+            self._static = static
+        index = self.universe.fluent_index
+        bits, extra = 0, []
+        for atom in fluent:
+            j = index.get(atom)
+            if j is None:
+                extra.append(atom)
+            else:
+                bits |= 1 << j
+        self.bits, self.unrepresented = bits, tuple(sorted(extra))
         self._refresh()
 
     def _table(self, static: frozenset[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -130,8 +155,8 @@ class SymbolicState:
         return self._ext[: len(self.universe.fluent_atoms)].astype(np.int8)
 
     def true_atoms(self) -> list[str]:
-        """The fluent atoms that hold, as lower-case PDDL."""
-        return self.universe.atoms_of(self.bits)
+        """The fluent atoms that hold, as lower-case PDDL (`unrepresented` ones last)."""
+        return [*self.universe.atoms_of(self.bits), *self.unrepresented]
 
     @property
     def static_atoms(self) -> frozenset[str]:

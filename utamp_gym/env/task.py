@@ -12,7 +12,6 @@ episode so far, so taking an object off and putting it back earns nothing) and
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 from gymnasium import spaces
@@ -46,11 +45,6 @@ def observation_space(
     if image_size is not None:
         entries["image"] = spaces.Box(0, 255, (*image_size, 3), np.uint8)
     return spaces.Dict(entries)
-
-
-def tower_complete(tower: Sequence[str], base: str, objects: Sequence[str]) -> bool:
-    """Whether `tower` (bottom to top, with or without the base) holds every other object."""
-    return set(tower) - {base} == set(objects) - {base}
 
 
 class KitchenTask:

@@ -41,7 +41,7 @@ import numpy as np
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
 from utamp_gym.env.atoms import parse_atom, scene_atoms, universe_facts
 from utamp_gym.env.geometric import geometric_domain, prune
-from utamp_gym.errors import UnknownNameError
+from utamp_gym.errors import PddlError, UnknownNameError
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene, suite_scenes
@@ -273,6 +273,15 @@ def ground_universe(key: UniverseKey) -> Universe:
         frozenset(parse_atom(a) for a in union_static | union_fluent),
         (),
     )
+    # conditional effects are resolved once, so their conditions must agree between scenes
+    conditions = domain.condition_predicates()
+    cond_facts = frozenset(a for a in problem.init if a.predicate in conditions)
+    differ = {a.predicate for a in cond_facts} - uniform
+    if differ:
+        raise PddlError(
+            f"{key.domain}.pddl: conditional effects depend on static predicates that differ "
+            f"between the scenes of {key}: {', '.join(sorted(differ))}"
+        )
     ops, reached, _ = reachable_ops(_relaxed_domain(domain, uniform), problem)
     if key.preconditions == "geometric":
         ops = prune(ops, inits, problem.init)
@@ -290,7 +299,7 @@ def ground_universe(key: UniverseKey) -> Universe:
     for op in sorted(ops, key=lambda o: f"({o.name})"):
         name, *args = op.name.split()
         act = domain.actions[name]
-        pre, add, dele = act.instantiate(args)
+        pre, add, dele = act.instantiate(args, cond_facts)
         names.append(f"({op.name})")
         params = dict(zip((v for v, _ in act.parameters), args, strict=True))
         moved, target = ROLES.get(name, ("", ""))

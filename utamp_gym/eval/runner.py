@@ -149,6 +149,48 @@ def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
         affordance_recall=None,
         affordance_f1=None,
         plan=PLAN_SEPARATOR.join(ep.actions),
+        n_faults=ep.n_faults,
+        **task.settings(),  # type: ignore[arg-type]
+    )
+
+
+def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
+    from utamp_gym.eval.closed_loop import run_closed_loop
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene(task.scene)
+    noise = DEFAULT_NOISE if task.noise is None else task.noise
+    out = run_closed_loop(
+        task.scene,
+        task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        disturbance=task.disturbance,
+        pose_noise=task.pose_noise,
+        noise=noise,
+        timeout=task.timeout,
+    )
+    return ResultRow(
+        scene=scene.name,
+        suite=_suite_of(scene.name),
+        n_objects=scene.n_objects,
+        method=task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        noise=task.noise,
+        solved=bool(out.actions) or out.success,
+        success=out.success,
+        failure_reason=out.failure,
+        plan_length=len(out.actions),
+        planning_time_s=out.planning_time_s,
+        execution_time_s=out.execution_time_s,
+        wall_time_s=time.perf_counter() - start,
+        affordance_precision=None,
+        affordance_recall=None,
+        affordance_f1=None,
+        plan=PLAN_SEPARATOR.join(out.actions),
+        n_faults=out.n_faults,
+        n_replans=out.n_replans,
         **task.settings(),  # type: ignore[arg-type]
     )
 
@@ -156,10 +198,12 @@ def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
 def _run(task: EvalTask, start: float) -> ResultRow:
     from utamp_gym.suites import resolve_scene
 
+    if task.method.startswith("rl:"):  # a saved agent acting in the env (always closed loop)
+        return _run_rl(task, resolve_scene(task.scene), start)
+    if task.closed_loop:
+        return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)
-    if task.method.startswith("rl:"):
-        return _run_rl(task, scene, start)
-    exec_time = 0.0
+    exec_time, n_faults = 0.0, 0
     planned = _plan(scene, task)
     success, failure = False, ""
     valid_gt = None
@@ -172,8 +216,16 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         else:
             from utamp_gym.sim.execute import execute_plan
 
-            ex = execute_plan(scene, planned.plan, task.seed)
+            assert task.pose_noise is not None
+            ex = execute_plan(
+                scene,
+                planned.plan,
+                task.seed,
+                pose_noise=task.pose_noise,
+                disturbance=task.disturbance,
+            )
             success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
+            n_faults = ex.n_faults
     else:
         failure = f"not solved: {planned.reason}"
         if task.explain and planned.facts is not None:
@@ -199,6 +251,7 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         affordance_f1=None if s is None else s.f1,
         valid_gt=valid_gt,
         plan=PLAN_SEPARATOR.join(planned.plan),
+        n_faults=n_faults,
         **task.settings(),  # type: ignore[arg-type]
     )
 

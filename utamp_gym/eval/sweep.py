@@ -63,6 +63,13 @@ class SweepConfig:
             raise UtampError(f"noise levels must be in [0, 1], got {list(self.noise)}")
         if not 0.0 <= self.disturbance <= 1.0:
             raise UtampError(f"--disturbance must be in [0, 1], got {self.disturbance}")
+        if self.disturbance > 0 and self.grounding != "physics":
+            raise UtampError("--disturbance needs --grounding physics (faults are physical)")
+        if self.closed_loop and any(m in VLM_METHODS for m in self.methods):
+            raise UtampError(
+                "--closed-loop runs the planner policy; it does not support "
+                + ", ".join(m for m in self.methods if m in VLM_METHODS)
+            )
         if not 0.0 <= self.pose_noise <= MAX_POSE_NOISE:
             raise UtampError(
                 f"--pose-noise must be in [0, {MAX_POSE_NOISE}] m, got {self.pose_noise}"
@@ -235,6 +242,9 @@ def write_outputs(report: SweepReport) -> dict[str, Any]:
     context = {
         "suite": cfg.suite,
         "grounding": cfg.grounding,
+        "closed_loop": cfg.closed_loop,
+        "disturbance": cfg.disturbance,
+        "pose_noise_m": cfg.pose_noise if cfg.grounding == "physics" else None,
         "methods_requested": list(cfg.methods),
         "seeds": cfg.seeds,
         "scenes": len({r.scene for r in report.rows}),

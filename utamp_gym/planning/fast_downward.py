@@ -329,10 +329,12 @@ def solve(
     search: str = DEFAULT_SEARCH,
     timeout: float = 30.0,
     translator: str = "utamp",
+    exclude: frozenset[str] = frozenset(),
 ) -> PlanResult:
     """Plan for PDDL ``domain``/``problem`` texts: in-process translation, then the binary.
 
     ``search`` is one of :data:`SEARCH_CONFIGS`, ``translator`` one of :data:`TRANSLATORS`.
+    ``exclude``: ground actions (lower-case PDDL text) the plan must not use (our translator).
     ``timeout`` (s) bounds translation plus search; exceeding it raises
     :class:`PlanningTimeout`. An unsolvable task returns ``solved=False`` with a ``reason``;
     bad PDDL raises :class:`PddlError`.
@@ -341,13 +343,15 @@ def solve(
         raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
     if translator not in TRANSLATORS:
         raise UnknownNameError("translator", translator, TRANSLATORS)
+    if exclude and translator != "utamp":
+        raise ValueError("exclude needs translator='utamp'")
     _check_timeout(timeout)
     start = time.perf_counter()
     task = None
     if translator == "fd":
         sas, reason = _translate(domain, problem, timeout)
     else:
-        sas, reason, task = _ground_to_sas(domain, problem)
+        sas, reason, task = _ground_to_sas(domain, problem, exclude)
     translate_time = time.perf_counter() - start
     if reason is not None:
         return PlanResult(False, (), None, translate_time, translate_time, 0.0, reason, None)
@@ -365,7 +369,9 @@ def solve(
     return result
 
 
-def _ground_to_sas(domain: str, problem: str) -> tuple[str | None, str | None, tuple | None]:
+def _ground_to_sas(
+    domain: str, problem: str, exclude: frozenset[str] = frozenset()
+) -> tuple[str | None, str | None, tuple | None]:
     """Our translator: parse, ground by relaxed reachability, write SAS.
 
     Also returns (ops by name, init, goal) so that the plan can be post-processed."""
@@ -376,6 +382,8 @@ def _ground_to_sas(domain: str, problem: str) -> tuple[str | None, str | None, t
     dom = parse_domain(domain, source="domain")
     prob = parse_problem(problem, source="problem")
     ops, _, _ = reachable_ops(dom, prob)
+    if exclude:
+        ops = [op for op in ops if f"({op.name})" not in exclude]
     sas = to_sas(ops, prob.init, prob.goal)
     if sas is None:
         return None, "goal unreachable (proved unsolvable by relaxed reachability)", None

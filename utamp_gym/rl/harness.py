@@ -82,6 +82,7 @@ class RLEpisode:
     failed_actions: int
     decision_time_s: float
     execution_time_s: float
+    n_faults: int = 0  # injected faults (physics grounding with disturbance)
 
 
 @lru_cache(maxsize=2)
@@ -129,7 +130,7 @@ def run_rl_episode(
         obs, info = env.reset(seed=seed, options={"scene": scene})
         budget = step_budget(kitchen.scene.n_objects)  # type: ignore[attr-defined]
         actions: list[str] = []
-        failed, decide, execute = 0, 0.0, 0.0
+        failed, faults, decide, execute = 0, 0, 0.0, 0.0
         last_failure: str | None = None
         policy.reset()
         for _ in range(budget):
@@ -139,16 +140,25 @@ def run_rl_episode(
             obs, reward, terminated, _, info = env.step(action)
             decide, execute = decide + t1 - t0, execute + time.perf_counter() - t1
             actions.append(str(info["action"]))
+            faults += info.get("fault") is not None
             if info["failure_reason"] is not None:
                 failed, last_failure = failed + 1, str(info["failure_reason"])
             if terminated:
-                if float(reward) >= GOAL_REWARD:
-                    return RLEpisode(True, "", tuple(actions), failed, decide, execute)
-                why = f"dead end: no applicable action after {len(actions)} steps"
-                return RLEpisode(False, why, tuple(actions), failed, decide, execute)
+                success = float(reward) >= GOAL_REWARD
+                why = "" if success else _terminal_reason(info, len(actions))
+                return RLEpisode(success, why, tuple(actions), failed, decide, execute, faults)
         why = f"budget exhausted: no goal in {budget} steps ({failed} failed)"
         if last_failure is not None:
             why += f"; last failure: {last_failure}"
-        return RLEpisode(False, why, tuple(actions), failed, decide, execute)
+        return RLEpisode(False, why, tuple(actions), failed, decide, execute, faults)
     finally:
         env.close()
+
+
+def _terminal_reason(info: dict[str, Any], steps: int) -> str:
+    """Why an episode ended without the goal: a perceived anomaly (physics) or a dead end."""
+    anomalies = info.get("anomalies") or {}
+    if anomalies:
+        shown = "; ".join(f"{k}: {v}" for k, v in sorted(anomalies.items()))
+        return f"anomaly after {steps} steps: {shown}"
+    return f"dead end: no applicable action after {steps} steps"

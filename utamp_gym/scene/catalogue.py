@@ -7,7 +7,6 @@ robustness. Types come from `assets/objects/*.toml` or from a scene file.
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -15,6 +14,22 @@ from typing import Any
 
 from utamp_gym.errors import SceneError, UnknownNameError
 from utamp_gym.resources import asset_path
+from utamp_gym.scene.fields import (
+    MAX_MASS,
+    MIN_MASS,
+    boolean,
+    bounds,
+    key,
+    known_keys,
+    read_toml,
+    text,
+    vec,
+)
+from utamp_gym.scene.fields import choice as _choice
+from utamp_gym.scene.fields import name as valid_name
+from utamp_gym.scene.fields import need as _need
+from utamp_gym.scene.fields import number as _number
+from utamp_gym.scene.fields import table as _table
 from utamp_gym.scene.geometry import PARTS, SIDES, Box
 
 SHAPES = ("flat", "round", "thin", "pointy", "open", "concave")
@@ -44,6 +59,14 @@ class PartAttrs:
     center: tuple[float, float] | None = None  # xy centre of the usable surface (object frame)
 
 
+def _union(members: Mapping[str, Member]) -> Box:
+    boxes = [m.box for m in members.values()]
+    out = boxes[0]
+    for b in boxes[1:]:
+        out = out.union(b)
+    return out
+
+
 @dataclass(frozen=True)
 class ObjectType:
     """Physical description of a kind of object."""
@@ -61,11 +84,7 @@ class ObjectType:
     @property
     def bbox(self) -> Box:
         """The object's bounding box: the union of its members' boxes."""
-        boxes = [m.box for m in self.members.values()]
-        out = boxes[0]
-        for b in boxes[1:]:
-            out = out.union(b)
-        return out
+        return _union(self.members)
 
     @property
     def body(self) -> Member:
@@ -98,102 +117,116 @@ class ObjectType:
         return replace(self, parts=dict(parts))
 
 
-def _need(d: Mapping[str, Any], key: str, file: str, path: str) -> Any:
-    if key not in d:
-        raise SceneError("missing required field", file=file, field=f"{path}.{key}")
-    return d[key]
+TYPE_FIELDS = ("description", "mass", "material", "robustness", "movable", "members", "parts")
+#: optional type attributes kept in `ObjectType.extra` (not used by the affordance rules)
+EXTRA_FIELDS = ("rgba",)
+MEMBER_FIELDS = ("kind", "geom", "min", "max")
+PART_FIELDS = ("shape", "size", "food_surface", "height", "center")
+#: smallest extent (m) of a member box along any axis
+MIN_EXTENT = 1e-3
+_TOL = 1e-6
 
 
-def _number(value: Any, file: str, path: str, *, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise SceneError(f"expected a number, got {value!r}", file=file, field=path)
-    if positive and value <= 0:
-        raise SceneError(f"must be > 0, got {value!r}", file=file, field=path)
-    return float(value)
+def _members(value: Any, file: str, path: str) -> dict[str, Member]:
+    members_raw = _table(value, file, path)
+    if not members_raw:
+        raise SceneError("expected a non-empty table of members", file=file, field=path)
+    members: dict[str, Member] = {}
+    for mname, m in members_raw.items():
+        mpath = key(path, mname)
+        valid_name(mname, file, mpath)
+        m = _table(m, file, mpath)
+        known_keys(m, MEMBER_FIELDS, file, mpath)
+        lo, hi = bounds(m, 3, file, mpath, min_extent=MIN_EXTENT)
+        members[mname] = Member(
+            name=mname,
+            kind=_choice(m.get("kind", "body"), MEMBER_KINDS, file, f"{mpath}.kind"),
+            box=Box(lo, hi),  # type: ignore[arg-type]
+            geom=_choice(m.get("geom", "box"), GEOMS, file, f"{mpath}.geom"),
+        )
+    if sum(m.kind == "body" for m in members.values()) != 1:
+        raise SceneError("exactly one member must have kind 'body'", file=file, field=path)
+    return members
 
 
-def vec(value: Any, n: int, file: str, path: str, *, positive: bool = False) -> tuple[float, ...]:
-    """A list of `n` numbers (each > 0 if `positive`); errors name the file and the field."""
-    if not isinstance(value, list) or len(value) != n:
-        raise SceneError(f"expected a list of {n} numbers, got {value!r}", file=file, field=path)
-    return tuple(_number(v, file, f"{path}[{i}]", positive=positive) for i, v in enumerate(value))
-
-
-def _choice(value: Any, valid: tuple[str, ...], file: str, path: str) -> str:
-    if value not in valid:
-        raise SceneError(f"{value!r} is not one of {', '.join(valid)}", file=file, field=path)
-    return str(value)
+def _part(p: Any, side: str, bbox: Box, file: str, path: str) -> PartAttrs:
+    """One part's attributes; its usable surface must lie on the bounding box's face."""
+    p = _table(p, file, path)
+    known_keys(p, PART_FIELDS, file, path)
+    size, center, height = p.get("size"), p.get("center"), p.get("height")
+    face = bbox.face_size(side) if size is not None or center is not None else (0.0, 0.0)
+    if size is not None:
+        size = vec(size, 2, file, f"{path}.size", positive=True)
+        if any(s > f + _TOL for s, f in zip(size, face, strict=True)):
+            raise SceneError(
+                f"{list(size)} exceeds the bounding-box face {[round(f, 6) for f in face]}",
+                file=file,
+                field=f"{path}.size",
+            )
+    if center is not None:
+        center = vec(center, 2, file, f"{path}.center")
+        extent = size if size is not None else face
+        if side in ("on", "under") and not all(
+            bbox.min[i] - _TOL <= center[i] - extent[i] / 2
+            and center[i] + extent[i] / 2 <= bbox.max[i] + _TOL
+            for i in (0, 1)
+        ):
+            raise SceneError(
+                f"the surface at {list(center)} of size {list(extent)} leaves the bounding box",
+                file=file,
+                field=f"{path}.center",
+            )
+    if height is not None:
+        height = _number(height, file, f"{path}.height", lo=bbox.min[2], hi=bbox.max[2])
+    return PartAttrs(
+        shape=_choice(_need(p, "shape", file, path), SHAPES, file, f"{path}.shape"),
+        size=size,  # type: ignore[arg-type]
+        food_surface=boolean(p.get("food_surface", False), file, f"{path}.food_surface"),
+        height=height,
+        center=center,  # type: ignore[arg-type]
+    )
 
 
 def parse_type(
     name: str, data: Mapping[str, Any], file: str, path: str | None = None
 ) -> ObjectType:
     """Build an ObjectType from its TOML table; errors name the file and the field."""
-    path = path or f"types.{name}"
-    if not isinstance(data, Mapping):
-        raise SceneError("expected a table", file=file, field=path)
-    members_raw = _need(data, "members", file, path)
-    if not isinstance(members_raw, Mapping) or not members_raw:
-        raise SceneError(
-            "expected a non-empty table of members", file=file, field=f"{path}.members"
-        )
-    members: dict[str, Member] = {}
-    for mname, m in members_raw.items():
-        mpath = f"{path}.members.{mname}"
-        if not isinstance(m, Mapping):
-            raise SceneError("expected a table", file=file, field=mpath)
-        lo = vec(_need(m, "min", file, mpath), 3, file, f"{mpath}.min")
-        hi = vec(_need(m, "max", file, mpath), 3, file, f"{mpath}.max")
-        if any(a >= b for a, b in zip(lo, hi, strict=True)):
-            raise SceneError(f"min {lo} must be below max {hi}", file=file, field=mpath)
-        members[mname] = Member(
-            name=mname,
-            kind=_choice(m.get("kind", "body"), MEMBER_KINDS, file, f"{mpath}.kind"),
-            box=Box(lo, hi),
-            geom=_choice(m.get("geom", "box"), GEOMS, file, f"{mpath}.geom"),
-        )
-    if sum(m.kind == "body" for m in members.values()) != 1:
-        raise SceneError(
-            "exactly one member must have kind 'body'", file=file, field=f"{path}.members"
-        )
-    parts_raw = _need(data, "parts", file, path)
+    path = path or key("types", name)
+    valid_name(name, file, path)
+    data = _table(data, file, path)
+    known_keys(data, (*TYPE_FIELDS, *EXTRA_FIELDS), file, path)
+    members = _members(_need(data, "members", file, path), file, f"{path}.members")
+    bbox = _union(members)
+    parts_raw = _table(_need(data, "parts", file, path), file, f"{path}.parts")
     parts: dict[str, PartAttrs] = {}
     for pname, p in parts_raw.items():
-        ppath = f"{path}.parts.{pname}"
-        _choice(pname, SIDES, file, ppath)
-        if not isinstance(p, Mapping):
-            raise SceneError("expected a table", file=file, field=ppath)
-        size, center, height = p.get("size"), p.get("center"), p.get("height")
-        unknown = sorted(set(p) - {"shape", "size", "food_surface", "height", "center"})
-        if unknown:
-            raise SceneError(
-                "unknown field; valid: shape, size, food_surface, height, center",
-                file=file,
-                field=f"{ppath}.{unknown[0]}",
-            )
-        parts[pname] = PartAttrs(
-            shape=_choice(_need(p, "shape", file, ppath), SHAPES, file, f"{ppath}.shape"),
-            size=None if size is None else vec(size, 2, file, f"{ppath}.size"),  # type: ignore[arg-type]
-            food_surface=bool(p.get("food_surface", False)),
-            height=None if height is None else _number(height, file, f"{ppath}.height"),
-            center=None if center is None else vec(center, 2, file, f"{ppath}.center"),  # type: ignore[arg-type]
-        )
+        ppath = key(f"{path}.parts", pname)
+        parts[pname] = _part(p, _choice(pname, SIDES, file, ppath), bbox, file, ppath)
     missing = [s for s in SIDES if s not in parts]
     if missing:
         raise SceneError(f"missing parts {', '.join(missing)}", file=file, field=f"{path}.parts")
-    known = {"members", "parts", "mass", "material", "robustness", "movable", "description"}
+    extra: dict[str, Any] = {}
+    if "rgba" in data:
+        extra["rgba"] = vec(data["rgba"], 4, file, f"{path}.rgba", lo=0.0, hi=1.0)
     return ObjectType(
         name=name,
-        mass=_number(_need(data, "mass", file, path), file, f"{path}.mass", positive=True),
-        material=str(_need(data, "material", file, path)),
+        mass=_number(
+            _need(data, "mass", file, path),
+            file,
+            f"{path}.mass",
+            positive=True,
+            lo=MIN_MASS,
+            hi=MAX_MASS,
+        ),
+        material=text(_need(data, "material", file, path), file, f"{path}.material", empty=False),
         robustness=_choice(
             _need(data, "robustness", file, path), ROBUSTNESS, file, f"{path}.robustness"
         ),
         members=members,
         parts=parts,
-        movable=bool(data.get("movable", True)),
-        description=str(data.get("description", "")),
-        extra={k: v for k, v in data.items() if k not in known},
+        movable=boolean(data.get("movable", True), file, f"{path}.movable"),
+        description=text(data.get("description", ""), file, f"{path}.description"),
+        extra=extra,
     )
 
 
@@ -222,6 +255,7 @@ def type_to_dict(t: ObjectType) -> dict[str, Any]:
         if p.center is not None:
             entry["center"] = list(p.center)
         out["parts"][pname] = entry
+    out.update({k: list(v) if isinstance(v, tuple) else v for k, v in t.extra.items()})
     return out
 
 
@@ -246,16 +280,17 @@ class Catalogue:
 
 def load_catalogue(path: str | Path | None = None) -> Catalogue:
     """Load a catalogue file (default: the packaged kitchen catalogue)."""
-    file = Path(path) if path is not None else asset_path("objects", "kitchen.toml")
-    try:
-        data = tomllib.loads(file.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"invalid TOML: {exc}", file=str(file)) from exc
-    types_raw = _need(data, "types", str(file), "")
-    return Catalogue({n: parse_type(n, d, str(file)) for n, d in types_raw.items()})
+    file = str(path if path is not None else asset_path("objects", "kitchen.toml"))
+    data = read_toml(file, "catalogue file")
+    known_keys(data, ("types",), file, "")
+    types_raw = _table(_need(data, "types", file, ""), file, "types")
+    if not types_raw:
+        raise SceneError("expected at least one object type", file=file, field="types")
+    return Catalogue({n: parse_type(n, d, file) for n, d in types_raw.items()})
 
 
 __all__ = [
+    "EXTRA_FIELDS",
     "GEOMS",
     "MEMBER_KINDS",
     "PARTS",

@@ -1,13 +1,13 @@
 """Read, validate and write scene files (TOML).
 
-Every problem is reported as a `SceneError` naming the file and the field, e.g.
-``scenes/my.toml: field 'objects[2].on': unknown support 'shelf'; valid: mug, slot1, ...``.
+Every problem is reported as a `SceneError` naming the file and the field path, e.g.
+``scenes/my.toml: field 'objects[2].on': unknown support 'shelf'; valid: mug, slot1, ...``;
+values are type- and range-checked by `utamp_gym.scene.fields`.
 """
 
 from __future__ import annotations
 
 import re
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -16,34 +16,55 @@ import numpy as np
 import tomli_w
 
 from utamp_gym.errors import SceneError
-from utamp_gym.scene.catalogue import Catalogue, load_catalogue, parse_type, type_to_dict, vec
-from utamp_gym.scene.geometry import Box
+from utamp_gym.scene import fields as f
+from utamp_gym.scene.catalogue import (
+    Catalogue,
+    ObjectType,
+    load_catalogue,
+    parse_type,
+    type_to_dict,
+)
+from utamp_gym.scene.geometry import PARTS, Box
 from utamp_gym.scene.model import ORIENTATIONS, Scene, SceneObject, Slot, Space
 
-RESERVED = frozenset({"hand", "air", "workspace", "table"})
-_NAME = re.compile(r"^[a-z][a-z0-9-]*$")
+#: the PDDL domains' constants (hand, air, workspace and the parts) and the table
+RESERVED = frozenset({"hand", "air", "workspace", "table", *PARTS})
+SCENE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_./-]{0,99}")
+SCENE_FIELDS = (
+    "name",
+    "description",
+    "workspace",
+    "table",
+    "slots",
+    "spaces",
+    "objects",
+    "types",
+    "goal_base",
+)
+SLOT_FIELDS = ("name", "position", "size", "min", "max")
+SPACE_FIELDS = ("name", "slot", "position", "size")
+OBJECT_FIELDS = ("name", "type", "on", "orientation", "position")
 
 
-def _name(value: Any, file: str, path: str) -> str:
-    if not isinstance(value, str) or not _NAME.match(value):
-        raise SceneError(
-            f"{value!r} is not a valid name "
-            "(lower-case letters, digits and '-', starting with a letter)",
-            file=file,
-            field=path,
-        )
-    if value in RESERVED:
-        raise SceneError(
-            f"'{value}' is reserved ({', '.join(sorted(RESERVED))})", file=file, field=path
-        )
-    return value
+class _Names:
+    """Slot, space and object names share one namespace (they are all PDDL objects)."""
 
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.where: dict[str, str] = {}
 
-def _list(data: Mapping[str, Any], key: str, file: str) -> list[Mapping[str, Any]]:
-    value = data.get(key, [])
-    if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
-        raise SceneError("expected an array of tables ([[...]])", file=file, field=key)
-    return value
+    def add(self, value: Any, path: str) -> str:
+        name = f.name(value, self.file, path)
+        if name in RESERVED:
+            raise SceneError(
+                f"'{name}' is reserved ({', '.join(sorted(RESERVED))})", file=self.file, field=path
+            )
+        if name in self.where:
+            raise SceneError(
+                f"duplicate name '{name}' (also {self.where[name]})", file=self.file, field=path
+            )
+        self.where[name] = path
+        return name
 
 
 def scene_from_dict(
@@ -51,162 +72,36 @@ def scene_from_dict(
 ) -> Scene:
     """Validate a parsed scene table and build a `Scene`."""
     base = catalogue if catalogue is not None else load_catalogue()
-    known = {
-        "name",
-        "description",
-        "workspace",
-        "table",
-        "slots",
-        "spaces",
-        "objects",
-        "types",
-        "goal_base",
-    }
-    unknown = sorted(set(data) - known)
-    if unknown:
+    data = f.table(data, file, "")
+    f.known_keys(data, SCENE_FIELDS, file, "")
+    name = f.text(f.need(data, "name", file, ""), file, "name", empty=False)
+    if not SCENE_NAME.fullmatch(name):
         raise SceneError(
-            f"unknown field(s); valid: {', '.join(sorted(known))}", file=file, field=unknown[0]
-        )
-    name = data.get("name")
-    if not isinstance(name, str) or not name:
-        raise SceneError("expected a non-empty string", file=file, field="name")
-
-    types_raw = data.get("types", {})
-    if not isinstance(types_raw, Mapping):
-        raise SceneError("expected a table of object types", file=file, field="types")
-    custom = {n: parse_type(n, d, file, f"types.{n}") for n, d in types_raw.items()}
-    cat = base.merged(custom)
-
-    ws = data.get("workspace")
-    if not isinstance(ws, Mapping):
-        raise SceneError("missing or not a table", file=file, field="workspace")
-    ws_min = vec(ws.get("min"), 3, file, "workspace.min")
-    ws_max = vec(ws.get("max"), 3, file, "workspace.max")
-    if any(a >= b for a, b in zip(ws_min, ws_max, strict=True)):
-        raise SceneError("min must be below max on every axis", file=file, field="workspace")
-
-    table = data.get("table", {})
-    table_type = table.get("type", "kitchen-table") if isinstance(table, Mapping) else None
-    if table_type not in cat:
-        raise SceneError(
-            f"unknown table type {table_type!r}; valid: {', '.join(sorted(cat.types))}",
+            f"{f.show(name)} is not a valid scene name (up to 100 letters, digits, "
+            "'-', '_', '.' and '/', starting with a letter or digit; it names the PDDL problem)",
             file=file,
-            field="table.type",
+            field="name",
         )
-    if cat[table_type].movable:
-        raise SceneError(
-            f"table type '{table_type}' must have movable = false", file=file, field="table.type"
-        )
-    top = cat[table_type].bbox
+    description = f.text(data.get("description", ""), file, "description")
 
-    slots: list[Slot] = []
-    for i, s in enumerate(_list(data, "slots", file)):
-        p = f"slots[{i}]"
-        pos = vec(s.get("position"), 2, file, f"{p}.position")
-        if "size" in s:
-            half = np.asarray(vec(s.get("size"), 2, file, f"{p}.size", positive=True)) / 2
-            lo, hi = np.asarray(pos) - half, np.asarray(pos) + half
-        else:
-            lo = np.asarray(vec(s.get("min"), 2, file, f"{p}.min"))
-            hi = np.asarray(vec(s.get("max"), 2, file, f"{p}.max"))
-            if np.any(lo >= hi):
-                raise SceneError("min must be below max", file=file, field=p)
-        region = Box((*lo.tolist(), 0.0), (*hi.tolist(), 0.0))
-        slot = Slot(_name(s.get("name"), file, f"{p}.name"), pos, region)  # type: ignore[arg-type]
-        if not region.contains_xy(Box((*pos, 0.0), (*pos, 0.0))):
-            raise SceneError(
-                "position lies outside the slot region", file=file, field=f"{p}.position"
-            )
-        if not top.contains_xy(slot.box):
-            raise SceneError("slot region lies outside the table top", file=file, field=p)
-        for other in slots:
-            if other.box.overlaps_xy(slot.box):
-                raise SceneError(f"slot region overlaps slot '{other.name}'", file=file, field=p)
-        slots.append(slot)
-    if not slots:
-        raise SceneError("a scene needs at least one slot", file=file, field="slots")
-    slot_names = {s.name for s in slots}
+    custom = _custom_types(data.get("types", {}), base, file)
+    cat = base.merged(custom)
+    ws = f.table(f.need(data, "workspace", file, ""), file, "workspace")
+    f.known_keys(ws, ("min", "max"), file, "workspace")
+    ws_min, ws_max = f.bounds(ws, 3, file, "workspace")
+    table_type = _table_type(data.get("table", {}), cat, file)
 
-    spaces: list[Space] = []
-    for i, s in enumerate(_list(data, "spaces", file)):
-        p = f"spaces[{i}]"
-        slot_name = s.get("slot")
-        if slot_name not in slot_names:
-            raise SceneError(
-                f"unknown slot {slot_name!r}; valid: {', '.join(sorted(slot_names))}",
-                file=file,
-                field=f"{p}.slot",
-            )
-        space = Space(
-            _name(s.get("name"), file, f"{p}.name"),
-            slot_name,
-            vec(s.get("position"), 2, file, f"{p}.position"),  # type: ignore[arg-type]
-            vec(s.get("size"), 2, file, f"{p}.size", positive=True),  # type: ignore[arg-type]
-        )
-        slot_box = next(sl.box for sl in slots if sl.name == slot_name)
-        if not slot_box.contains_xy(space.box, tol=1e-6):
-            raise SceneError(f"space lies outside its slot '{slot_name}'", file=file, field=p)
-        spaces.append(space)
-
-    objects: list[SceneObject] = []
-    seen = set(slot_names) | {s.name for s in spaces}
-    raw_objects = _list(data, "objects", file)
-    object_names = [o.get("name") for o in raw_objects]
-    for i, o in enumerate(raw_objects):
-        p = f"objects[{i}]"
-        oname = _name(o.get("name"), file, f"{p}.name")
-        if oname in seen:
-            raise SceneError(f"duplicate name '{oname}'", file=file, field=f"{p}.name")
-        seen.add(oname)
-        otype = o.get("type")
-        if otype not in cat:
-            raise SceneError(
-                f"unknown object type {otype!r}; valid: {', '.join(sorted(cat.types))}",
-                file=file,
-                field=f"{p}.type",
-            )
-        if not cat[otype].movable:
-            raise SceneError(
-                f"type '{otype}' is not movable (a table?)", file=file, field=f"{p}.type"
-            )
-        on = o.get("on")
-        supports = sorted(
-            slot_names | {n for n in object_names if isinstance(n, str) and n != oname}
-        )
-        if on not in supports:
-            raise SceneError(
-                f"unknown support {on!r}; valid: {', '.join(supports)}", file=file, field=f"{p}.on"
-            )
-        orientation = o.get("orientation", "upright")
-        if orientation not in ORIENTATIONS:
-            raise SceneError(
-                f"{orientation!r} is not one of {', '.join(ORIENTATIONS)}",
-                file=file,
-                field=f"{p}.orientation",
-            )
-        position = o.get("position")
-        if position is not None:
-            if on not in slot_names:
-                raise SceneError(
-                    "position is only allowed for objects standing on a slot",
-                    file=file,
-                    field=f"{p}.position",
-                )
-            position = vec(position, 2, file, f"{p}.position")
-        unknown = sorted(set(o) - {"name", "type", "on", "orientation", "position"})
-        if unknown:
-            raise SceneError(
-                "unknown field; valid: name, type, on, orientation, position",
-                file=file,
-                field=f"{p}.{unknown[0]}",
-            )
-        objects.append(SceneObject(oname, otype, on, orientation, position))  # type: ignore[arg-type]
-
-    _check_supports(objects, slot_names, file)
+    names = _Names(file)
+    slots = _slots(data.get("slots", []), cat[table_type].bbox, names, file)
+    spaces = _spaces(data.get("spaces", []), slots, names, file)
+    objects = _objects(data.get("objects", []), cat, {s.name for s in slots}, names, file)
+    _check_supports(objects, {s.name for s in slots}, file)
+    _check_member_symbols(objects, cat, names, file)
     goal_base = data.get("goal_base")
-    if goal_base is not None and goal_base not in {o.name for o in objects}:
+    object_names = [o.name for o in objects]
+    if goal_base is not None and (not isinstance(goal_base, str) or goal_base not in object_names):
         raise SceneError(
-            f"unknown object {goal_base!r}; valid: {', '.join(o.name for o in objects)}",
+            f"unknown object {f.show(goal_base)}; valid: {', '.join(object_names)}",
             file=file,
             field="goal_base",
         )
@@ -219,12 +114,150 @@ def scene_from_dict(
         spaces=tuple(spaces),
         objects=tuple(objects),
         custom_types=custom,
-        description=str(data.get("description", "")),
+        description=description,
         source=file,
         goal_base=goal_base,
     )
     _check_footprints(scene, file)
     return scene
+
+
+def _custom_types(value: Any, base: Catalogue, file: str) -> dict[str, ObjectType]:
+    types_raw = f.table(value, file, "types")
+    for tname in types_raw:
+        if tname in base:
+            raise SceneError(
+                f"type '{tname}' is already in the catalogue; give yours another name",
+                file=file,
+                field=f.key("types", tname),
+            )
+    return {n: parse_type(n, d, file) for n, d in types_raw.items()}
+
+
+def _table_type(value: Any, cat: Catalogue, file: str) -> str:
+    table = f.table(value, file, "table")
+    f.known_keys(table, ("type",), file, "table")
+    table_type = table.get("type", "kitchen-table")
+    if not isinstance(table_type, str) or table_type not in cat:
+        raise SceneError(
+            f"unknown table type {f.show(table_type)}; valid: {', '.join(sorted(cat.types))}",
+            file=file,
+            field="table.type",
+        )
+    if cat[table_type].movable:
+        raise SceneError(
+            f"table type '{table_type}' must have movable = false", file=file, field="table.type"
+        )
+    return table_type
+
+
+def _slots(value: Any, top: Box, names: _Names, file: str) -> list[Slot]:
+    slots: list[Slot] = []
+    for i, s in enumerate(f.tables(value, file, "slots")):
+        p = f"slots[{i}]"
+        f.known_keys(s, SLOT_FIELDS, file, p)
+        name = names.add(f.need(s, "name", file, p), f"{p}.name")
+        pos = f.vec(f.need(s, "position", file, p), 2, file, f"{p}.position")
+        if "size" in s:
+            if "min" in s or "max" in s:
+                raise SceneError(
+                    "give either size or min and max, not both", file=file, field=f"{p}.size"
+                )
+            half = np.asarray(f.vec(s["size"], 2, file, f"{p}.size", positive=True)) / 2
+            lo, hi = tuple(np.asarray(pos) - half), tuple(np.asarray(pos) + half)
+        else:
+            lo, hi = f.bounds(s, 2, file, p)
+        slot = Slot(name, pos, Box((*lo, 0.0), (*hi, 0.0)))  # type: ignore[arg-type]
+        if not slot.region.contains_xy(Box((*pos, 0.0), (*pos, 0.0))):
+            raise SceneError(
+                "position lies outside the slot region", file=file, field=f"{p}.position"
+            )
+        if not top.contains_xy(slot.box):
+            raise SceneError("slot region lies outside the table top", file=file, field=p)
+        for other in slots:
+            if other.box.overlaps_xy(slot.box):
+                raise SceneError(f"slot region overlaps slot '{other.name}'", file=file, field=p)
+        slots.append(slot)
+    if not slots:
+        raise SceneError("a scene needs at least one slot", file=file, field="slots")
+    return slots
+
+
+def _spaces(value: Any, slots: list[Slot], names: _Names, file: str) -> list[Space]:
+    by_name = {s.name: s for s in slots}
+    spaces: list[Space] = []
+    for i, s in enumerate(f.tables(value, file, "spaces")):
+        p = f"spaces[{i}]"
+        f.known_keys(s, SPACE_FIELDS, file, p)
+        name = names.add(f.need(s, "name", file, p), f"{p}.name")
+        slot_name = f.need(s, "slot", file, p)
+        if not isinstance(slot_name, str) or slot_name not in by_name:
+            raise SceneError(
+                f"unknown slot {f.show(slot_name)}; valid: {', '.join(sorted(by_name))}",
+                file=file,
+                field=f"{p}.slot",
+            )
+        space = Space(
+            name,
+            slot_name,
+            f.vec(f.need(s, "position", file, p), 2, file, f"{p}.position"),  # type: ignore[arg-type]
+            f.vec(f.need(s, "size", file, p), 2, file, f"{p}.size", positive=True),  # type: ignore[arg-type]
+        )
+        if not by_name[slot_name].box.contains_xy(space.box, tol=1e-6):
+            raise SceneError(f"space lies outside its slot '{slot_name}'", file=file, field=p)
+        spaces.append(space)
+    return spaces
+
+
+def _objects(
+    value: Any, cat: Catalogue, slot_names: set[str], names: _Names, file: str
+) -> list[SceneObject]:
+    raw_objects = f.tables(value, file, "objects")
+    if not raw_objects:
+        raise SceneError(
+            "a scene needs at least one object ([[objects]])", file=file, field="objects"
+        )
+    object_names = {  # supports may be objects listed later: take every well-formed name
+        n for o in raw_objects if isinstance(n := o.get("name"), str) and f.NAME.fullmatch(n)
+    }
+    objects: list[SceneObject] = []
+    for i, o in enumerate(raw_objects):
+        p = f"objects[{i}]"
+        f.known_keys(o, OBJECT_FIELDS, file, p)
+        oname = names.add(f.need(o, "name", file, p), f"{p}.name")
+        otype = f.need(o, "type", file, p)
+        if not isinstance(otype, str) or otype not in cat:
+            raise SceneError(
+                f"unknown object type {f.show(otype)}; valid: {', '.join(sorted(cat.types))}",
+                file=file,
+                field=f"{p}.type",
+            )
+        if not cat[otype].movable:
+            raise SceneError(
+                f"type '{otype}' is not movable (a table?)", file=file, field=f"{p}.type"
+            )
+        on = f.need(o, "on", file, p)
+        supports = sorted(slot_names | {n for n in object_names if n != oname})
+        if not isinstance(on, str) or on not in supports:
+            raise SceneError(
+                f"unknown support {f.show(on)}; valid: {', '.join(supports)}",
+                file=file,
+                field=f"{p}.on",
+            )
+        orientation = f.choice(
+            o.get("orientation", "upright"), ORIENTATIONS, file, f"{p}.orientation"
+        )
+        position = o.get("position")
+        if position is not None:
+            if on not in slot_names:
+                raise SceneError(
+                    "position is only allowed for objects standing on a slot",
+                    file=file,
+                    field=f"{p}.position",
+                )
+            position = f.vec(position, 2, file, f"{p}.position")
+        objects.append(SceneObject(oname, otype, on, orientation, position))  # type: ignore[arg-type]
+    return objects
 
 
 def _check_supports(objects: list[SceneObject], slots: set[str], file: str) -> None:
@@ -249,31 +282,42 @@ def _check_supports(objects: list[SceneObject], slots: set[str], file: str) -> N
             cur = by_name[cur].on
 
 
+def _check_member_symbols(
+    objects: list[SceneObject], cat: Catalogue, names: _Names, file: str
+) -> None:
+    """Members are PDDL objects too, named ``<object>-<member>`` (`member_symbol`): no clash."""
+    used = dict(names.where)
+    for i, o in enumerate(objects):
+        for member in cat[o.type].members:
+            symbol = f"{o.name}-{member}"
+            if symbol in used:
+                raise SceneError(
+                    f"member '{member}' of '{o.name}' is the PDDL object '{symbol}', "
+                    f"which {used[symbol]} already names",
+                    file=file,
+                    field=f"objects[{i}].name",
+                )
+            used[symbol] = f"a member of objects[{i}]"
+
+
 def _check_footprints(scene: Scene, file: str) -> None:
     for slot_name, chain in scene.stacks.items():
         slot_box = scene.slot(slot_name).box
         for name in chain:
             if not slot_box.contains_xy(scene.world_box(name), tol=1e-6):
                 idx = scene.object_names.index(name)
+                placed = scene.objects[idx].position is not None
                 raise SceneError(
                     f"'{name}' does not fit inside slot '{slot_name}'",
                     file=file,
-                    field=f"objects[{idx}]",
+                    field=f"objects[{idx}].position" if placed else f"objects[{idx}]",
                 )
 
 
 def load_scene(path: str | Path, *, catalogue: Catalogue | None = None) -> Scene:
-    """Load and validate a scene file."""
-    file = Path(path)
-    try:
-        text = file.read_text()
-    except OSError as exc:
-        raise SceneError(f"cannot read scene file: {exc.strerror}", file=str(file)) from exc
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"invalid TOML: {exc}", file=str(file)) from exc
-    return scene_from_dict(data, file=str(file), catalogue=catalogue)
+    """Load and validate a scene file (UTF-8 TOML)."""
+    data = f.read_toml(path, "scene file")
+    return scene_from_dict(data, file=str(path), catalogue=catalogue)
 
 
 def scene_to_dict(scene: Scene) -> dict[str, Any]:

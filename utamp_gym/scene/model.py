@@ -101,8 +101,10 @@ class Scene:
         trays = [o.name for o in self.objects if o.type == "wooden-tray"]
         if len(trays) != 1:
             raise SceneError(
-                f"{self.source}: set 'goal_base' (the object to stack everything on); "
-                f"valid: {', '.join(self.object_names)}"
+                f"set 'goal_base' (the object to stack everything on): the scene has "
+                f"{len(trays)} wooden trays; valid: {', '.join(self.object_names)}",
+                file=self.source,
+                field="goal_base",
             )
         return trays[0]
 

@@ -2,20 +2,23 @@
 
 `reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose,
 draws the initial pose noise from the given generator and lets everything settle;
-`execute` runs one U-TAMP-2 macro action through `skills`. Everything random (pose
-noise, IK restarts, OMPL seeds) is drawn from that one generator, so the same seed
-gives the same rollout. Rendering is headless (set ``MUJOCO_GL=egl``) and cheap:
+`execute` runs one U-TAMP-2 macro action through `skills`; `physical_state` reports what
+perception needs; `disturb` injects a fault (`faults`). Everything random (initial pose
+noise, pose-estimation noise, IK restarts, OMPL seeds) is drawn from the generator given
+to `reset`, and faults from the one given to `disturb`, so the same seeds give the same
+rollout. Rendering is headless (set ``MUJOCO_GL=egl``) and cheap:
 shadows, reflections and skybox are off.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import mujoco
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_POSE_NOISE, MacroResult
+from utamp_gym.backend import DEFAULT_POSE_NOISE, Fault, MacroResult
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
 from utamp_gym.perception.state import FLOOR, Grasp, PhysicalState
 from utamp_gym.robot.kinematics import PandaKinematics
@@ -23,9 +26,11 @@ from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.control import ArmDriver, Timings
 from utamp_gym.sim.decode import parse_action
-from utamp_gym.sim.measure import SimState, settle_objects
+from utamp_gym.sim.estimate import PoseEstimator
+from utamp_gym.sim.faults import disturb
+from utamp_gym.sim.measure import SimState, believed_qpos, settle_objects
 from utamp_gym.sim.skills import run_skill
-from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top, stack_from_poses
+from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top
 
 CAMERA = "overview"
 FLOOR_BELOW = -0.05  # m: an unsupported object this far below the table top fell off it
@@ -35,8 +40,12 @@ FrameSink = Callable[[np.ndarray], None]
 class MujocoBackend:
     """Simulated Panda executing macro actions on a kitchen table (MuJoCo + Pinocchio + OMPL).
 
-    `frame_sink`, if set before `reset`, receives an RGB frame (`frame_size` = width,
-    height) every `frame_period` s of simulated time while actions run (for videos).
+    `pos_noise` (m) and `yaw_noise_deg` randomise where the scene's objects start (uniform,
+    per episode). `pose_noise` (m) is the robot's pose-estimation error: grasp, place and
+    slide targets are decoded from estimates (`utamp_gym.sim.estimate`), never from the
+    simulator's truth. `frame_sink`, if set before `reset`, receives an RGB frame
+    (`frame_size` = width, height) every `frame_period` s of simulated time while actions
+    run (for videos).
     """
 
     def __init__(
@@ -74,7 +83,14 @@ class MujocoBackend:
         set_home(world.model, data, ids)
         on_step = self._on_step if self.frame_sink is not None else None
         arm = ArmDriver(world.model, data, ids, self._kin, rng, on_step=on_step)
-        self._state = SimState(world, data, arm)
+        self._state = SimState(
+            world,
+            data,
+            arm,
+            scratch=mujoco.MjData(world.model),
+            estimator=PoseEstimator(self.pose_noise, rng),
+        )
+        arm.belief = functools.partial(believed_qpos, self._state)
         self._steps = 0
         settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
         arm.timings = Timings()
@@ -91,7 +107,7 @@ class MujocoBackend:
     def physical_state(self) -> PhysicalState:
         """Poses, what carries each object (contact forces), containment and the grasp."""
         st = self._require()
-        stack = stack_from_poses(st.world, st.data)
+        stack = st.stack()
         supports: dict[str, str | None] = {}
         for name, support in stack.items():
             below_table = st.data.xpos[st.world.body_ids[name]][2] < FLOOR_BELOW
@@ -106,6 +122,10 @@ class MujocoBackend:
             held = Grasp(sym.obj, sym.member, sym.palm, sym.finger1, sym.finger2)
         poses = {n: tuple(float(v) for v in p) for n, p in self.object_poses().items()}
         return PhysicalState(poses, supports, on_top, held, st.arm.gap())
+
+    def disturb(self, rng: np.random.Generator) -> Fault | None:
+        """Inject one fault (`utamp_gym.sim.faults`), chosen with `rng`."""
+        return disturb(self._require(), rng)
 
     def object_poses(self) -> dict[str, np.ndarray]:
         """Object name -> [x, y, z, qw, qx, qy, qz] of its frame in the world."""
@@ -124,7 +144,7 @@ class MujocoBackend:
     def stacked_on_tray(self) -> list[str]:
         """Objects standing on the tower base, bottom to top (base excluded), as simulated."""
         st = self._require()
-        stack = stack_from_poses(st.world, st.data)
+        stack = st.stack()
         out: list[str] = []
         cur = st.world.scene.tower_base
         while True:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 
 import mujoco
@@ -58,17 +58,28 @@ class Timings:
 
 
 @contextmanager
-def ignoring(checker: CollisionChecker, geoms: Sequence[int]) -> Iterator[None]:
-    """Within the block, contacts of the robot with `geoms` (e.g. the grasped object) do
-    not count: the fingers are meant to touch it."""
+def allowing(
+    checker: CollisionChecker,
+    geoms1: Sequence[int],
+    geoms2: Sequence[int],
+    distance: float = -np.inf,
+) -> Iterator[None]:
+    """Within the block, contacts between `geoms1` and `geoms2` count only when closer than
+    `distance` (m; -inf: never)."""
     saved = dict(checker.tolerance)
-    for a in checker.ids.geom_ids.tolist():
-        for b in geoms:
-            checker.tolerance[(min(a, b), max(a, b))] = -np.inf
+    for a in geoms1:
+        for b in geoms2:
+            checker.tolerance[(min(a, b), max(a, b))] = distance
     try:
         yield
     finally:
         checker.tolerance = saved
+
+
+def ignoring(checker: CollisionChecker, geoms: Sequence[int]) -> AbstractContextManager[None]:
+    """Within the block, contacts of the robot with `geoms` (e.g. the grasped object) do
+    not count: the fingers are meant to touch it."""
+    return allowing(checker, checker.ids.geom_ids.tolist(), geoms)
 
 
 class ArmDriver:
@@ -89,6 +100,8 @@ class ArmDriver:
         self.near = CollisionChecker(model, ids, margin=0.002, self_margin=0.001)
         self.dt = float(model.opt.timestep)
         self.on_step = on_step  # called after every mj_step (e.g. a video recorder)
+        #: maps the true qpos (a copy) to the one the robot believes (estimated object poses)
+        self.belief: Callable[[np.ndarray], np.ndarray] | None = None
         self.timings = Timings()
 
     # ------------------------------------------------------------ state
@@ -107,8 +120,10 @@ class ArmDriver:
         return out
 
     def sync(self, checker: CollisionChecker, gap: float | None = None) -> CollisionChecker:
-        """Give `checker` the simulated world state, optionally with the fingers at `gap`."""
-        checker.sync(self.data)
+        """Give `checker` the world as the robot believes it (`belief`, else the simulated
+        state), optionally with the fingers at `gap`."""
+        qpos = self.data.qpos if self.belief is None else self.belief(self.data.qpos.copy())
+        checker.set_world_state(qpos, self.data.mocap_pos, self.data.mocap_quat)
         if gap is not None:
             checker.data.qpos[self.ids.finger_qpos_adr] = gap / 2
         return checker

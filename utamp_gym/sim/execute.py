@@ -19,11 +19,13 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.backend import DEFAULT_POSE_NOISE
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.backend import FrameSink, MujocoBackend
 
 VIDEO_SIZE = (480, 360)  # width, height
+FAULT_STREAM = 0xFA17  # second generator of a seed: injected faults (open loop)
 VIDEO_PERIOD = 0.1  # s of simulated time per frame
 
 
@@ -54,6 +56,7 @@ class EpisodeResult:
     planning_time_s: float
     execution_time_s: float
     wall_time_s: float
+    n_faults: int = 0
     steps: list[StepRecord] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
@@ -70,6 +73,7 @@ class Execution:
     object_poses: dict[str, list[float]]
     execution_time_s: float
     steps: list[StepRecord]
+    n_faults: int = 0
 
     @property
     def failure_reason(self) -> str:
@@ -89,23 +93,30 @@ def execute_plan(
     video: str | Path | None = None,
     *,
     backend: MujocoBackend | None = None,
+    pose_noise: float = DEFAULT_POSE_NOISE,
+    disturbance: float = 0.0,
 ) -> Execution:
-    """Execute `plan` on `scene` in MuJoCo, stopping at the first failed step.
+    """Execute `plan` on `scene` in MuJoCo, stopping at the first failed step (open loop).
 
-    `seed` feeds one generator for pose noise, IK restarts and OMPL. `success` means
-    every step succeeded and all objects stand in one tower on the tray, as simulated.
+    `seed` feeds one generator for initial pose noise, pose estimates, IK restarts and
+    OMPL; `pose_noise` is the robot's pose-estimation noise (m; ignored when `backend` is
+    given: its own applies). With `disturbance` p, each executed step is followed with
+    probability p by an injected fault (drawn from a second generator of `seed`).
+    `success` means every step succeeded and all objects stand in one tower on the tray,
+    as simulated.
     """
     plan = list(plan)
+    faults = np.random.default_rng([seed, FAULT_STREAM]) if disturbance > 0 else None
     with _video(video) as sink:
         own = backend is None
-        sim = backend or MujocoBackend()
+        sim = backend or MujocoBackend(pose_noise=pose_noise)
         sim.frame_sink = sink
         try:
             start = time.perf_counter()
             sim.reset(scene, np.random.default_rng(seed))
             if sink is not None:
                 sink(sim.render(*VIDEO_SIZE))
-            steps, failure = _execute(sim, plan)
+            steps, failure, n_faults = _execute(sim, plan, disturbance, faults)
             if sink is not None:
                 sink(sim.render(*VIDEO_SIZE))
             elapsed = time.perf_counter() - start
@@ -122,7 +133,7 @@ def execute_plan(
             "action": None,
             "reason": f"goal not reached: the tray holds {final_stack or 'nothing'}",
         }
-    return Execution(failure is None, failure, final_stack, poses, elapsed, steps)
+    return Execution(failure is None, failure, final_stack, poses, elapsed, steps, n_faults)
 
 
 def run_episode(
@@ -132,12 +143,14 @@ def run_episode(
     video: str | Path | None = None,
     *,
     backend: MujocoBackend | None = None,
+    pose_noise: float = DEFAULT_POSE_NOISE,
+    disturbance: float = 0.0,
 ) -> EpisodeResult:
     """Plan `scene` with `method`, execute it in MuJoCo (`execute_plan`) and measure.
 
     `seed` drives the planner's randomness and the physics generator: the same seed
     gives the same rollout. An unsolved scene is not executed (its poses are measured
-    after reset).
+    after reset). `pose_noise` and `disturbance` as in `execute_plan`.
     """
     if isinstance(scene, str):
         from utamp_gym.suites import resolve_scene
@@ -145,7 +158,15 @@ def run_episode(
         scene = resolve_scene(scene)
     t0 = time.perf_counter()
     outcome = plan_scene(scene, method, seed=seed)
-    ex = execute_plan(scene, outcome.plan if outcome.solved else (), seed, video, backend=backend)
+    ex = execute_plan(
+        scene,
+        outcome.plan if outcome.solved else (),
+        seed,
+        video,
+        backend=backend,
+        pose_noise=pose_noise,
+        disturbance=disturbance,
+    )
     failure = ex.failure
     if not outcome.solved:
         failure = {"step": None, "action": None, "reason": f"not planned: {outcome.reason}"}
@@ -162,18 +183,24 @@ def run_episode(
         planning_time_s=outcome.planning_time_s,
         execution_time_s=ex.execution_time_s,
         wall_time_s=time.perf_counter() - t0,
+        n_faults=ex.n_faults,
         steps=ex.steps,
     )
 
 
-def _execute(sim: MujocoBackend, plan: list[str]) -> tuple[list[StepRecord], dict[str, Any] | None]:
+def _execute(
+    sim: MujocoBackend, plan: list[str], disturbance: float, faults: np.random.Generator | None
+) -> tuple[list[StepRecord], dict[str, Any] | None, int]:
     steps: list[StepRecord] = []
+    n_faults = 0
     for i, action in enumerate(plan):
         res = sim.execute(action)
         steps.append(StepRecord(i, action, res.success, res.reason, dict(res.timings)))
         if not res.success:
-            return steps, {"step": i, "action": action, "reason": res.reason}
-    return steps, None
+            return steps, {"step": i, "action": action, "reason": res.reason}, n_faults
+        if faults is not None and faults.random() < disturbance:
+            n_faults += sim.disturb(faults) is not None
+    return steps, None, n_faults
 
 
 @contextmanager

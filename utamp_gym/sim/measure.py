@@ -17,6 +17,7 @@ import numpy as np
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim.control import ArmDriver
 from utamp_gym.sim.decode import GraspSymbols, pose_of, support_point, world_aabb
+from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.world import World, object_orientation, rests_on_top, stack_from_poses
 
 MOVED = 0.02  # m, another object moving this far was disturbed
@@ -36,9 +37,10 @@ class Held:
     obj: str
     member: str
     body: int
-    tcp_t_obj: np.ndarray
+    tcp_t_obj: np.ndarray  # true pose in the hand (the referee's checks: slip, drop)
     opening: float
     symbols: GraspSymbols  # the grasp's member, palm and finger parts
+    belief: np.ndarray  # estimated pose in the hand (what the robot aims and plans with)
 
 
 @dataclass
@@ -49,6 +51,34 @@ class SimState:
     data: mujoco.MjData
     arm: ArmDriver
     held: Held | None = None
+    scratch: mujoco.MjData | None = None  # for forwarded copies (`world.forwarded_copy`)
+    estimator: PoseEstimator | None = None  # None: the robot knows the true poses
+
+    def estimate(self, name: str) -> np.ndarray:
+        """The robot's estimate (4x4) of an object's pose: one look (`PoseEstimator`)."""
+        true = obj_pose(self, name)
+        return true if self.estimator is None else self.estimator.estimate(name, true)
+
+    def stack(self) -> dict[str, str | None]:
+        """What each object rests on now (`world.stack_from_poses`)."""
+        return stack_from_poses(self.world, self.data, scratch=self.scratch)
+
+
+def believed_qpos(st: SimState, qpos: np.ndarray) -> np.ndarray:
+    """`qpos` with every free object's pose replaced by the robot's estimate (one look each).
+
+    The held object is left alone (the collision model attaches it by its belief)."""
+    if st.estimator is None or (st.estimator.noise == 0 and not st.estimator.offsets):
+        return qpos
+    quat = np.zeros(4)
+    for name, adr in st.world.qpos_adr.items():
+        if st.held is not None and name == st.held.obj:
+            continue
+        pose = st.estimate(name)
+        mujoco.mju_mat2Quat(quat, pose[:3, :3].ravel())
+        qpos[adr : adr + 3] = pose[:3, 3]
+        qpos[adr + 3 : adr + 7] = quat
+    return qpos
 
 
 # ------------------------------------------------------------------ measurements
@@ -79,12 +109,16 @@ def disturbed(st: SimState, before: dict[str, tuple[np.ndarray, str | None]]) ->
     return None
 
 
-def grasp_drift(st: SimState, held: Held) -> tuple[float, float]:
-    """(offset change in m, rotation change in deg) of the held object in the hand."""
-    now = np.linalg.inv(st.arm.tcp()) @ obj_pose(st, held.obj)
-    delta = np.linalg.inv(held.tcp_t_obj) @ now
+def pose_change(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """(distance in m, rotation angle in deg) between two 4x4 poses."""
+    delta = np.linalg.inv(a) @ b
     angle = math.degrees(math.acos(np.clip((np.trace(delta[:3, :3]) - 1) / 2, -1.0, 1.0)))
     return float(np.linalg.norm(delta[:3, 3])), angle
+
+
+def grasp_drift(st: SimState, held: Held) -> tuple[float, float]:
+    """(offset change in m, rotation change in deg) of the held object in the hand (true)."""
+    return pose_change(held.tcp_t_obj, np.linalg.inv(st.arm.tcp()) @ obj_pose(st, held.obj))
 
 
 def settle_objects(st: SimState, *, min_s: float = 0.25, max_s: float = 1.2) -> None:
@@ -100,11 +134,12 @@ def settle_objects(st: SimState, *, min_s: float = 0.25, max_s: float = 1.2) -> 
 
 
 def lift_height(st: SimState, name: str) -> float:
-    """Least lift taking `name` over the tallest other object (`LIFT` .. `MAX_LIFT`)."""
+    """Least lift taking `name` over the tallest other object (`LIFT` .. `MAX_LIFT`), from
+    the robot's estimates of the poses."""
     scene = st.world.scene
-    bottom = world_aabb(scene.type_of(name).bbox, obj_pose(st, name))[0][2]
+    bottom = world_aabb(scene.type_of(name).bbox, st.estimate(name))[0][2]
     tops = [
-        world_aabb(scene.type_of(o).bbox, obj_pose(st, o))[1][2]
+        world_aabb(scene.type_of(o).bbox, st.estimate(o))[1][2]
         for o in st.world.body_ids
         if o != name
     ]
@@ -115,7 +150,7 @@ def lift_height(st: SimState, name: str) -> float:
 def verify_on(st: SimState, name: str, support: str) -> None:
     """Raise `SkillFailure` unless `name` stands upright/inverted on top of `support`."""
     tipped = object_orientation(st.world.model, st.data, name) is None
-    now = stack_from_poses(st.world, st.data).get(name)
+    now = st.stack().get(name)
     if now != support:
         below_table = st.data.xpos[st.world.body_ids[name]][2] < -0.05
         where = now if now is not None else "the floor" if below_table else "nothing stable"

@@ -11,15 +11,16 @@ with a reason naming the object.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
 
 import numpy as np
 
-from utamp_gym.backend import MacroResult
+from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
-from utamp_gym.sim.control import LinePath, Timings, ignoring
+from utamp_gym.sim.control import LinePath, Timings, allowing, ignoring
 from utamp_gym.sim.decode import (
     MAX_OPENING,
     GraspPose,
@@ -41,12 +42,13 @@ from utamp_gym.sim.measure import (
     grasp_drift,
     lift_height,
     obj_pose,
+    pose_change,
     riders,
     settle_objects,
     snapshot,
     verify_on,
 )
-from utamp_gym.sim.world import stack_from_poses
+from utamp_gym.sim.world import object_orientation
 
 APPROACH = (0.25, 1.0)  # m/s, m/s^2: pre-grasp -> grasp, lift, retreat
 PLACE = (0.15, 0.6)  # pre-place -> place
@@ -74,7 +76,7 @@ def _plan_grasp(
     t = world.scene.type_of(sym.obj)
     geoms = world.geom_ids[sym.obj]
     tried = []
-    candidates = grasp_candidates(t, sym, obj_pose(st, sym.obj), prefer_x=arm.tcp()[:3, 0])
+    candidates = grasp_candidates(t, sym, st.estimate(sym.obj), prefer_x=arm.tcp()[:3, 0])
     if candidates[0].width > MAX_OPENING:
         raise SkillFailure(
             f"cannot grasp {sym.obj} by its {sym.member}: it is {candidates[0].width * 100:.0f} cm"
@@ -123,8 +125,13 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     arm.open_gripper(g.opening)
     arm.move_line(approach, *APPROACH)
     gap = arm.close_gripper()
-    tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, sym.obj)
-    st.held = Held(sym.obj, sym.member, st.world.body_ids[sym.obj], tcp_t_obj, g.opening, sym)
+    if st.estimator is not None:
+        st.estimator.forget(sym.obj)  # in the hand, it is looked at again
+    hand_t_world = np.linalg.inv(arm.tcp())
+    tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)
+    belief = hand_t_world @ st.estimate(sym.obj)
+    body = st.world.body_ids[sym.obj]
+    st.held = Held(sym.obj, sym.member, body, tcp_t_obj, g.opening, sym, belief)
     if not arm.holds_something():
         raise SkillFailure(
             f"grasp failed: the fingers closed on nothing at the {sym.member} of {sym.obj} "
@@ -164,7 +171,7 @@ def pick(st: SimState, act: MacroAction) -> None:
     _, path, held = _grasp(st, sym, lift)
     start_obj, start_tcp = obj_pose(st, sym.obj), arm.tcp()
     near = arm.sync(arm.near, gap=arm.gap())
-    near.attach(held.body, held.tcp_t_obj)
+    near.attach(held.body, held.belief)
     try:
         with near.tolerating(path.q[0]):
             blocked = [q for q in path.q if not near.is_valid(q)]
@@ -192,10 +199,16 @@ def pick(st: SimState, act: MacroAction) -> None:
             f"{sym.obj} is not liftable by its {sym.member}: {how} "
             f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm)"
         )
+    if object_orientation(st.world.model, st.data, sym.obj) is None:
+        raise SkillFailure(f"{sym.obj} tilted over in the grasp (it was grasped off its centre)")
     moved = disturbed(st, before)
     if moved:
         raise SkillFailure(f"picking {sym.obj} disturbed the scene: {moved}")
-    held.tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, sym.obj)  # as carried
+    hand_t_world = np.linalg.inv(arm.tcp())  # as carried: measured, and looked at again
+    held.tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)
+    if st.estimator is not None:
+        st.estimator.forget(sym.obj)
+    held.belief = hand_t_world @ st.estimate(sym.obj)
 
 
 def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
@@ -206,9 +219,7 @@ def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
         valid = [*st.world.body_ids, *st.world.slot_positions]
         raise GroundingError(f"unknown support '{act.support}'; valid: {', '.join(valid)}")
     try:
-        return support_point(
-            scene.type_of(act.support), act.support_part, obj_pose(st, act.support)
-        )
+        return support_point(scene.type_of(act.support), act.support_part, st.estimate(act.support))
     except GroundingError as exc:
         raise SkillFailure(f"cannot place {act.grasp.obj} on {act.support}: {exc}") from None
 
@@ -225,17 +236,16 @@ def place(st: SimState, act: MacroAction) -> None:
     before = snapshot(st, {name})
     up = _plan_place(st, held, act)
     what = f"carrying {name} to {act.support}"
-    arm.transfer(up.end, held=(held.body, held.tcp_t_obj), what=what)
+    arm.transfer(up.end, held=(held.body, held.belief), what=what)
     slip, tilt = grasp_drift(st, held)
     if not arm.holds_something() or slip > DROP_SLIP or tilt > DROP_TILT_DEG:
         raise SkillFailure(
             f"{name} dropped during transport (moved {slip * 100:.1f} cm, {tilt:.0f} deg "
             "in the hand)"
         )
-    if slip > REGRASP_SLIP or tilt > REGRASP_TILT_DEG:  # it turned in the hand: re-aim
-        held.tcp_t_obj = np.linalg.inv(arm.tcp()) @ obj_pose(st, name)
+    if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
         up = _plan_place(st, held, act)
-        arm.transfer(up.end, held=(held.body, held.tcp_t_obj), what=what)
+        arm.transfer(up.end, held=(held.body, held.belief), what=what)
     arm.move_line(up.reversed(), *PLACE)
     _release_and_retreat(st, name, held.opening)
     settle_objects(st)
@@ -245,35 +255,56 @@ def place(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(f"placing {name} on {act.support} toppled the stack: {moved}")
 
 
+def _looked_again(st: SimState, held: Held) -> bool:
+    """Look at the held object again before lowering it (a wrist camera) and adopt the new
+    estimate if it differs from the belief by more than `REGRASP_SLIP` / `REGRASP_TILT_DEG`
+    beyond what estimation noise explains (3 standard deviations of a difference)."""
+    if st.estimator is not None:
+        st.estimator.forget(held.obj)
+    new = np.linalg.inv(st.arm.tcp()) @ st.estimate(held.obj)
+    shift, angle = pose_change(held.belief, new)
+    noise = 0.0 if st.estimator is None else st.estimator.noise
+    explained = 3 * math.sqrt(2)
+    if shift > REGRASP_SLIP + explained * noise or angle > REGRASP_TILT_DEG + explained * (
+        yaw_noise_deg(noise)
+    ):
+        held.belief = new
+        return True
+    return False
+
+
 def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     """Path from the place configuration up to the pre-place one, or `GroundingError`.
 
     The object keeps its current yaw; if that does not fit, it turns to its support's.
     """
     name, arm = held.obj, st.arm
-    t, now = st.world.scene.type_of(name), obj_pose(st, name)
+    t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
     surface = _support_surface(st, act)
-    base_yaw = (
-        yaw_of(obj_pose(st, act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
-    )
+    base_yaw = yaw_of(st.estimate(act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
     tried = []
     near = arm.sync(arm.near, gap=arm.gap())
-    near.attach(held.body, held.tcp_t_obj)
+    near.attach(held.body, held.belief)
+    world = st.world
+    support = world.geom_ids.get(act.support, [world.table_geom_id])
+    # lowering into a snug support (a board into a rimmed tray) may graze it: touching is
+    # allowed there, penetrating (in the robot's belief) is not
     try:
-        for yaw in (None, base_yaw):
-            tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.tcp_t_obj)
-            for q in arm.ik_solutions(tcp, near.is_valid):
-                try:
-                    return arm.line(
-                        q,
-                        tcp,
-                        np.array([0.0, 0.0, PREPLACE]),
-                        near.is_valid,
-                        what=f"lowering {name} onto {act.support}",
-                    )
-                except GroundingError as exc:
-                    tried.append(str(exc))
-            tried.append("no collision-free IK solution")
+        with allowing(near, world.geom_ids[name], support, 0.0):
+            for yaw in (None, base_yaw):
+                tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.belief)
+                for q in arm.ik_solutions(tcp, near.is_valid):
+                    try:
+                        return arm.line(
+                            q,
+                            tcp,
+                            np.array([0.0, 0.0, PREPLACE]),
+                            near.is_valid,
+                            what=f"lowering {name} onto {act.support}",
+                        )
+                    except GroundingError as exc:
+                        tried.append(str(exc))
+                tried.append("no collision-free IK solution")
     finally:
         near.detach()
     raise GroundingError(
@@ -289,12 +320,13 @@ def slide(st: SimState, act: MacroAction) -> None:
     spaces = {s.name: s for s in st.world.scene.spaces}
     if act.space not in spaces:
         raise GroundingError(f"unknown space '{act.space}'; valid: {', '.join(spaces)}")
-    stack = stack_from_poses(st.world, st.data)
+    stack = st.stack()
     above = riders(stack, sym.obj)
     before = snapshot(st, {sym.obj, *above})
     t = st.world.scene.type_of(sym.obj)
-    g, _, _ = _grasp(st, sym)
-    offset = slide_vector(t, obj_pose(st, sym.obj), np.asarray(spaces[act.space].position))
+    g, _, held = _grasp(st, sym)
+    believed = arm.tcp() @ held.belief
+    offset = slide_vector(t, believed, np.asarray(spaces[act.space].position))
     near = arm.sync(arm.near, gap=arm.gap())
     with ignoring(near, st.world.geom_ids[sym.obj]):
         path = arm.line(
@@ -327,12 +359,16 @@ def run_skill(st: SimState, act: MacroAction) -> MacroResult:
     it held before and still holds firmly (a failed place), else it lets go."""
     t0 = time.perf_counter()
     st.arm.timings = Timings()
+    if st.estimator is not None:
+        st.estimator.new_look()
     held_before = st.held
     try:
         SKILLS[act.kind](st, act)
         ok, reason = True, None
     except (SkillFailure, GroundingError) as exc:
         ok, reason = False, str(exc)
+        if st.estimator is not None:  # after a failure the robot looks at them again
+            st.estimator.forget(act.grasp.obj, act.support)
         if st.held is not None and (st.held is not held_before or not _firmly_held(st)):
             _release_and_retreat(st, st.held.obj, st.held.opening)
             settle_objects(st, min_s=0.1, max_s=0.6)

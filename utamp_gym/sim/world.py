@@ -25,6 +25,7 @@ import mujoco
 import numpy as np
 
 from utamp_gym.errors import SimulationError, UnknownNameError
+from utamp_gym.perception.abstraction import TILT_DEG
 from utamp_gym.scene.model import Pose, Scene
 from utamp_gym.sim.bodies import (
     BODY_PREFIX,
@@ -41,7 +42,6 @@ from utamp_gym.sim.bodies import (
 TABLE_GEOM = "table"
 FLOOR_Z = -0.75  # m, the floor under the table (objects that fall off land here)
 GRAVITY = 9.81
-TILT_DEG = 20.0  # an object tilted more than this from upright/inverted has tipped over
 
 
 @dataclass(frozen=True)
@@ -324,18 +324,40 @@ def _support_forces(world: World, data: mujoco.MjData) -> dict[str, dict[str, fl
     return out
 
 
+def forwarded_copy(
+    model: mujoco.MjModel, data: mujoco.MjData, scratch: mujoco.MjData | None = None
+) -> mujoco.MjData:
+    """A forwarded copy of `data`'s state (contacts and forces current); `data` is untouched.
+
+    `scratch`, an `MjData` of the same model, is overwritten and returned instead of
+    allocating a full copy (about 5x cheaper).
+    """
+    if scratch is None:
+        scratch = copy.copy(data)
+    else:
+        scratch.time = data.time
+        for name in ("qpos", "qvel", "act", "ctrl", "qacc_warmstart", "xfrc_applied"):
+            getattr(scratch, name)[:] = getattr(data, name)
+    mujoco.mj_forward(model, scratch)
+    return scratch
+
+
 def stack_from_poses(
-    world: World, data: mujoco.MjData, *, min_share: float = 0.3
+    world: World,
+    data: mujoco.MjData,
+    *,
+    min_share: float = 0.3,
+    scratch: mujoco.MjData | None = None,
 ) -> dict[str, str | None]:
     """What each object rests on: an object, the slot under it (table), or None.
 
-    The support is whatever pushes the object up hardest (contacts recomputed on a copy
-    of `data`); it must carry at least `min_share` of the object's own weight. Resting on
-    the table outside every slot gives ``"table"``; on the floor, held by the robot or in
-    the air gives None. Use `rests_on_top` to tell *on* from *inside* (shaker in a mug).
+    The support is whatever pushes the object up hardest (contacts recomputed on a
+    `forwarded_copy` of `data`, in `scratch` if given); it must carry at least `min_share`
+    of the object's own weight. Resting on the table outside every slot gives ``"table"``;
+    on the floor, held by the robot or in the air gives None. Use `rests_on_top` to tell
+    *on* from *inside* (shaker in a mug).
     """
-    data = copy.copy(data)  # leave the caller's data untouched
-    mujoco.mj_forward(world.model, data)
+    data = forwarded_copy(world.model, data, scratch)
     forces = _support_forces(world, data)
     out: dict[str, str | None] = {}
     for name, by_support in forces.items():
@@ -362,6 +384,7 @@ __all__ = [
     "build_world",
     "build_world_spec",
     "compile_world",
+    "forwarded_copy",
     "initial_poses",
     "object_orientation",
     "object_pose",

@@ -1,8 +1,11 @@
 """Parser for the PDDL subset of the U-TAMP domains (``:strips :typing
-:negative-preconditions :equality``): typed types/constants/predicates, actions with
-conjunctive preconditions (literals, ``=``, ``not =``) and effects (atoms, ``not atom``),
-problems with objects, init and a conjunctive goal. Anything else raises `PddlError` naming
-the source, line and problem, so an unsupported file fails at load time, not silently.
+:negative-preconditions :equality :conditional-effects``): typed types/constants/predicates,
+actions with conjunctive preconditions (literals, ``=``, ``not =``) and effects (atoms,
+``not atom``, and ``(forall (?v - t ...) (when COND EFFECTS))`` or ``(when COND EFFECTS)``
+whose condition is a conjunction of literals over *static* predicates in which every ``?v``
+occurs positively), problems with objects, init and a conjunctive goal. Anything else raises
+`PddlError` naming the source, line and problem, so an unsupported file fails at load time,
+not silently.
 
 Names are case-insensitive (lower-cased); `Domain.spelling` keeps predicate names as
 declared so that messages can show ``(canLift tray tray-handle-left)``.
@@ -16,11 +19,12 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 from utamp_gym.errors import PddlError
-from utamp_gym.symbolic.pddl_model import Action, Atom, Domain, Literal, Problem
+from utamp_gym.symbolic.pddl_model import Action, Atom, CondEffect, Domain, Literal, Problem
 
 __all__ = [
     "Action",
     "Atom",
+    "CondEffect",
     "Domain",
     "Literal",
     "Problem",
@@ -30,7 +34,13 @@ __all__ = [
     "parse_problem",
 ]
 
-SUPPORTED_REQUIREMENTS = (":strips", ":typing", ":negative-preconditions", ":equality")
+SUPPORTED_REQUIREMENTS = (
+    ":strips",
+    ":typing",
+    ":negative-preconditions",
+    ":equality",
+    ":conditional-effects",
+)
 _TOKEN = re.compile(r"\(|\)|[^\s()]+")
 _STEP = re.compile(r"\(\s*([^\s()]+(?:\s+[^\s()]+)*)\s*\)")
 _KEYWORDS = ("and", "not", "or", "imply", "forall", "exists", "when", "either", "increase")
@@ -210,6 +220,7 @@ def parse_domain(text: str, source: str = "<string>") -> Domain:
     constants: dict[str, str] = {}
     actions: dict[str, Action] = {}
     spelling: dict[str, str] = {}
+    lines: dict[str, int] = {}
     for key, sec in p.sections(root):
         body = sec.items[1:]
         if key == ":requirements":
@@ -246,12 +257,14 @@ def parse_domain(text: str, source: str = "<string>") -> Domain:
             if act.name in actions:
                 raise p.fail(sec, f"duplicate action '{act.name}'")
             actions[act.name] = act
+            lines[act.name] = sec.line
         else:
             raise p.fail(
                 sec,
                 f"unsupported domain section '{key}'; supported: :requirements "
                 ":types :constants :predicates :action",
             )
+    _check_static_conditions(p, actions.values(), lines)
     return Domain(
         name,
         tuple(reqs),
@@ -282,23 +295,128 @@ def _parse_action(
     if len({v for v, _ in params}) != len(params):
         raise p.fail(pnode, f"action '{name}': duplicate parameter name")
     ok = {v for v, _ in params} | set(constants)
-    pre, eff = (
-        p.literals(
-            fields.get(k, _Node(sec.line)),
-            sec.line,
-            ok,
-            k == ":precondition",
-            f"{k[1:]} of '{name}'",
+    pre = p.literals(
+        fields.get(":precondition", _Node(sec.line)),
+        sec.line,
+        ok,
+        True,
+        f"precondition of '{name}'",
+    )
+    eff = fields.get(":effect", _Node(sec.line))
+    adds, dels, conds = _parse_effect(p, eff, sec.line, ok, f"effect of '{name}'", types)
+    return Action(name, tuple(params), tuple(pre), tuple(adds), tuple(dels), tuple(conds))
+
+
+def _head(item: str | _Node) -> str:
+    return str(item.items[0]).lower() if isinstance(item, _Node) and item.items else ""
+
+
+def _parse_effect(
+    p: _Parser,
+    item: str | _Node,
+    line: int,
+    ok: set[str],
+    what: str,
+    types: Mapping[str, str | None],
+) -> tuple[list[Atom], list[Atom], list[CondEffect]]:
+    """Parse an effect: a conjunction of atoms, ``(not atom)`` and conditional effects."""
+    node = p.node(item, line, what)
+    conj = node.items[1:] if _head(node) == "and" else [node] if node.items else []
+    adds: list[Atom] = []
+    dels: list[Atom] = []
+    conds: list[CondEffect] = []
+    for x in conj:
+        head = _head(x)
+        if head in ("forall", "when"):
+            conds.append(_parse_cond_effect(p, p.node(x, node.line, what), ok, what, types))
+            continue
+        for lit in p.literals(x, node.line, ok, False, what):
+            (adds if lit.positive else dels).append(lit.atom)
+    return adds, dels, conds
+
+
+def _parse_cond_effect(
+    p: _Parser, node: _Node, ok: set[str], what: str, types: Mapping[str, str | None]
+) -> CondEffect:
+    """``(forall (?v - t ...) (when COND EFF))`` or ``(when COND EFF)``; see the module doc."""
+    variables: list[tuple[str, str]] = []
+    body: str | _Node = node
+    if _head(node) == "forall":
+        if len(node.items) != 3:
+            raise p.fail(node, f"expected (forall (?v - type ...) (when ...)) in {what}")
+        vnode = p.node(node.items[1], node.line, "a variable list")
+        variables = p.typed_list(vnode.items, vnode.line, True, types)
+        names = [v for v, _ in variables]
+        twice = next((v for i, v in enumerate(names) if v in ok or v in names[:i]), None)
+        if twice is not None:
+            raise p.fail(node, f"forall variable '{twice}' in {what} is declared twice")
+        body = node.items[2]
+    if _head(body) != "when" or len(p.node(body, node.line, what).items) != 3:
+        raise p.fail(
+            node,
+            f"unsupported conditional effect in {what}: expected (forall (?v - type ...) "
+            "(when CONDITION EFFECTS)) or (when CONDITION EFFECTS)",
         )
-        for k in (":precondition", ":effect")
+    assert isinstance(body, _Node)
+    inner = ok | {v for v, _ in variables}
+    cond = p.literals(body.items[1], body.line, inner, True, f"the condition of a when in {what}")
+    effect = p.literals(body.items[2], body.line, inner, False, f"a when in {what}")
+    arg_types = p.predicates or {}
+    for var, typ in variables:
+        if not any(
+            lit.positive
+            and lit.atom.predicate != "="
+            and any(
+                a == var and _is_subtype(types, t, typ)
+                for a, t in zip(lit.atom.args, arg_types[lit.atom.predicate], strict=True)
+            )
+            for lit in cond
+        ):
+            raise p.fail(
+                body,
+                f"forall variable '{var}' in {what} must occur in a positive condition literal "
+                f"at an argument of type '{typ}' (other quantification is not supported)",
+            )
+    return CondEffect(
+        tuple(variables),
+        tuple(cond),
+        tuple(lit.atom for lit in effect if lit.positive),
+        tuple(lit.atom for lit in effect if not lit.positive),
     )
-    return Action(
-        name,
-        tuple(params),
-        tuple(pre),
-        tuple(lit.atom for lit in eff if lit.positive),
-        tuple(lit.atom for lit in eff if not lit.positive),
-    )
+
+
+def _is_subtype(types: Mapping[str, str | None], sub: str, sup: str) -> bool:
+    t: str | None = sub
+    while t is not None and t != sup:
+        t = types.get(t)
+    return t is not None
+
+
+def _check_static_conditions(
+    p: _Parser, actions: Iterable[Action], lines: Mapping[str, int]
+) -> None:
+    """Conditions of conditional effects may use static predicates only (resolved when
+    grounding); a fluent one raises `PddlError`."""
+    actions = list(actions)
+    fluent = {
+        a.predicate
+        for act in actions
+        for a in (
+            *act.add_effects,
+            *act.del_effects,
+            *(x for ce in act.cond_effects for x in (*ce.add, *ce.delete)),
+        )
+    }
+    for act in actions:
+        for ce in act.cond_effects:
+            bad = [lit for lit in ce.condition if lit.atom.predicate in fluent]
+            if bad:
+                raise p.fail(
+                    lines.get(act.name),
+                    f"effect of '{act.name}': condition {bad[0]} uses the fluent predicate "
+                    f"'{bad[0].atom.predicate}'; conditions over fluent predicates are not "
+                    "supported (only static ones)",
+                )
 
 
 def parse_problem(text: str, source: str = "<string>", domain: Domain | None = None) -> Problem:

@@ -4,7 +4,9 @@ Starting from the initial atoms, every action schema is instantiated by a join o
 its positive preconditions (static and so-far reachable fluent atoms, most-bound
 literal first, with per-argument indexes); static negative literals and equalities
 are checked exactly, fluent negative literals are relaxed (assumed achievable). The
-add effects of new actions extend the reachable set until a fixpoint. This is what
+add effects of new actions extend the reachable set until a fixpoint. Conditional effects
+have static conditions, so each ground action's are resolved against the initial state and
+become plain add and delete effects. This is what
 Fast Downward's translator computes, specialised to our STRIPS subset and fast
 enough to run on every planning call.
 """
@@ -226,6 +228,8 @@ def reachable_ops(
         objects_of.setdefault(t, [])
     objects_of.setdefault("object", [n for n in (*domain.constants, *problem.objects)])
 
+    conditions = domain.condition_predicates()
+    cond_facts = frozenset(a for a in problem.init if a.predicate in conditions)
     atoms: dict[str, _Index] = defaultdict(_Index)
     static: dict[str, _Index] = defaultdict(_Index)
     for a in problem.init:
@@ -275,7 +279,7 @@ def reachable_ops(
                     name = " ".join((act.name, *args))
                     if name in ops:
                         continue
-                    pre, add, dele = act.instantiate(args)
+                    pre, add, dele = act.instantiate(args, cond_facts)
                     ops[name] = GroundOp(
                         name,
                         tuple(

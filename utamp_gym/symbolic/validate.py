@@ -2,9 +2,10 @@
 
 A plan is applied step by step: every precondition literal is checked on the current state,
 then delete effects are removed and add effects added (so an atom both deleted and added ends
-up true). The first failure is reported as data (`ValidationResult`), never as an exception,
-so callers such as the evaluation harness can count and explain failures. Only malformed
-*input text* (`validate_files`) raises `PddlError`.
+up true); conditional effects count when their (static) condition holds in the state. The
+first failure is reported as data (`ValidationResult`), never as an exception, so callers
+such as the evaluation harness can count and explain failures. Only malformed *input text*
+(`validate_files`) raises `PddlError`.
 """
 
 from __future__ import annotations
@@ -92,7 +93,7 @@ def validate_plan(
         error = _step_error(domain, objects, step)
         failed = None
         if error is None:
-            pre, add, delete = domain.actions[step[0]].instantiate(step[1:])
+            pre, add, delete = domain.actions[step[0]].instantiate(step[1:], state)
             failed = next((lit for lit in pre if not holds(lit, state)), None)
             if failed is not None:
                 error = f"precondition {domain.show(failed)} is false"

@@ -1,0 +1,174 @@
+"""Closed loop vs open loop under injected faults (UTAMP-2-GT, physics).
+
+For every suite and fault probability p (``--levels``), the same scenes and seeds run
+open-loop (the paper's protocol: plan once, execute, stop at the first failure) and
+closed-loop (`utamp eval --closed-loop`: the planner policy perceives and replans). Prints
+per (suite, p): open-loop success, closed-loop success, recovery rate (closed-loop episodes
+with at least one fault that still reached the goal), mean replans and wall time per
+episode; then the happy path's cost (p = 0): perception per step and the median episode
+execution time open-loop vs closed-loop, measured side by side in this run. Writes
+``success_vs_disturbance.png`` next to the rows (``--out``, resumable).
+
+    python benchmarks/closed_loop.py [--suites pick-place,sliding] [--levels 0,0.05,0.1,0.2]
+        [--seeds 1] [--limit N] [--workers 2] [--out out/bench/closed_loop]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from utamp_gym.eval.records import ResultRow
+from utamp_gym.eval.sweep import SweepConfig, run_sweep
+from utamp_gym.suites import suite_scenes
+
+TARGET = 0.95  # closed-loop success at p = 0.1 on pick-place
+
+
+def perception_cost(scenes: list[str], seed: int = 0) -> list[float]:
+    """Seconds per step spent perceiving, over closed-loop episodes of `scenes` at p = 0."""
+    from utamp_gym.env.kitchen import UTampKitchenEnv
+    from utamp_gym.env.planner_policy import PlannerPolicy
+
+    out: list[float] = []
+    for name in scenes:
+        env = UTampKitchenEnv(suite=name.split("/")[0], scene=name)
+        policy = PlannerPolicy(env)
+        obs, info = env.reset(seed=seed)
+        for _ in range(40):
+            obs, _, terminated, truncated, info = env.step(policy(obs, info))
+            out.append(info["timings"]["perceive_s"])
+            if terminated or truncated:
+                break
+        env.close()
+    return out
+
+
+def summarise(rows: list[ResultRow], levels: list[float]) -> dict[tuple[str, float], dict]:
+    table = {}
+    for suite in sorted({r.suite for r in rows}):
+        for p in levels:
+            sel = [r for r in rows if r.suite == suite and r.disturbance == p]
+            closed = [r for r in sel if r.closed_loop]
+            opened = [r for r in sel if not r.closed_loop]
+            faulty = [r for r in closed if r.n_faults > 0]
+            if not closed or not opened:
+                continue
+            table[(suite, p)] = {
+                "n": len(closed),
+                "open": sum(r.success for r in opened) / len(opened),
+                "closed": sum(r.success for r in closed) / len(closed),
+                "faulty": len(faulty),
+                "recovery": sum(r.success for r in faulty) / len(faulty) if faulty else None,
+                "replans": statistics.mean(r.n_replans for r in closed),
+                "wall_open": statistics.mean(r.wall_time_s for r in opened),
+                "wall_closed": statistics.mean(r.wall_time_s for r in closed),
+            }
+    return table
+
+
+def plot(table: dict[tuple[str, float], dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    for suite in sorted({s for s, _ in table}):
+        ps = sorted(p for s, p in table if s == suite)
+        for mode, style in (("closed", "-o"), ("open", "--s")):
+            ax.plot(ps, [table[(suite, p)][mode] for p in ps], style, label=f"{suite}, {mode} loop")
+    ax.axhline(TARGET, color="grey", lw=0.8, ls=":")
+    ax.set_xlabel("fault probability per macro action")
+    ax.set_ylabel("success rate")
+    ax.set_ylim(0, 1.02)
+    ax.set_title("UTAMP-2-GT in physics under injected faults")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--suites", default="pick-place,sliding")
+    ap.add_argument("--levels", default="0,0.05,0.1,0.2")
+    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--limit", type=int, default=None, help="only the first N scenes per suite")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--out", default="out/bench/closed_loop")
+    args = ap.parse_args()
+    levels = [float(p) for p in args.levels.split(",")]
+    out = Path(args.out)
+    rows: list[ResultRow] = []
+    start = time.perf_counter()
+    for suite in args.suites.split(","):
+        for p in levels:
+            for closed in (False, True):
+                cfg = SweepConfig(
+                    suite,
+                    ("utamp2-gt",),
+                    seeds=args.seeds,
+                    disturbance=p,
+                    closed_loop=closed,
+                    explain=False,
+                    limit=args.limit,
+                )
+                report = run_sweep(cfg, out / suite, workers=args.workers, progress=False)
+                rows += report.rows
+                print(
+                    f"{suite} p={p:g} {'closed' if closed else 'open'}: "
+                    f"{sum(r.success for r in report.rows)}/{len(report.rows)}",
+                    flush=True,
+                )
+    table = summarise(rows, levels)
+    print(
+        "\n| suite | p | n | open-loop | closed-loop | recovery (faulty eps) | replans |"
+        " wall/ep open | wall/ep closed |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    for (suite, p), t in sorted(table.items()):
+        rec = "–" if t["recovery"] is None else f"{t['recovery']:.2f} ({t['faulty']})"
+        print(
+            f"| {suite} | {p:g} | {t['n']} | {t['open']:.2f} | {t['closed']:.2f} | {rec} | "
+            f"{t['replans']:.2f} | {t['wall_open']:.2f} s | {t['wall_closed']:.2f} s |"
+        )
+    hit = table.get(("pick-place", 0.1))
+    if hit:
+        verdict = "met" if hit["closed"] >= TARGET else "NOT met"
+        print(
+            f"\ntarget closed-loop >= {TARGET:.2f} at p = 0.1 on pick-place: {hit['closed']:.2f}"
+            f" ({verdict})"
+        )
+    happy = [r for r in rows if r.disturbance == 0.0]
+    for mode in (False, True):
+        ex = [r.execution_time_s for r in happy if r.closed_loop == mode]
+        if ex:
+            print(
+                f"p = 0, {'closed' if mode else 'open'} loop: median episode execution "
+                f"{statistics.median(ex):.3f} s over {len(ex)} episodes"
+            )
+    opened = [r.execution_time_s for r in happy if not r.closed_loop]
+    closed = [r.execution_time_s for r in happy if r.closed_loop]
+    if opened and closed:
+        ratio = statistics.median(closed) / statistics.median(opened)
+        print(f"closed/open median execution ratio at p = 0: {ratio:.3f} (target <= 1.10)")
+    sample = [s.name for s in suite_scenes("pick-place")[::15]]
+    cost = perception_cost(sample)
+    cost.sort()
+    print(
+        f"perception per step: median {1000 * statistics.median(cost):.2f} ms, "
+        f"p95 {1000 * cost[int(0.95 * (len(cost) - 1))]:.2f} ms over {len(cost)} steps "
+        "(target <= 5 ms)"
+    )
+    plot(table, out / "success_vs_disturbance.png")
+    print(f"\nwrote {out / 'success_vs_disturbance.png'}; {time.perf_counter() - start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
