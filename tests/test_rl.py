@@ -24,7 +24,7 @@ from utamp_gym.rl.cli import MASK_CHOICES, add_train_parser
 from utamp_gym.rl.harness import STEPS_PER_OBJECT
 from utamp_gym.rl.policy import RLPolicy, algo_of, evaluate_rl, load_rl_policy
 from utamp_gym.rl.saved import META_NAME, ModelError, read_meta, write_meta
-from utamp_gym.rl.train import train
+from utamp_gym.rl.train import TrainConfig, finished_run, train, train_seed
 
 ROW_KEYS = {"scene", "n_objects", "seed", "success", "steps", "invalid_actions", "episode_time_s"}
 
@@ -258,3 +258,17 @@ def test_utamp_eval_runs_a_trained_agent_next_to_the_planner(
             assert len(r["plan"].split(" ; ")) == steps
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert {m["method"] for m in summary["methods"]} == {"utamp2-gt", f"rl:{model}"}
+
+
+def test_a_finished_seed_is_reused_not_retrained(cli_runs: Path) -> None:
+    run = cli_runs / "seed_3"
+    before = (run / "model.zip").stat().st_mtime_ns
+    kwargs = {
+        "algo": "maskable-ppo", "masks": "geometric", "num_objects": 2, "steps": 1024,
+        "n_envs": 2, "eval_every": 512, "eval_episodes": 5, "progress": False,
+    }  # fmt: skip
+    result = train_seed(3, cli_runs, **kwargs)
+    assert result.out == run and (run / "model.zip").stat().st_mtime_ns == before
+    assert result.curve == json.loads((run / "train.json").read_text())["curve"]
+    options = {k: v for k, v in kwargs.items() if k != "progress"}
+    assert finished_run(run, TrainConfig(**{**options, "seed": 3, "steps": 2048})) is None

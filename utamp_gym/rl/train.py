@@ -34,7 +34,7 @@ import platform
 import statistics
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -266,14 +266,40 @@ def seed_dir(out: str | Path, seed: int) -> Path:
     return Path(out) / f"seed_{seed}"
 
 
+def finished_run(out: str | Path, config: TrainConfig) -> TrainResult | None:
+    """The result of a finished run of exactly `config` in `out` (its ``train.json`` and
+    ``model.zip``), or None."""
+    out = Path(out)
+    report_path = out / "train.json"
+    if not report_path.is_file() or not (out / "model.zip").is_file():
+        return None
+    report = json.loads(report_path.read_text())
+    want = {**asdict(config), "obs_keys": list(config.obs_keys)}
+    if report.get("config") != want:
+        return None
+    names = {f.name for f in fields(TrainResult)}
+    data = {k: v for k, v in report.items() if k in names}
+    return TrainResult(**{**data, "out": out, "model_path": out / "model.zip"})
+
+
+def train_seed(seed: int, out: str | Path, **kwargs: Any) -> TrainResult:
+    """One seed of `train_seeds`: `train` into `seed_dir`, or its finished run if there is
+    one with the same configuration (so an interrupted or split job resumes)."""
+    options = {k: v for k, v in kwargs.items() if k not in ("progress", "verbose")}
+    config = TrainConfig(seed=seed, **options)
+    done = finished_run(seed_dir(out, seed), config)
+    return done if done is not None else train(seed=seed, out=seed_dir(out, seed), **kwargs)
+
+
 def train_seeds(
     seeds: int = 1, *, out: str | Path = "runs/rl", seed: int = 0, **kwargs: Any
 ) -> dict[str, Any]:
-    """`seeds` independent runs of `train` (seeds ``seed .. seed + seeds - 1``), each in
-    `seed_dir`, then `aggregate_seeds`; `kwargs` are `train`'s. Returns the aggregate."""
+    """`seeds` independent runs (seeds ``seed .. seed + seeds - 1``), one `train_seed` call
+    each (an executor may run them in parallel), then `aggregate_seeds`; `kwargs` are
+    `train`'s. Returns the aggregate."""
     if seeds < 1:
         raise ValueError(f"seeds must be a positive integer, got {seeds}")
-    results = [train(seed=s, out=seed_dir(out, s), **kwargs) for s in range(seed, seed + seeds)]
+    results = [train_seed(s, out, **kwargs) for s in range(seed, seed + seeds)]
     return aggregate_seeds(results, out)
 
 
