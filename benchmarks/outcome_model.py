@@ -1,7 +1,7 @@
 """How well the symbolic outcome model stands in for physics (geometric masks, both suites).
 
     python benchmarks/outcome_model.py [--pairs 600] [--seed 0] [--max-steps 12]
-        [--out docs/results/outcome_model]
+        [--out docs/results/outcome_model] [--from-json]
 
 Sampling: episodes in the physics env (``masks="geometric"``, MuJoCo backend) on scenes
 drawn by the env's RNG. At every step the action is drawn among the mask-allowed ones,
@@ -25,7 +25,7 @@ import json
 import re
 import time
 from collections import Counter
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -80,6 +80,16 @@ def describe_affordance(reason: str, truth: frozenset[str] = frozenset()) -> str
     if pred == "isP2PSupportive":
         return f"isP2PSupportive {args[3]} on {args[1]}"
     return f"{pred} {' '.join(args[:2])}"
+
+
+def family(kind: str) -> str:
+    """The coarse class of a disagreement kind: its direction and false affordance."""
+    if kind.startswith("physics failed"):
+        return "physics failed where ground truth allows"
+    why = kind[kind.index("(") + 1 : -1]
+    if "fingers swapped" in why:
+        return "succeeded: a ground-truth grasp with the fingers swapped"
+    return f"succeeded: {why.split()[0]} false"
 
 
 def _physics_class(reason: str) -> str:
@@ -193,6 +203,7 @@ def summarize(pairs: list[Pair]) -> dict[str, Any]:
         (("ok" if p.predicted else "fail"), ("ok" if p.physics else "fail")) for p in pairs
     )
     kinds = Counter(p.kind for p in pairs if p.kind != "agree")
+    families = Counter(family(k) for k in kinds.elements())
     examples = {}
     for p in pairs:
         if p.kind != "agree":
@@ -210,6 +221,7 @@ def summarize(pairs: list[Pair]) -> dict[str, Any]:
         "agreement": agree / len(pairs) if pairs else None,
         "per_suite": per_suite,
         "confusion": {f"model {a}, physics {b}": n for (a, b), n in sorted(confusion.items())},
+        "by_family": dict(families.most_common()),
         "disagreements": [
             {
                 "kind": k,
@@ -244,6 +256,8 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
     for key, n in summary["confusion"].items():
         model, physics = key.split(", ")
         out.append(f"| {model.removeprefix('model ')} | {physics.removeprefix('physics ')} | {n} |")
+    out += ["", "## Disagreements by class", "", "| class | pairs |", "|---|---|"]
+    out += [f"| {k} | {n} |" for k, n in summary["by_family"].items()]
     out += ["", "## Disagreements by kind", "", "| kind | pairs | example action | physics |"]
     out.append("|---|---|---|---|")
     for d in summary["disagreements"]:
@@ -260,15 +274,27 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--max-steps", type=int, default=12, help="steps per episode at most")
     ap.add_argument("--out", default="docs/results/outcome_model")
+    ap.add_argument(
+        "--from-json", action="store_true", help="re-summarize the pairs of <out>.json, no physics"
+    )
     args = ap.parse_args()
+    out = Path(args.out)
     start = time.perf_counter()
     pairs: list[Pair] = []
-    for k, suite in enumerate(SUITES):
-        share = args.pairs // len(SUITES) + (k < args.pairs % len(SUITES))
-        pairs += sample_suite(suite, share, args.seed + k, args.max_steps)
-    wall = time.perf_counter() - start
+    if args.from_json:
+        old = json.loads(out.with_suffix(".json").read_text())
+        names = {f.name for f in fields(Pair)}
+        pairs = [Pair(**{k: v for k, v in p.items() if k in names}) for p in old["all_pairs"]]
+        wall = float(old["wall_time_s"])
+        args.pairs, args.seed, args.max_steps = (
+            old["args"][k] for k in ("pairs", "seed", "max_steps")
+        )
+    else:
+        for k, suite in enumerate(SUITES):
+            share = args.pairs // len(SUITES) + (k < args.pairs % len(SUITES))
+            pairs += sample_suite(suite, share, args.seed + k, args.max_steps)
+        wall = time.perf_counter() - start
     summary = summarize(pairs)
-    out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     data = {
         **summary,
