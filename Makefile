@@ -6,7 +6,9 @@ STAMP  := $(VENV)/.installed
 OUT    ?= out
 export MUJOCO_GL ?= egl
 
-.PHONY: venv demo test test-all bench lint clean
+MJ4    := .venv-mujoco4
+
+.PHONY: venv demo test test-all test-mujoco4 bench lint clean
 
 venv: $(STAMP)
 
@@ -16,7 +18,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "torch==2.13.0"
-	$(BIN)/pip install --quiet -e ".[rl,dm,dev]"
+	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray]"
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -28,6 +30,22 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q
 
+# The core package on mujoco 4 without the dm extra (only dm-control caps mujoco below 4):
+# a second venv gets `pip install ".[dev]"` (a built wheel, not editable) and the physics
+# tests run from tests/ against that installed copy (tests/test_dm_control.py skips).
+MJ4_TESTS := test_extras.py test_robot_*.py test_sim_*.py test_closed_loop.py test_extra_suite.py \
+	test_dm_control.py
+test-mujoco4:
+	test -x $(MJ4)/bin/python || $(PYTHON) -m venv $(MJ4)
+	$(MJ4)/bin/pip install --quiet --upgrade pip
+	$(MJ4)/bin/pip install --quiet ".[dev]" "mujoco>=4,<5"
+	cd tests && $(abspath $(MJ4))/bin/python -c "import importlib.util as u, mujoco, utamp_gym; \
+		assert mujoco.__version__.startswith('4.'), mujoco.__version__; \
+		assert u.find_spec('dm_control') is None, 'dm_control must not be installed'; \
+		assert 'site-packages' in utamp_gym.__file__, utamp_gym.__file__; \
+		print('mujoco', mujoco.__version__, 'without dm_control;', utamp_gym.__file__)"
+	cd tests && $(abspath $(MJ4))/bin/python -m pytest -m "not slow" -q -p no:cacheprovider $(MJ4_TESTS)
+
 bench: $(STAMP)
 	$(BIN)/python benchmarks/planning.py
 	$(BIN)/python benchmarks/env_throughput.py
@@ -37,4 +55,4 @@ lint: $(STAMP)
 	$(BIN)/ruff check utamp_gym tests benchmarks examples
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(MJ4) $(OUT) .pytest_cache .ruff_cache

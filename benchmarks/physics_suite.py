@@ -8,7 +8,12 @@ where physics failed with the steps that violate them (`affordance_violations`):
 violating step, at the place completing a violating pick, elsewhere, or not at all.
 
     python benchmarks/physics_suite.py [--seeds 3] [--stride 1] [--suites pick-place,sliding]
-                                       [--method utamp2-gt|utamp1|...]
+                                       [--method utamp2-gt|utamp1|...] [--noise-m M]
+
+With ``--pose-noise`` it instead sweeps the robot's pose-estimation noise (0, 2, 5, 10 mm;
+`--seeds` seeds at the default noise, 1 elsewhere) through the evaluation harness
+(`--workers` processes, rows in `--out`, resumable) and prints success per suite and noise,
+the failure reasons per noise level, and writes ``success_vs_pose_noise.png``.
 """
 
 from __future__ import annotations
@@ -20,6 +25,9 @@ import statistics
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+from pathlib import Path
+
+from utamp_gym.backend import DEFAULT_POSE_NOISE
 from utamp_gym.planning.crosscheck import affordance_violations
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.execute import EpisodeResult, run_episode
@@ -43,13 +51,86 @@ def agreement(scene: Scene, r: EpisodeResult) -> str:
     return "violation, physics failed at a step without violation"
 
 
+NOISE_LEVELS = (0.0, 0.002, 0.005, 0.010)  # m
+
+
+def noise_sweep(args: argparse.Namespace) -> None:
+    """Success vs pose-estimation noise, through the evaluation harness."""
+    from utamp_gym.eval.sweep import SweepConfig, run_sweep
+
+    out = Path(args.out)
+    table: dict[tuple[str, float], list[bool]] = collections.defaultdict(list)
+    reasons: dict[float, collections.Counter[str]] = collections.defaultdict(collections.Counter)
+    for suite in args.suites.split(","):
+        for noise in NOISE_LEVELS:
+            seeds = args.seeds if noise == DEFAULT_POSE_NOISE else 1
+            cfg = SweepConfig(
+                suite, (args.method,), seeds=seeds, pose_noise=noise, explain=False,
+                limit=args.limit,
+            )  # fmt: skip
+            report = run_sweep(cfg, out / suite, workers=args.workers, progress=False)
+            for r in report.rows:
+                table[(suite, noise)].append(r.success)
+                if not r.success:
+                    reasons[noise][_reason(r.failure_reason)] += 1
+            ok = table[(suite, noise)]
+            print(f"{suite} noise {noise * 1000:g} mm: {sum(ok)}/{len(ok)}", flush=True)
+    print(f"\n## Physics success vs pose-estimation noise, {args.method}")
+    print("| suite | noise (mm) | seeds | episodes | success |\n|---|---|---|---|---|")
+    for (suite, noise), ok in sorted(table.items()):
+        seeds = args.seeds if noise == DEFAULT_POSE_NOISE else 1
+        print(f"| {suite} | {noise * 1000:g} | {seeds} | {len(ok)} | {sum(ok) / len(ok):.3f} |")
+    for noise, counts in sorted(reasons.items()):
+        print(f"\nfailures at {noise * 1000:g} mm:")
+        for reason, count in counts.most_common():
+            print(f"- {reason}: {count}")
+    _plot_noise(table, out / "success_vs_pose_noise.png")
+
+
+def _reason(failure: str) -> str:
+    """A failure reason without its step and numbers (to count kinds)."""
+    text = failure.split(": ", 1)[-1] if failure.startswith("step ") else failure
+    return text.split(" (")[0]
+
+
+def _plot_noise(table: dict[tuple[str, float], list[bool]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.0, 3.4))
+    for suite in sorted({s for s, _ in table}):
+        noises = sorted(n for s, n in table if s == suite)
+        rates = [sum(table[(suite, n)]) / len(table[(suite, n)]) for n in noises]
+        ax.plot([1000 * n for n in noises], rates, "-o", label=suite)
+    ax.axvline(1000 * DEFAULT_POSE_NOISE, color="grey", lw=0.8, ls=":", label="default")
+    ax.set_xlabel("pose-estimation noise (mm, std per axis)")
+    ax.set_ylabel("success rate")
+    ax.set_ylim(0, 1.02)
+    ax.set_title("UTAMP-2-GT in physics vs pose-estimation noise")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    print(f"\nwrote {path}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suites", default="pick-place,sliding")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--stride", type=int, default=1, help="use every k-th scene")
     ap.add_argument("--method", default="utamp2-gt")
+    ap.add_argument("--noise-m", type=float, default=DEFAULT_POSE_NOISE, help="pose noise (m)")
+    ap.add_argument("--pose-noise", action="store_true", help="sweep the pose noise instead")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--limit", type=int, default=None, help="noise sweep: first N scenes")
+    ap.add_argument("--out", default="out/bench/pose_noise", help="noise sweep: rows here")
     args = ap.parse_args()
+    if args.pose_noise:
+        noise_sweep(args)
+        return
 
     table: dict[tuple[str, int], list[bool]] = collections.defaultdict(list)
     reasons: collections.Counter[str] = collections.Counter()
@@ -60,7 +141,7 @@ def main() -> None:
     for suite in args.suites.split(","):
         for scene in suite_scenes(suite)[:: args.stride]:
             for seed in range(args.seeds):
-                r = run_episode(scene, args.method, seed=seed)
+                r = run_episode(scene, args.method, seed=seed, pose_noise=args.noise_m)
                 table[(suite, scene.n_objects)].append(r.success)
                 episode_times[scene.n_objects].append(r.wall_time_s)
                 step_times += [s.timings.get("wall_s", 0.0) for s in r.steps]

@@ -17,3 +17,11 @@ from utamp_gym.resources import asset_path
 def demo_dict() -> dict[str, Any]:
     """The demo scene file as plain data (tests mutate their own copy)."""
     return tomllib.loads(asset_path("scenes", "kitchen-demo.toml").read_text())
+
+
+@pytest.fixture(scope="session")
+def session_display():
+    """One Xvfb display for windows opened inside the test process (None without Xvfb)."""
+    from xvfb import process_display
+
+    return process_display()

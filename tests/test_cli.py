@@ -3,11 +3,18 @@
 from __future__ import annotations
 
 import json
+import signal
+import subprocess
+import sys
+import time
 import tomllib
 from pathlib import Path
 
+import pytest
+
 from utamp_gym.cli import main
 from utamp_gym.scene import scene_from_dict
+from utamp_gym.suites import resolve_scene
 
 
 def test_scenes_list_and_show(capsys) -> None:
@@ -64,3 +71,87 @@ def test_bad_input_exits_two_with_a_message(capsys, tmp_path: Path) -> None:
     bad.write_text('name = "x"\n[workspace]\nmin = [0, 0]\n')
     assert main(["plan", str(bad)]) == 2
     assert f"{bad}: field 'workspace.min'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "-inf", "1e9", "86400.5", "soon"])
+def test_invalid_timeout_exits_two_with_one_line(capsys, value: str) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["plan", "kitchen-demo", "--timeout", value])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("utamp plan: error: argument --timeout: ")
+
+
+def test_timeout_bounds_the_whole_plan_command(capsys) -> None:
+    resolve_scene("pick-place/105")  # the scene's first build is not what is measured
+    start = time.perf_counter()
+    code = main(["plan", "pick-place/105", "--method", "utamp1", "--timeout", "0.2", "--json"])
+    wall = time.perf_counter() - start
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and wall < 0.5, wall  # UTAMP-1 takes seconds to ground five objects
+    assert data["timed_out"] is True and data["solved"] is False
+    assert data["phase"] in ("grounding", "problem") and "0.2 s" in data["reason"]
+
+
+def _downward_children(pid: int) -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            comm = stat[stat.index("(") + 1 : stat.rindex(")")]
+            state, ppid = stat[stat.rindex(")") + 2 :].split()[:2]
+            if comm == "downward" and int(ppid) == pid and state != "Z":
+                found.append(int(entry.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rindex(")") + 2] != "Z"
+
+
+def test_sigint_during_search_exits_130_and_kills_the_search() -> None:
+    # UTAMP-1 with LM-cut on five objects: seconds of grounding, then a search of about a second
+    cmd = [sys.executable, "-m", "utamp_gym.cli", "plan", "pick-place/105", "--method", "utamp1"]
+    cmd += ["--search", "astar-lmcut", "--json"]
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        # a background job of a non-interactive shell starts with SIGINT ignored; undo that
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        limit = time.monotonic() + 120
+        children: list[int] = []
+        while not children and proc.poll() is None and time.monotonic() < limit:
+            children = _downward_children(proc.pid)
+            time.sleep(0.005)
+        assert children, "the search never started (or finished before it could be seen)"
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130 and out == ""
+    assert err == "utamp: interrupted\n"
+    deadline = time.monotonic() + 2.0
+    while any(map(_alive, children)) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not any(map(_alive, children))
+
+
+def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
+    cmd = [sys.executable, "-X", "importtime", "-m", "utamp_gym.cli", "plan", "pick-place/017"]
+    run = subprocess.run([*cmd, "--json"], capture_output=True, text=True, check=True)
+    assert json.loads(run.stdout)["solved"]
+    imported = {ln.split("|")[-1].strip() for ln in run.stderr.splitlines() if "|" in ln}
+    assert "utamp_gym.planning.state_planner" in imported  # the check sees our imports
+    heavy = ("gymnasium", "torch", "mujoco", "pinocchio", "ompl", "matplotlib", "numpy")
+    assert not {m for m in imported if m.split(".")[0] in heavy}

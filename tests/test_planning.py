@@ -123,3 +123,16 @@ def test_affordance_violations_lists_every_step_that_ignores_the_ground_truth() 
     assert affordance_violations(scene, [gt.plan[0], body]) == [
         (1, "(canGraspFrom board board-body on left right)")
     ]
+
+
+@pytest.mark.parametrize("suite", ["pick-place", "sliding"])
+def test_our_grounder_and_fd_translator_plan_equally_long(suite: str) -> None:
+    """A sample of the suite (benchmarks/planning.py --sections crosscheck runs all of it)."""
+    cases = [(scene, "utamp2-gt") for scene in suite_scenes(suite)[::9]]
+    if suite == "pick-place":
+        cases += [(suite_scenes(suite)[0], "utamp1")]
+    for scene, method in cases:
+        ours = plan_scene(scene, method, timeout=120)
+        theirs = fast_downward.solve(ours.domain, ours.problem, translator="fd", timeout=120)
+        assert ours.solved and theirs.solved, scene.name
+        assert ours.plan_length == len(theirs.plan), (scene.name, method)

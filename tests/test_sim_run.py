@@ -1,6 +1,6 @@
 """End to end: plan a scene with U-TAMP-2-GT, execute it in MuJoCo, measure the tower.
 
-`pick-place/080` (five objects, six steps) and `sliding/014` (three objects, a 5 kg
+`pick-place/080` (five objects, six steps) and `sliding/014` (three objects, a 3.5 kg
 tray slid into place first) are the CI representatives; the sweeps over whole suites
 are marked slow. Timings are recorded (`record_property`) and printed, never asserted.
 """

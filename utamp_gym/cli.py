@@ -1,17 +1,23 @@
-"""The `utamp` command line: scenes, plan, validate, run, eval, train.
+"""The `utamp` command line: scenes, plan, validate, run, view, eval, train.
 
-Exit codes: 0 success (also for `plan` when the scene is unsolvable: see `solved`),
-1 an invalid plan (`validate`), 2 bad input (unknown scene, malformed file, ...).
+Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
+see `solved` and `timed_out`), 1 an invalid plan (`validate`), 2 bad input (unknown scene,
+malformed file, bad option value, ...), 130 interrupted (Ctrl-C).
+
+Each subcommand imports what it needs when it runs; `utamp plan` imports neither Gymnasium
+nor the physics stack (the RL parser and the env registration load only for the
+subcommands that use them).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from utamp_gym.errors import UtampError
 
@@ -34,17 +40,19 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
+    from utamp_gym.deadline import Deadline
     from utamp_gym.planning.methods import plan_scene
     from utamp_gym.suites import resolve_scene
 
+    deadline = Deadline.after(args.timeout)  # bounds the whole command, scene lookup included
     scene = resolve_scene(args.scene)
     outcome = plan_scene(
         scene,
         args.method,
         seed=args.seed,
-        timeout=args.timeout,
         search=args.search,
         noise=args.noise,
+        deadline=deadline,
     )
     if args.out:
         out = Path(args.out)
@@ -58,6 +66,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         if args.explain:
             data["explanation"] = explanation
         print(json.dumps(data, indent=2))
+    elif outcome.timed_out:
+        print(f"{scene.name} [{args.method}]: timed out during {outcome.phase}: {outcome.reason}")
     elif outcome.solved:
         print(
             f"{scene.name} [{args.method}]: {outcome.plan_length} steps, "
@@ -83,8 +93,14 @@ def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
+    if args.eval_cmd == "merge":
+        return _cmd_eval_merge(args)
+    missing = [flag for flag, value in (("--suite", args.suite), ("--out", args.out)) if not value]
+    if missing:
+        args.eval_parser.error(f"the following arguments are required: {', '.join(missing)}")
+    from utamp_gym.distributed import make_executor
     from utamp_gym.eval.summary import to_markdown
-    from utamp_gym.eval.sweep import SweepConfig, run_sweep, write_outputs
+    from utamp_gym.eval.sweep import SweepConfig, parse_shard, run_sweep, write_outputs
 
     noise = (args.noise,)
     if args.sweep_noise:
@@ -108,8 +124,20 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         closed_loop=args.closed_loop,
         disturbance=args.disturbance,
         pose_noise=args.pose_noise,
+        seed_offset=args.seed_offset,
+        scenes=args.scenes,
+        shard=None if args.shard is None else parse_shard(args.shard),
     )
-    report = run_sweep(cfg, args.out, workers=args.workers, progress=not args.quiet)
+    executor = make_executor(args.executor, workers=args.workers, ray_address=args.ray_address)
+    try:
+        report = run_sweep(cfg, args.out, progress=not args.quiet, executor=executor)
+    except KeyboardInterrupt:
+        print(
+            f"utamp eval: interrupted; finished runs are in {Path(args.out) / 'results.csv'}: "
+            "run the same command (with either executor) to resume",
+            file=sys.stderr,
+        )
+        return 130
     summary = write_outputs(report)
     if not args.quiet:
         sys.stdout.write(to_markdown(summary))
@@ -119,6 +147,106 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         f"in {args.out}"
     )
     return 0
+
+
+def _cmd_eval_merge(args: argparse.Namespace) -> int:
+    from utamp_gym.eval.merge import merge_outputs
+    from utamp_gym.eval.summary import to_markdown
+
+    summary = merge_outputs(args.merge_out, args.dirs)
+    if not args.quiet:
+        sys.stdout.write(to_markdown(summary))
+    print(
+        f"merged {summary['runs']} run(s) from {len(summary['merged_from'])} folder(s) "
+        f"({summary['duplicate_rows']} duplicate(s) dropped); wrote results.csv, summary.md, "
+        f"summary.json and figures in {args.merge_out}"
+    )
+    return 0
+
+
+def _add_eval_parser(sub: Any) -> None:
+    """``utamp eval --suite ... --out DIR`` (a sweep) and ``utamp eval merge OUT DIR...``.
+
+    argparse has no optional sub-command next to required options, so ``merge`` is an
+    optional sub-command and the sweep's required options are checked in `_cmd_eval`.
+    """
+    from utamp_gym.distributed import EXECUTORS
+    from utamp_gym.planning.methods import DEFAULT_NOISE
+    from utamp_gym.suites import SUITES
+
+    ev = sub.add_parser(
+        "eval",
+        help=EVAL_HELP,
+        usage="utamp eval --suite SUITE --out DIR [options]\n       utamp eval merge OUT DIR...",
+    )
+    ev.add_argument("--suite", choices=SUITES, help="required for a sweep")
+    ev.add_argument(
+        "--methods",
+        help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2-vlm, "
+        "vlm-planner, rl:PATH (a model.zip from `utamp train`; its env options come from the "
+        "model) (default: the first four; utamp2-noisy alone with --sweep-noise)",
+    )
+    ev.add_argument("--seeds", type=int, default=1, help="K seeds per scene and method")
+    ev.add_argument(
+        "--seed-offset", type=int, default=0, help="the first seed: seeds S..S+K-1 (default 0)"
+    )
+    ev.add_argument(
+        "--scenes", metavar="PATTERN", help="only scenes matching this glob (pick-place/0*)"
+    )
+    ev.add_argument(
+        "--shard", metavar="I/N", help="only the I-th of N parts of the runs (by a stable hash)"
+    )
+    ev.add_argument(
+        "--workers",
+        type=int,
+        help="worker processes (default: CPU count; 0: in this process); with --executor ray "
+        "the CPUs of a new local Ray instance",
+    )
+    ev.add_argument(
+        "--executor",
+        choices=EXECUTORS,
+        default="local",
+        help="local worker processes, or Ray tasks (the utamp-gym[ray] extra)",
+    )
+    ev.add_argument(
+        "--ray-address",
+        metavar="ADDR",
+        help="Ray cluster to use (default: $RAY_ADDRESS, else a new local Ray instance)",
+    )
+    ev.add_argument("--grounding", choices=("physics", "symbolic"), default="physics")
+    ev.add_argument("--limit", type=int, help="only the first N (matching) scenes of the suite")
+    ev.add_argument(
+        "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
+    )
+    ev.add_argument(
+        "--sweep-noise", help="comma-separated noise levels for utamp2-noisy (success vs F1)"
+    )
+    ev.add_argument("--timeout", type=timeout_seconds, default=30.0, help="planner time limit (s)")
+    ev.add_argument(
+        "--no-explain", action="store_true", help="do not explain unsolved U-TAMP-2 runs"
+    )
+    _add_physics_options(ev)
+    ev.add_argument(
+        "--closed-loop",
+        action="store_true",
+        help="run the planner policy in the env (perceive, replan; at most "
+        "utamp_gym.eval.closed_loop.MAX_STEPS macro actions) instead of plan-then-execute",
+    )
+    ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
+    ev.add_argument("--out", help="output directory (re-use it to resume); required for a sweep")
+    ev.set_defaults(func=_cmd_eval, eval_parser=ev, eval_cmd=None)
+    esub = ev.add_subparsers(dest="eval_cmd", metavar="merge")
+    merge = esub.add_parser(
+        "merge",
+        prog="utamp eval merge",
+        help="merge output folders (shards, seed ranges) into OUT and rewrite its summaries",
+        description="Merge the results.csv of several `utamp eval` output folders into OUT "
+        "(each run once; a run with different outcomes in two folders is an error) and write "
+        "summary.md, summary.json and the figures there.",
+    )
+    merge.add_argument("merge_out", metavar="OUT", help="output folder (may be one of DIR)")
+    merge.add_argument("dirs", metavar="DIR", nargs="+", help="`utamp eval` output folders")
+    merge.add_argument("--quiet", action="store_true", help="do not print the table")
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -178,6 +306,30 @@ def _run_closed_loop(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    """Open a scene in a window until it is closed (MuJoCo's viewer, or the schematic)."""
+    from utamp_gym.env.viewer import require_display
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene(args.scene)
+    require_display("utamp view", "utamp run --video PATH (a headless video)")
+    if args.symbolic:
+        from utamp_gym.env.viewer import show_schematic
+
+        show_schematic(scene)
+        return 0
+    import mujoco.viewer
+    import numpy as np
+
+    from utamp_gym.sim.backend import MujocoBackend
+
+    backend = MujocoBackend()
+    backend.reset(scene, np.random.default_rng(args.seed))
+    # MuJoCo's viewer runs the physics; the servos hold the arm at its ready pose
+    mujoco.viewer.launch(backend.model, backend.data, show_left_ui=False, show_right_ui=False)
+    return 0
+
+
 def _cmd_validate(args: argparse.Namespace) -> int:
     from utamp_gym.symbolic.validate import validate_files
 
@@ -187,6 +339,35 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         return 0
     print(result.message, file=sys.stderr)
     return 1
+
+
+MAX_TIMEOUT_S = 86400.0
+"""The largest accepted ``--timeout`` (one day): anything longer is a typo."""
+LIGHT_COMMANDS = ("scenes", "plan", "validate")
+"""Subcommands that never build an env: the Gymnasium env ids are not registered for them."""
+EVAL_HELP = "evaluate planning methods on a suite (the paper's table); `eval merge` joins outputs"
+TRAIN_HELP = "train an RL baseline (MaskablePPO, PPO or DQN)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """Reports a usage error as one line on stderr and exits 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def timeout_seconds(text: str) -> float:
+    """``--timeout`` values: a positive, finite number of seconds up to `MAX_TIMEOUT_S`."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT_S):
+        raise argparse.ArgumentTypeError(
+            f"must be a positive number of seconds, at most {MAX_TIMEOUT_S:g} (one day); "
+            f"got {text!r}"
+        )
+    return value
 
 
 def _probability(text: str) -> float:
@@ -236,14 +417,16 @@ def _add_physics_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand. Options whose modules are heavy (``train``: the RL and
+    env stack; the physics options of ``run`` and ``eval``: the backend) are only added when
+    `command` is that subcommand or None (all), so `utamp plan` stays light."""
     from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
     from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
     from utamp_gym.suites import SUITES
 
-    parser = argparse.ArgumentParser(prog="utamp", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="utamp", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="cmd", required=True)
-
     scenes = sub.add_parser("scenes", help="list or show benchmark scenes")
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
     lst = ssub.add_parser("list", help="scene names, one per line")
@@ -258,7 +441,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     plan.add_argument("--method", choices=METHODS, default="utamp2-gt")
     plan.add_argument("--seed", type=int, default=0)
-    plan.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
+    plan.add_argument(
+        "--timeout",
+        type=timeout_seconds,
+        default=30.0,
+        help="time limit of the whole command (s, at most one day)",
+    )
     plan.add_argument("--search", choices=SEARCH_CONFIGS, default=DEFAULT_SEARCH)
     plan.add_argument(
         "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
@@ -280,7 +468,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0, help="pose noise, IK restarts and OMPL seed")
     run.add_argument("--video", help="write an MP4 (or .gif) of the episode here")
     run.add_argument("--json", action="store_true", help="print one JSON object")
-    _add_physics_options(run)
+    if command in (None, "run"):  # its defaults come from the physics backend (numpy)
+        _add_physics_options(run)
     run.add_argument(
         "--closed-loop",
         action="store_true",
@@ -288,60 +477,58 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.set_defaults(func=_cmd_run)
 
+    view = sub.add_parser(
+        "view",
+        help="open a scene interactively: MuJoCo's viewer (physics runs), or --symbolic",
+        description="Open SCENE in a window until it is closed. Default: MuJoCo's "
+        "interactive viewer on the simulated scene with the Panda at its ready pose (the "
+        "physics runs; double-click an object, then Ctrl + right-drag pushes it; Tab and "
+        "Shift+Tab show the viewer's panels). --symbolic: the labelled top-down "
+        "schematic of the scene's declared state. Needs a display (DISPLAY).",
+    )
+    view.add_argument(
+        "scene", help="suite scene (pick-place/017), packaged scene or scene-file path"
+    )
+    view.add_argument("--symbolic", action="store_true", help="the labelled schematic instead")
+    view.add_argument("--seed", type=int, default=0, help="initial pose noise (physics view)")
+    view.set_defaults(func=_cmd_view)
+
     val = sub.add_parser("validate", help="check a plan against a domain and problem")
     val.add_argument("domain")
     val.add_argument("problem")
     val.add_argument("plan")
     val.set_defaults(func=_cmd_validate)
 
-    ev = sub.add_parser("eval", help="evaluate planning methods on a suite (the paper's table)")
-    ev.add_argument("--suite", choices=SUITES, required=True)
-    ev.add_argument(
-        "--methods",
-        help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2-vlm, "
-        "vlm-planner, rl:PATH (a model.zip from `utamp train`; its env options come from the "
-        "model) (default: the first four; utamp2-noisy alone with --sweep-noise)",
-    )
-    ev.add_argument("--seeds", type=int, default=1, help="seeds 0..K-1 per scene and method")
-    ev.add_argument(
-        "--workers", type=int, help="worker processes (default: CPU count; 0: in this process)"
-    )
-    ev.add_argument("--grounding", choices=("physics", "symbolic"), default="physics")
-    ev.add_argument("--limit", type=int, help="only the first N scenes of the suite")
-    ev.add_argument(
-        "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
-    )
-    ev.add_argument(
-        "--sweep-noise", help="comma-separated noise levels for utamp2-noisy (success vs F1)"
-    )
-    ev.add_argument("--timeout", type=float, default=30.0, help="planner time limit (s)")
-    ev.add_argument(
-        "--no-explain", action="store_true", help="do not explain unsolved U-TAMP-2 runs"
-    )
-    _add_physics_options(ev)
-    ev.add_argument(
-        "--closed-loop",
-        action="store_true",
-        help="run the planner policy in the env (perceive, replan; at most "
-        "utamp_gym.eval.closed_loop.MAX_STEPS macro actions) instead of plan-then-execute",
-    )
-    ev.add_argument("--quiet", action="store_true", help="no progress bar, no table")
-    ev.add_argument("--out", required=True, help="output directory (re-use it to resume)")
-    ev.set_defaults(func=_cmd_eval)
-    from utamp_gym.rl.cli import add_train_parser
+    if command in (None, "eval"):
+        _add_eval_parser(sub)
+    else:  # listed in `utamp --help`; its options load with `utamp eval`
+        sub.add_parser("eval", help=EVAL_HELP)
+    if command in (None, "train"):
+        from utamp_gym.rl.cli import add_train_parser
 
-    add_train_parser(sub)
+        add_train_parser(sub)
+    else:  # listed in `utamp --help`; its options load with `utamp train`
+        sub.add_parser("train", help=TRAIN_HELP)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one subcommand; returns the exit code (see the module docstring)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
     try:
+        args = build_parser(command).parse_args(argv)
+        if args.cmd not in LIGHT_COMMANDS:
+            from utamp_gym.env.registry import register_envs
+
+            register_envs()
         return int(args.func(args))
     except UtampError as exc:
         print(f"utamp: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # planner processes were killed on the way out
+        print("utamp: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # e.g. `utamp scenes list | head`
         sys.stderr.close()
         return 0

@@ -55,7 +55,14 @@ class PlanningError(UtampError):
 
 
 class PlanningTimeout(PlanningError):
-    """The planner exceeded its time limit; the process was killed."""
+    """The planner exceeded its time limit; any planner process was killed.
+
+    `phase` names the step that ran out of time (``grounding``, ``sas``, ``search``, ...).
+    """
+
+    def __init__(self, message: str, *, phase: str = "search"):
+        self.phase = phase
+        super().__init__(message)
 
 
 class GroundingError(UtampError):

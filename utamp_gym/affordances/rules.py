@@ -8,11 +8,14 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
   on it) and the object can rest with that part facing up; fixed furniture supports
   on its top only;
 * small objects do not support larger ones: on a flat surface the footprint of the
-  supported object must fit the surface; a concave surface (a pan) only supports
-  objects that span its opening; the supporter's robustness bounds the load;
-* the gripper approaches from above (palm on a part that can face up), its fingers
-  close across a member no wider than the 8 cm opening and are not blocked by a
-  sibling member;
+  supported object must fit the surface (on a round one, the circle); a concave
+  surface (a pan) only supports objects that span its opening; the supporter's
+  robustness bounds the load;
+* the gripper approaches from above (palm on a part that can face up) and comes down
+  onto the member's palm face: no sibling member (the body included) stands over it
+  (a bottle's neck over its body, a bowl's floor under its rim when upside-down); its
+  fingers close across a member no wider than the 8 cm opening and are not blocked by
+  a sibling member;
 * an object can be lifted by a member if it is well below the Panda's 3 kg payload
   (edge grasps carry much less); an edge grasp is only useful when it can lift the
   object or when the object cannot be lifted at all (then it is slid);
@@ -27,7 +30,7 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.scene.catalogue import ObjectType
-from utamp_gym.scene.geometry import OPPOSITE, SIDES, axis_of
+from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
 
 GRIPPER_OPENING = 0.08  # m, Franka Hand
 MIN_GRASP_WIDTH = 0.005  # m
@@ -56,18 +59,41 @@ def is_supportive(t: ObjectType, part: str) -> bool:
     return shape in ("flat", "concave") and can_rest_on(t, OPPOSITE[part])
 
 
+def _disc(t: ObjectType, part: str) -> float | None:
+    """Diameter of `part` if it is a round face (a cylinder body forms it), else None."""
+    body, bbox = t.body.box, t.bbox
+    forms = (part == "on" and body.max[2] >= bbox.max[2] - 1e-9) or (
+        part == "under" and body.min[2] <= bbox.min[2] + 1e-9
+    )
+    if t.body.geom != "cylinder" or not forms:
+        return None
+    size = t.parts[part].size
+    return float(min(*body.size[:2], *(size if size is not None else ())))
+
+
+def _fits_flat(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
+    """Does t1's footprint (resting on p1) fit the flat surface p2 of t2? Objects keep
+    their yaw (all x-aligned), so a rectangle is compared axis by axis; on a round
+    surface a footprint must fit the circle: a round one by its diameter, any other by
+    its diagonal."""
+    footprint = np.asarray(t1.bbox.face_size(p1))
+    disc = _disc(t2, p2)
+    if disc is None:
+        return bool(np.all(footprint <= np.asarray(t2.surface_size(p2)) + 1e-9))
+    own = _disc(t1, p1)
+    round_ = own is not None and np.allclose(t1.body.box.size[:2], t1.bbox.size[:2])
+    return (own if round_ and own is not None else float(np.hypot(*footprint))) <= disc + 1e-9
+
+
 def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Can part p2 of t2 stably support t1 resting on its part p1?"""
     if t1.name == t2.name or not (is_supportive(t2, p2) and is_supportable(t1, p1)):
         return False
-    # objects keep their yaw (all x-aligned), so extents are compared axis by axis
-    footprint = np.asarray(t1.bbox.face_size(p1))
-    surface = np.asarray(t2.surface_size(p2))
-    fits = (
-        bool(np.all(footprint <= surface + 1e-9))
-        if t2.parts[p2].shape == "flat"
-        else bool(np.all(footprint >= surface - 1e-9))
-    )
+    if t2.parts[p2].shape == "flat":
+        fits = _fits_flat(t2, p2, t1, p1)
+    else:  # a concave surface: the object spans its opening
+        footprint = np.asarray(t1.bbox.face_size(p1))
+        fits = bool(np.all(footprint >= np.asarray(t2.surface_size(p2)) - 1e-9))
     return fits and t1.mass <= LOAD_CAPACITY[t2.robustness]
 
 
@@ -78,6 +104,30 @@ def _blocked(t: ObjectType, member: str, side: str) -> bool:
     )
 
 
+def _covered(t: ObjectType, member: str, palm: str) -> bool:
+    """True if a sibling member reaches beyond the member's `palm` face over that face:
+    the hand coming down against the palm part would meet it first."""
+    box = t.members[member].box
+    ax = axis_of(palm)
+    for name, m in t.members.items():
+        other = m.box
+        if name == member:
+            continue
+        beyond = (
+            other.max[ax] > box.max[ax] + 1e-9
+            if NORMALS[palm][ax] > 0
+            else other.min[ax] < box.min[ax] - 1e-9
+        )
+        over = all(
+            box.min[i] < other.max[i] - 1e-9 and other.min[i] < box.max[i] - 1e-9
+            for i in range(3)
+            if i != ax
+        )
+        if beyond and over:
+            return True
+    return False
+
+
 def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
     """(member, palm, finger1, finger2) grasps the gripper can physically close on."""
     if not t.movable:
@@ -85,8 +135,8 @@ def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
     out = []
     for mname, m in t.members.items():
         for palm in PALM_PARTS:
-            if not can_rest_on(t, OPPOSITE[palm]):
-                continue  # that part never faces up: no top-down approach
+            if not can_rest_on(t, OPPOSITE[palm]) or _covered(t, mname, palm):
+                continue  # that part never faces up, or the hand cannot reach the member
             for f1, f2 in FINGER_PAIRS:
                 width = float(m.box.size[axis_of(f1)])
                 if not MIN_GRASP_WIDTH <= width <= GRIPPER_OPENING:

@@ -26,10 +26,11 @@ from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.outcome import OutcomeModel
 from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
 from utamp_gym.env.poses import SymbolicPoses
-from utamp_gym.env.render import SchematicRenderer
+from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
 from utamp_gym.env.state import SymbolicState
 from utamp_gym.env.task import KitchenTask, home_joints, observation_space
 from utamp_gym.env.universe import Universe, ground_universe
+from utamp_gym.env.viewer import FRAME_RATE, Rendering
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.perception.abstraction import Perception
 from utamp_gym.planning.methods import DEFAULT_NOISE
@@ -98,15 +99,16 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5) restricts the scenes, ``scene`` fixes one (suite, packaged or file
       name); ``reset(options={"scene": name})`` picks the scene of one episode;
+    * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array" |
+      "rgb_array_list" | "human"), ``camera`` (adds ``image``), ``image_size`` /
+      ``render_size`` ((height, width));
     * ``masks``: "affordances" (default: the U-TAMP-2 precondition under the env's affordances),
       "geometric" (U-TAMP-2 without affordance literals, over a larger action space that has
-      e.g. side grasps and picks of the tray; `utamp_gym.env.universe`) or "none" (that action
-      space, every action whose objects are in the scene). Physics decides what the mask
-      allows; symbolic grounding decides it with the outcome model (`utamp_gym.env.outcome`:
-      the ground-truth U-TAMP-2 precondition; a failure names the false affordance);
-    * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array"),
-      ``camera`` (adds ``image``), ``image_size`` / ``render_size`` ((height, width));
-    * ``masks``: "affordances" (default) | "geometric" | "none" (what `action_masks()` allows);
+      e.g. side grasps and picks of the tray; `utamp_gym.env.geometric`) or "none" (that
+      action space, every action whose objects are in the scene). Physics decides what the
+      mask allows; symbolic grounding decides it with the outcome model
+      (`utamp_gym.env.outcome`: the ground-truth U-TAMP-2 precondition; a failure names the
+      false affordance);
     * physics only: ``backend`` ("module:Class" or a callable, built as
       ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (wall-clock times in
       info), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
@@ -127,13 +129,20 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     RNG), one fault of `utamp_gym.backend.FAULT_KINDS` is injected; ``info["fault"]`` describes
     it (None otherwise).
 
-    **Rendering** – "rgb_array": the simulator's camera in physics grounding, a top-down
-    schematic (`utamp_gym.env.render`) in symbolic grounding.
+    **Rendering** (`utamp_gym.env.viewer`) – "rgb_array": the simulator's camera in physics
+    grounding, a labelled top-down schematic (`utamp_gym.env.render`) in symbolic grounding.
+    "rgb_array_list": every frame since the last ``render()`` or ``reset()``; in physics
+    grounding 10 frames per simulated second while macro actions run (``render_fps`` 10),
+    so ``utamp_gym.env.video.RecordVideo`` records smooth videos. "human": a live MuJoCo
+    viewer (physics) or a labelled matplotlib window (symbolic); it needs a display.
 
     **Version history** – v0: initial release.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}  # noqa: RUF012
+    metadata = {  # noqa: RUF012
+        "render_modes": ["rgb_array", "rgb_array_list", "human"],
+        "render_fps": FRAME_RATE,  # per instance: 2 when there is one frame per macro action
+    }
 
     def __init__(
         self,
@@ -198,6 +207,11 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             factory = backend_factory(opts.backend)
             self._backend = factory(pose_noise=opts.pose_noise, **opts.backend_kwargs)
             self._physics = PhysicalGrounding(self._backend, opts.disturbance)
+        self._labels = LabelledSchematic(opts.objects)
+        self._rendering = Rendering(
+            render_mode, self._render_frame, self._draw_schematic, self._backend, "UTampKitchen"
+        )
+        self.metadata = {**type(self).metadata, "render_fps": self._rendering.fps}
 
     # ------------------------------------------------------------------ public helpers
     @property
@@ -254,10 +268,12 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._outcome is not None:
             self._outcome.reset(scene)
         self._renderer.reset(scene)
+        self._labels.reset(scene)
         if self._physics is not None:
             rng = np.random.default_rng(self.np_random.integers(2**63))
             self._observe(self._physics.reset(scene, rng))
         self._task.initialize_episode(self._progress(self.options.reward_shaping)[1])
+        self._rendering.reset()
         return self._observation(), self._info(None, None, {}, None)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
@@ -297,6 +313,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         )
         terminated = terminated or self._state.dead_end() or bool(self._anomalies())
         info = self._info(a, failure, timings, executed, unexpected)
+        self._rendering.step()
         return self._observation(), reward, terminated, False, info
 
     @property
@@ -304,13 +321,14 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         """The physics backend (None in symbolic grounding), e.g. to read measured towers."""
         return self._backend
 
-    def render(self) -> np.ndarray | None:  # type: ignore[override]
+    def render(self) -> np.ndarray | list[np.ndarray] | None:  # type: ignore[override]
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        return self._image(self.options.render_size)
+        return self._rendering.render()
 
     def close(self) -> None:
+        self._rendering.close()
         if self._backend is not None:
             self._backend.close()  # kept: a closed env must not silently turn symbolic
 
@@ -374,6 +392,17 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self.options.camera:
             obs["image"] = self._image(self.options.image_size)
         return obs
+
+    def _render_frame(self) -> np.ndarray:
+        """What ``render()`` shows: the camera (physics) or the labelled schematic."""
+        if self._backend is not None:
+            return self._image(self.options.render_size)
+        poses, present = self._poses.observation(), self._poses.present()
+        return self._labels.render(poses, present, self._held, self.options.render_size)
+
+    def _draw_schematic(self, axes: Any) -> None:
+        """The labelled schematic into matplotlib axes (the symbolic human window)."""
+        self._labels.draw(axes, self._poses.observation(), self._poses.present(), self._held)
 
     def _image(self, size: tuple[int, int]) -> np.ndarray:
         if self._backend is not None:

@@ -21,7 +21,8 @@ from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
 from utamp_gym.symbolic.problem import DOMAINS
 
 GROUNDINGS = ("physics", "symbolic")
-RENDER_MODES = ("rgb_array",)
+#: see `utamp_gym.env.viewer` for what each mode shows
+RENDER_MODES = ("rgb_array", "rgb_array_list", "human")
 #: what `action_masks()` allows: U-TAMP-2 preconditions under the env's affordances, the
 #: U-TAMP-1 object-centric (geometric) preconditions only, or every action of the scene
 MASKS = ("affordances", "geometric", "none")

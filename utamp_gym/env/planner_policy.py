@@ -30,8 +30,9 @@ from utamp_gym.env.atoms import scene_atoms
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.physics import perceived_static
 from utamp_gym.errors import PlanningError, UnknownNameError
-from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS, solve
+from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
 from utamp_gym.planning.methods import DEFAULT_NOISE, affordances_for, method_spec
+from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import parse_domain
 from utamp_gym.symbolic.problem import domain_text, goal_atoms
@@ -169,11 +170,24 @@ class PlannerPolicy:
         env, universe = self.env, self.env.universe
         scene = env.scene
         start = time.perf_counter()
-        objects = scene_atoms(scene, (), self.spec.domain, self._fluent)[2]
-        atoms = [*self._static_atoms(scene), *universe.atoms_of(bits)]
-        problem = state_problem(scene, objects, atoms, self.spec.domain)
-        result = solve(
-            self._domain_text, problem, search=self.search, timeout=self.timeout, exclude=exclude
+        # one StatePlanner per policy, created on first use: replans of an episode (and of
+        # every episode of the same scene) re-use its grounded task; objects kept per scene
+        if getattr(self, "_state_planner", None) is None:
+            self._state_planner = StatePlanner(
+                self.spec.domain, search=self.search, timeout=self.timeout
+            )
+            self._scene_objects: dict[str, tuple[str, ...]] = {}
+        objects = self._scene_objects.get(scene.name)
+        if objects is None:
+            objects = self._scene_objects[scene.name] = scene_atoms(
+                scene, (), self.spec.domain, self._fluent
+            )[2]
+        result = self._state_planner.plan(
+            objects,
+            self._static_atoms(scene),
+            universe.atoms_of(bits),
+            goal_atoms(scene),
+            exclude=exclude,
         )
         self.planning_times.append(time.perf_counter() - start)
         if not result.solved:

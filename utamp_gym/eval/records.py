@@ -9,6 +9,7 @@ the final sort) go through a temporary file and `os.replace`.
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import os
 from collections.abc import Iterable
@@ -18,9 +19,21 @@ from typing import Any
 
 GROUNDINGS = ("physics", "symbolic")
 PLAN_SEPARATOR = " ; "
+#: measured with a clock: they differ between two runs of one task, nothing else may
+TIMING_COLUMNS = ("planning_time_s", "execution_time_s", "wall_time_s")
 
 #: scene, method, seed, grounding, noise, closed_loop, disturbance, pose_noise
 Key = tuple[str, str, int, str, str, bool, str, str]
+KEY_FIELDS = (
+    "scene",
+    "method",
+    "seed",
+    "grounding",
+    "noise",
+    "closed_loop",
+    "disturbance",
+    "pose_noise",
+)
 
 
 def noise_label(noise: float | None) -> str:
@@ -51,8 +64,45 @@ def row_key(
     )
 
 
+def key_text(key: Key) -> str:
+    """A run key as ``field=value`` pairs, for messages."""
+    return ", ".join(f"{n}={_fmt(v)}" for n, v in zip(KEY_FIELDS, key, strict=True))
+
+
+def key_shard(key: Key, n: int) -> int:
+    """The shard (0..n-1) of a run: a stable hash of its key (SHA-256, not the salted hash())."""
+    text = "\x1f".join(_fmt(v) for v in key)
+    return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big") % n
+
+
+class RunIdentity:
+    """What names one run: the `key` shared by a task (`EvalTask`) and its row."""
+
+    scene: str
+    method: str
+    seed: int
+    grounding: str
+    noise: float | None
+    closed_loop: bool
+    disturbance: float
+    pose_noise: float | None
+
+    @property
+    def key(self) -> Key:
+        return row_key(
+            self.scene,
+            self.method,
+            self.seed,
+            self.grounding,
+            self.noise,
+            self.closed_loop,
+            self.disturbance,
+            self.pose_noise,
+        )
+
+
 @dataclass(frozen=True)
-class ResultRow:
+class ResultRow(RunIdentity):
     """One evaluated run. Times in seconds; `plan` holds the actions joined by `` ; ``.
 
     `valid_gt` is whether the plan is valid under the ground-truth U-TAMP-2 model (None
@@ -89,21 +139,17 @@ class ResultRow:
     n_faults: int = 0
     n_replans: int = 0
 
-    @property
-    def key(self) -> Key:
-        return row_key(
-            self.scene,
-            self.method,
-            self.seed,
-            self.grounding,
-            self.noise,
-            self.closed_loop,
-            self.disturbance,
-            self.pose_noise,
-        )
-
     def to_csv(self) -> dict[str, str]:
         return {k: _fmt(v) for k, v in asdict(self).items()}
+
+    def outcome(self) -> dict[str, str]:
+        """The row as written to CSV without the wall-clock columns: equal for equal runs."""
+        return {k: v for k, v in self.to_csv().items() if k not in TIMING_COLUMNS}
+
+    def differences(self, other: ResultRow) -> list[str]:
+        """The columns, wall-clock ones excepted, in which `other` differs from this row."""
+        mine, theirs = self.outcome(), other.outcome()
+        return [k for k in mine if mine[k] != theirs[k]]
 
     @classmethod
     def from_csv(cls, d: dict[str, str]) -> ResultRow:
@@ -206,7 +252,12 @@ class ResultsFile:
 
     def sort(self) -> None:
         """Rewrite the file in a stable order (atomically)."""
-        _write_atomic(self.path, sorted(self.rows.values(), key=_order))
+        write_rows(self.path, self.rows.values())
+
+
+def write_rows(path: str | Path, rows: Iterable[ResultRow]) -> None:
+    """Write a whole results file (header + `rows` in the stable order), atomically."""
+    _write_atomic(Path(path), sorted(rows, key=_order))
 
 
 def _order(r: ResultRow) -> tuple[Any, ...]:

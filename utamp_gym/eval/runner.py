@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError, UnknownNameError
 from utamp_gym.eval.explain import explain_unsolvable
-from utamp_gym.eval.records import PLAN_SEPARATOR, Key, ResultRow, row_key
+from utamp_gym.eval.records import PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import (
@@ -48,7 +48,7 @@ def check_method(method: str, suite: str | None = None) -> None:
 
 
 @dataclass(frozen=True)
-class EvalTask:
+class EvalTask(RunIdentity):
     """One scene × method × seed in one grounding (picklable: sent to worker processes)."""
 
     scene: str
@@ -61,19 +61,6 @@ class EvalTask:
     closed_loop: bool = False
     disturbance: float = 0.0
     pose_noise: float | None = None  # physics only
-
-    @property
-    def key(self) -> Key:
-        return row_key(
-            self.scene,
-            self.method,
-            self.seed,
-            self.grounding,
-            self.noise,
-            self.closed_loop,
-            self.disturbance,
-            self.pose_noise,
-        )
 
     def settings(self) -> dict[str, object]:
         """The row columns that repeat the task's settings."""

@@ -2,7 +2,10 @@
 
 Statistics are per method (``utamp2-noisy`` per noise level), overall and per object
 count; planning time is mean ± sample standard deviation over all runs that reached
-the planner. Written as ``summary.json`` (machine-readable) and ``summary.md``.
+the planner. Every rate comes with its number of runs and a 95 % Wilson interval
+(``success_rate_ci95``), the mean planning and execution times with a seeded 95 %
+bootstrap interval (``planning_time_ci95_s``, ``execution_time_ci95_s``). Written as
+``summary.json`` (machine-readable) and ``summary.md``.
 """
 
 from __future__ import annotations
@@ -16,6 +19,12 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.eval.intervals import (
+    BOOTSTRAP_RESAMPLES,
+    BOOTSTRAP_SEED,
+    bootstrap_mean_interval,
+    wilson_interval,
+)
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.runner import EVAL_METHODS
 
@@ -48,20 +57,32 @@ def failure_category(reason: str) -> str:
     return reason.split(":", 1)[0][:60]
 
 
+def _interval(ci: tuple[float, float] | None) -> list[float] | None:
+    return None if ci is None else [ci[0], ci[1]]
+
+
 def stats(rows: Sequence[ResultRow]) -> dict[str, Any]:
-    """Success rate, planning time mean/std and affordance scores of some rows."""
+    """Success rate (n, Wilson 95 %), planning/execution time (mean, std, bootstrap 95 %),
+    affordance scores of some rows."""
     times = [r.planning_time_s for r in rows if r.planning_time_s is not None]
     t_mean, t_std = _mean_std(times)
+    exec_times = [r.execution_time_s for r in rows]
     f1 = [r.affordance_f1 for r in rows if r.affordance_f1 is not None]
     valid = [r for r in rows if r.valid_gt is not None]
+    successes = sum(r.success for r in rows)
     return {
         "runs": len(rows),
-        "success_rate": sum(r.success for r in rows) / len(rows) if rows else None,
+        "successes": successes,
+        "success_rate": successes / len(rows) if rows else None,
+        "success_rate_ci95": _interval(wilson_interval(successes, len(rows))),
         "solved_rate": sum(r.solved for r in rows) / len(rows) if rows else None,
         "valid_plan_rate": sum(bool(r.valid_gt) for r in valid) / len(valid) if valid else None,
         "planning_time_mean_s": t_mean,
         "planning_time_std_s": t_std,
-        "execution_time_mean_s": _mean_std([r.execution_time_s for r in rows])[0],
+        "planning_time_runs": len(times),
+        "planning_time_ci95_s": _interval(bootstrap_mean_interval(times)),
+        "execution_time_mean_s": _mean_std(exec_times)[0],
+        "execution_time_ci95_s": _interval(bootstrap_mean_interval(exec_times)),
         "affordance_f1_mean": statistics.fmean(f1) if f1 else None,
         "crashed": sum(r.crashed for r in rows),
     }
@@ -113,7 +134,9 @@ def summarize(
                     "affordance_f1_mean": st["affordance_f1_mean"],
                     "affordance_precision_mean": statistics.fmean(prec) if prec else None,
                     "affordance_recall_mean": statistics.fmean(rec) if rec else None,
+                    "successes": st["successes"],
                     "success_rate": st["success_rate"],
+                    "success_rate_ci95": st["success_rate_ci95"],
                     "solved_rate": st["solved_rate"],
                 }
             )
@@ -124,40 +147,82 @@ def _f(x: float | None, spec: str = ".2f") -> str:
     return "–" if x is None else format(x, spec)
 
 
+def _ci(ci: list[float] | None, spec: str = ".2f") -> str:
+    return "–" if ci is None else f"{ci[0]:{spec}}–{ci[1]:{spec}}"
+
+
 def _time(d: dict[str, Any]) -> str:
     m, s = d["planning_time_mean_s"], d["planning_time_std_s"]
     return "–" if m is None else f"{m:.3f} ± {s:.3f}"
 
 
-def to_markdown(summary: dict[str, Any]) -> str:
-    """`summary.md`: the table of the paper plus per-object-count and failure breakdowns."""
+def _rate_n(d: dict[str, Any]) -> str:
+    """``0.95 (0.76–0.99, n=20)``: a success rate with its Wilson interval and n."""
+    if d["success_rate"] is None:
+        return "–"
+    return f"{d['success_rate']:.2f} ({_ci(d.get('success_rate_ci95'))}, n={d['runs']})"
+
+
+def _time_ci(d: dict[str, Any]) -> str:
+    """``0.052 ± 0.015 [0.049–0.055]``: mean ± std [bootstrap interval of the mean]."""
+    if d["planning_time_mean_s"] is None:
+        return "–"
+    return f"{_time(d)} [{_ci(d.get('planning_time_ci95_s'), '.3f')}]"
+
+
+def _exec(d: dict[str, Any]) -> str:
+    m = d["execution_time_mean_s"]
+    return "–" if m is None else f"{m:.2f} [{_ci(d.get('execution_time_ci95_s'))}]"
+
+
+def _header(summary: dict[str, Any]) -> list[str]:
     suite, grounding = summary.get("suite", "?"), summary.get("grounding", "?")
+    seeds = f"{summary.get('seeds', '?')} seed(s)"
+    if summary.get("seed_offset"):
+        seeds += f" from {summary['seed_offset']}"
     out = [f"# Evaluation: {suite} suite, {grounding} grounding", ""]
     out.append(
-        f"{summary['runs']} runs ({summary.get('scenes', '?')} scenes, "
-        f"{summary.get('seeds', '?')} seed(s)); success = "
+        f"{summary['runs']} runs ({summary.get('scenes', '?')} scenes, {seeds}); success = "
         + (
             "plan valid under the ground-truth U-TAMP-2 model."
             if grounding == "symbolic"
             else "every step executed in MuJoCo and the tower stands on the tray."
         )
     )
+    out.append(
+        "Intervals are 95 %: Wilson score for rates, percentile bootstrap "
+        f"({BOOTSTRAP_RESAMPLES} resamples, seed {BOOTSTRAP_SEED}) for mean times."
+    )
+    if summary.get("scene_pattern"):
+        out.append(f"- scenes matching `{summary['scene_pattern']}`")
+    if summary.get("shard"):
+        out.append(f"- shard {summary['shard']} of the sweep")
+    if summary.get("merged_from"):
+        out.append("- merged from: " + ", ".join(f"`{d}`" for d in summary["merged_from"]))
     out += [f"- note: {n}" for n in summary.get("notes", [])]
+    return out
+
+
+def to_markdown(summary: dict[str, Any]) -> str:
+    """`summary.md`: the table of the paper plus per-object-count and failure breakdowns."""
+    out = _header(summary)
     out += ["", "## Success rate and planning time", ""]
     out += [
-        "| method | runs | success rate | planning time (s) | valid plans | affordance F1 "
-        "| crashed |",
-        "|---|---|---|---|---|---|---|",
+        "| method | runs | success rate | 95 % CI | planning time (s) | mean 95 % CI "
+        "| execution time (s) [95 % CI] | valid plans | affordance F1 | crashed |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for m in summary["methods"]:
         out.append(
-            f"| {m['label']} | {m['runs']} | {_f(m['success_rate'])} | {_time(m)} | "
+            f"| {m['label']} | {m['runs']} | {_f(m['success_rate'])} | "
+            f"{_ci(m.get('success_rate_ci95'))} | {_time(m)} | "
+            f"{_ci(m.get('planning_time_ci95_s'), '.3f')} | {_exec(m)} | "
             f"{_f(m['valid_plan_rate'])} | {_f(m['affordance_f1_mean'], '.3f')} | {m['crashed']} |"
         )
     ns = sorted({n for m in summary["methods"] for n in m["by_objects"]}, key=int)
     for title, cell in (
-        ("Success rate per object count", lambda d: _f(d["success_rate"])),
-        ("Planning time (s) per object count", _time),
+        ("Success rate per object count (95 % CI, n)", _rate_n),
+        ("Planning time (s) per object count: mean ± std [95 % CI of the mean]", _time_ci),
     ):
         out += ["", f"## {title}", "", "| method | " + " | ".join(f"n={n}" for n in ns) + " |"]
         out.append("|---|" + "---|" * len(ns))
@@ -167,14 +232,15 @@ def to_markdown(summary: dict[str, Any]) -> str:
     if summary["noise_sweep"]:
         out += ["", "## Success rate against affordance F1 (utamp2-noisy)", ""]
         out += [
-            "| noise p | runs | F1 | precision | recall | success rate |",
-            "|---|---|---|---|---|---|",
+            "| noise p | runs | F1 | precision | recall | success rate | 95 % CI |",
+            "|---|---|---|---|---|---|---|",
         ]
         for s in summary["noise_sweep"]:
             out.append(
                 f"| {s['noise']:g} | {s['runs']} | {_f(s['affordance_f1_mean'], '.3f')} | "
                 f"{_f(s['affordance_precision_mean'], '.3f')} | "
-                f"{_f(s['affordance_recall_mean'], '.3f')} | {_f(s['success_rate'])} |"
+                f"{_f(s['affordance_recall_mean'], '.3f')} | {_f(s['success_rate'])} | "
+                f"{_ci(s.get('success_rate_ci95'))} |"
             )
     out += ["", "## Failures", ""]
     for m in summary["methods"]:

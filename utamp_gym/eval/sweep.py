@@ -1,44 +1,45 @@
 """The evaluation sweep: every scene × method × seed of a suite, in parallel, resumable.
 
-Runs go to spawn-started worker processes (`ProcessPoolExecutor`), at most one per
-worker in flight, so when a worker process dies (`BrokenProcessPool`) the suspects
-are known: each is re-run alone in a fresh pool, the one that kills it again is
-recorded as a failure row, and the sweep continues with a fresh pool. Every finished
-row is appended to ``results.csv`` at once (flush + fsync), and re-running with the
-same output directory skips the rows already there.
+The runs go to an executor (`utamp_gym.distributed`: worker processes on this machine,
+or Ray tasks on a cluster), which records each finished row once, even for a run that
+crashed or killed its worker. Every finished row is appended to ``results.csv`` at once
+(flush + fsync), and re-running with the same output directory, with either executor,
+skips the rows already there. `--seed-offset`, `--scenes` and `--shard` select a part
+of a sweep so that several machines can share one (`utamp eval merge` joins them).
 """
 
 from __future__ import annotations
 
-import multiprocessing
-import os
+import fnmatch
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
+from utamp_gym.distributed import Executor, LocalExecutor
 from utamp_gym.errors import UnknownNameError, UtampError
-from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile
+from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile, key_shard
 from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EvalTask, check_method, failure_row, run_task
 from utamp_gym.eval.vlm_methods import VLM_METHODS
 from utamp_gym.planning.methods import DEFAULT_NOISE
+from utamp_gym.scene.model import Scene
 from utamp_gym.suites import suite_scenes
 
 DEFAULT_METHODS = ("utamp1", "utamp2-gt", "utamp2-rules", "utamp2-noisy")
 NO_SLIDING = ("utamp1",)  # U-TAMP-1 has no slide-support action (skipped, as in the paper)
-WORKER_DIED = "crashed: the worker process died (killed or crashed hard) while running this"
 Runner = Callable[[EvalTask], ResultRow]
-Record = Callable[[ResultRow], None]
 
 
 @dataclass(frozen=True)
 class SweepConfig:
-    """What to evaluate. Several `noise` levels make a noise sweep of ``utamp2-noisy``."""
+    """What to evaluate. Several `noise` levels make a noise sweep of ``utamp2-noisy``.
+
+    Seeds are ``seed_offset .. seed_offset + seeds - 1``; `scenes` is a glob over scene
+    names (``pick-place/0*``), applied before `limit`; ``shard=(i, n)`` keeps the runs whose
+    key hashes to the i-th of n parts (1 <= i <= n), so n machines split one sweep.
+    """
 
     suite: str
     methods: tuple[str, ...] = DEFAULT_METHODS
@@ -51,6 +52,9 @@ class SweepConfig:
     closed_loop: bool = False
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE  # physics only (symbolic rows record None)
+    seed_offset: int = 0
+    scenes: str | None = None
+    shard: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         for m in self.methods:
@@ -59,6 +63,11 @@ class SweepConfig:
             raise UnknownNameError("grounding", self.grounding, GROUNDINGS)
         if self.seeds < 1 or (self.limit is not None and self.limit < 1):
             raise UtampError("--seeds and --limit must be at least 1")
+        if self.seed_offset < 0:
+            raise UtampError(f"--seed-offset must be at least 0, got {self.seed_offset}")
+        if self.shard is not None and not 1 <= self.shard[0] <= self.shard[1]:
+            i, n = self.shard
+            raise UtampError(f"--shard I/N needs 1 <= I <= N, got {i}/{n}")
         if not self.noise or any(not 0.0 <= p <= 1.0 for p in self.noise):
             raise UtampError(f"noise levels must be in [0, 1], got {list(self.noise)}")
         if not 0.0 <= self.disturbance <= 1.0:
@@ -89,9 +98,36 @@ class SweepReport:
     wall_time_s: float = 0.0
 
 
+def parse_shard(text: str) -> tuple[int, int]:
+    """``"I/N"`` -> ``(I, N)`` (1 <= I <= N): the I-th of N parts of a sweep."""
+    try:
+        i, n = (int(part) for part in text.split("/"))
+    except ValueError:
+        raise UtampError(f"--shard: expected I/N such as 2/3, got {text!r}") from None
+    if not 1 <= i <= n:
+        raise UtampError(f"--shard I/N needs 1 <= I <= N, got {text!r}")
+    return i, n
+
+
+def select_scenes(cfg: SweepConfig) -> tuple[Scene, ...]:
+    """The suite's scenes matching `cfg.scenes` (a glob), then the first `cfg.limit`."""
+    scenes = suite_scenes(cfg.suite)
+    if cfg.scenes is not None:
+        matched = tuple(s for s in scenes if fnmatch.fnmatchcase(s.name, cfg.scenes))
+        if not matched:
+            shown = ", ".join(s.name for s in scenes[:3])
+            raise UtampError(
+                f"--scenes {cfg.scenes!r} matches no scene of the {cfg.suite} suite "
+                f"({len(scenes)} scenes named like {shown}, ...; e.g. {cfg.suite}/0*)"
+            )
+        scenes = matched
+    return scenes[: cfg.limit]
+
+
 def plan_tasks(cfg: SweepConfig) -> tuple[list[EvalTask], list[str]]:
-    """The tasks of a sweep, most expensive first, and notes on what was skipped."""
-    scenes = suite_scenes(cfg.suite)[: cfg.limit]
+    """The tasks of a sweep (or of its shard), most expensive first, and notes on skips."""
+    scenes = select_scenes(cfg)
+    seeds = range(cfg.seed_offset, cfg.seed_offset + cfg.seeds)
     notes = []
     methods = list(cfg.methods)
     if cfg.suite == "sliding":
@@ -104,7 +140,7 @@ def plan_tasks(cfg: SweepConfig) -> tuple[list[EvalTask], list[str]]:
         for method in methods:
             levels: Sequence[float | None] = cfg.noise if method == "utamp2-noisy" else (None,)
             for noise in levels:
-                for seed in range(cfg.seeds):
+                for seed in seeds:
                     task = EvalTask(
                         scene.name,
                         method,
@@ -117,68 +153,13 @@ def plan_tasks(cfg: SweepConfig) -> tuple[list[EvalTask], list[str]]:
                         disturbance=cfg.disturbance,
                         pose_noise=cfg.pose_noise if cfg.grounding == "physics" else None,
                     )
+                    if cfg.shard and key_shard(task.key, cfg.shard[1]) != cfg.shard[0] - 1:
+                        continue
                     cost = scene.n_objects * (20 if method == "utamp1" else 1)
                     cost *= 50 if method in VLM_METHODS else 1
                     tasks.append((cost, task))
     tasks.sort(key=lambda ct: -ct[0])  # longest first: better load balance
     return [t for _, t in tasks], notes
-
-
-def _pool_pass(
-    tasks: deque[EvalTask], workers: int, runner: Runner, record: Record
-) -> list[EvalTask]:
-    """Run `tasks` in one pool until done or the pool breaks; returns the suspects."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-    inflight: dict[Future[ResultRow], EvalTask] = {}
-    interrupted = True
-    try:
-        while tasks or inflight:
-            while tasks and len(inflight) < workers:
-                task = tasks.popleft()
-                try:
-                    inflight[pool.submit(runner, task)] = task
-                except BrokenProcessPool:
-                    tasks.appendleft(task)
-                    interrupted = False
-                    return list(inflight.values())
-            done, _ = wait(inflight, return_when=FIRST_COMPLETED)
-            broken = []
-            for fut in done:
-                task = inflight.pop(fut)
-                try:
-                    record(fut.result())
-                except BrokenProcessPool:
-                    broken.append(task)
-                except Exception as exc:  # e.g. the result could not be pickled
-                    record(failure_row(task, f"crashed: {type(exc).__name__}: {exc}"))
-            if broken:
-                interrupted = False
-                return [*broken, *inflight.values()]
-        interrupted = False
-        return []
-    finally:  # on Ctrl-C do not wait for running tasks
-        pool.shutdown(wait=not interrupted, cancel_futures=True)
-
-
-def execute(tasks: Sequence[EvalTask], workers: int, runner: Runner, record: Record) -> None:
-    """Run every task (in-process when `workers` is 0) and record each row once."""
-    if workers <= 0:
-        for task in tasks:
-            try:
-                row = runner(task)
-            except Exception as exc:  # a custom runner; `run_task` itself never raises
-                row = failure_row(task, f"crashed: {type(exc).__name__}: {exc}")
-            record(row)
-        return
-    pending = deque(tasks)
-    while pending:
-        suspects = _pool_pass(pending, workers, runner, record)
-        if len(suspects) == 1:
-            record(failure_row(suspects[0], WORKER_DIED))
-            continue
-        for task in suspects:  # find the culprit: each suspect alone
-            if _pool_pass(deque([task]), 1, runner, record):
-                record(failure_row(task, WORKER_DIED))
 
 
 def run_sweep(
@@ -188,8 +169,13 @@ def run_sweep(
     workers: int | None = None,
     progress: bool = True,
     runner: Runner = run_task,
+    executor: Executor | None = None,
 ) -> SweepReport:
-    """Run the sweep into `out` (results.csv, resumable); summaries are written by the caller."""
+    """Run the sweep into `out` (results.csv, resumable); summaries are written by the caller.
+
+    `executor` defaults to worker processes on this machine (`workers` of them: None for
+    the CPU count, 0 to run in this process); `runner` must be picklable for both.
+    """
     if any(m in VLM_METHODS for m in cfg.methods):
         from utamp_gym.eval.vlm_client import VlmConfig
 
@@ -200,7 +186,7 @@ def run_sweep(
     tasks, notes = plan_tasks(cfg)
     results = ResultsFile(out / "results.csv")
     todo = [t for t in tasks if t.key not in results]
-    workers = (os.cpu_count() or 1) if workers is None else workers
+    executor = LocalExecutor(workers) if executor is None else executor
     from tqdm import tqdm
 
     with tqdm(
@@ -219,7 +205,7 @@ def run_sweep(
             bar.update(1)
             bar.set_postfix(success=f"{ok}/{bar.n}")
 
-        execute(todo, min(workers, len(todo)) if workers > 0 else 0, runner, record)
+        executor.run(runner, todo, record, failure_row)
     results.sort()
     rows = [results.rows[t.key] for t in tasks if t.key in results]
     return SweepReport(
@@ -247,6 +233,9 @@ def write_outputs(report: SweepReport) -> dict[str, Any]:
         "pose_noise_m": cfg.pose_noise if cfg.grounding == "physics" else None,
         "methods_requested": list(cfg.methods),
         "seeds": cfg.seeds,
+        "seed_offset": cfg.seed_offset,
+        "scene_pattern": cfg.scenes,
+        "shard": None if cfg.shard is None else f"{cfg.shard[0]}/{cfg.shard[1]}",
         "scenes": len({r.scene for r in report.rows}),
         "noise_levels": list(cfg.noise),
         "planner_timeout_s": cfg.timeout,

@@ -1,9 +1,9 @@
 """Fast Downward as a library: PDDL texts in, a plan out.
 
-The fast path (:func:`solve`) runs the translator *in this process* and only the
-C++ search binary as a subprocess, fed the SAS task on stdin. This skips two Python
-start-ups and the driver, which dominate the wall time on our small tasks (measured
-on a 3-block problem: about 16 ms instead of about 165 ms for the lama-first driver).
+The fast path (:func:`solve`, and `utamp_gym.planning.state_planner.StatePlanner`) grounds
+the task *in this process* and runs only the C++ search binary as a subprocess: it reads the
+SAS task on stdin and writes its plan to a pipe, so no file is written. This skips two
+Python start-ups and the driver, which dominate the wall time on our small tasks.
 :func:`solve_with_driver` runs the official driver script for comparison.
 
 Every subprocess runs in its own session; on time-out, error or interrupt its whole
@@ -20,19 +20,18 @@ import io
 import math
 import os
 import re
-import select
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from types import ModuleType
 
+from utamp_gym.deadline import Deadline, check_timeout
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
 
 __all__ = [
@@ -41,6 +40,7 @@ __all__ = [
     "TRANSLATORS",
     "PlanResult",
     "downward_paths",
+    "search_sas",
     "solve",
     "solve_with_driver",
 ]
@@ -59,10 +59,13 @@ _SEARCH_ARGS: dict[str, tuple[str, ...]] = {
 }
 SEARCH_CONFIGS: tuple[str, ...] = tuple(_SEARCH_ARGS)
 """Valid ``search`` names for :func:`solve` (lama-first: satisficing; astar-*: optimal)."""
-DEFAULT_SEARCH = "astar-lmcut"
-"""Optimal plans: on five-object scenes lama-first's plans are up to 3x longer (36 steps
-against 12), which triples the physics episode, while A* with LM-cut plans in about the
-same time (~0.06 s)."""
+DEFAULT_SEARCH = "astar-blind"
+"""Optimal plans (lama-first's are up to 3x longer on five objects: 36 steps against 12,
+which triples a physics episode), and of the optimal configurations the fastest on every
+suite task measured (`benchmarks/planning.py --sections search`): these tasks are small,
+so LM-cut's per-state cost outweighs the states it saves. Median CPU per search, five
+objects: UTAMP-2 23 ms blind vs 36 ms LM-cut; UTAMP-1 0.22 s vs 1.06 s; noisy affordances
+(some unsolvable) 23 ms vs 35 ms."""
 
 # Exit codes of the search binary / driver (driver/returncodes.py). Note the order:
 # 11 means *proved* unsolvable, 12 means an incomplete search gave up.
@@ -225,62 +228,94 @@ def _kill_group(proc: subprocess.Popen) -> None:
             time.sleep(0.002)
 
 
-def _wait(proc: subprocess.Popen, timeout: float) -> int:
-    """Wait for ``proc`` with a time-out, waking the moment it exits.
+_PLAN_PIPE_BYTES = 1 << 20  # a plan pipe this large never fills up (plans take kilobytes)
 
-    ``Popen.wait(timeout=...)`` polls with growing sleeps (up to 50 ms), which costs
-    more than a whole small search; a pidfd (Linux >= 5.3) is readable exactly on exit.
-    """
+
+def _drain(fd: int, chunks: list[bytes]) -> None:
+    """Read `fd` to its end."""
+    while chunk := os.read(fd, 65536):
+        chunks.append(chunk)
+
+
+def _roomy_pipe() -> tuple[int, int, bool]:
+    """(read end, write end, whether the pipe holds `_PLAN_PIPE_BYTES`). If it does, the
+    plan is read after the search ends; otherwise a thread must drain it meanwhile."""
+    r, w = os.pipe()
     try:
-        fd = os.pidfd_open(proc.pid)
-    except (AttributeError, OSError):  # not Linux, or an old kernel
-        return proc.wait(timeout=timeout)
-    try:
-        ready, _, _ = select.select([fd], [], [], timeout)
-    finally:
-        os.close(fd)
-    if not ready:
-        raise subprocess.TimeoutExpired(proc.args, timeout)
-    return proc.wait()
+        import fcntl
+
+        roomy = fcntl.fcntl(w, fcntl.F_SETPIPE_SZ, _PLAN_PIPE_BYTES) >= _PLAN_PIPE_BYTES
+    except (ImportError, AttributeError, OSError):  # not Linux, or pipe-max-size is smaller
+        roomy = False
+    return r, w, roomy
 
 
 def _run(
-    cmd: Sequence[str], cwd: str, stdin_path: str | None, timeout: float, what: str, limit: float
-) -> tuple[int, str, str]:
-    """Run ``cmd`` in its own session with output to files in ``cwd``; kill it on time-out."""
-    out_path, err_path = os.path.join(cwd, "stdout.log"), os.path.join(cwd, "stderr.log")
-    with (
-        open(out_path, "wb") as out,
-        open(err_path, "wb") as err,
-        open(stdin_path or os.devnull, "rb") as stdin,
-    ):
-        proc = subprocess.Popen(
-            list(cmd), cwd=cwd, stdin=stdin, stdout=out, stderr=err, start_new_session=True
-        )
-        try:
-            try:
-                code = _wait(proc, max(timeout, 0.0))
-            except subprocess.TimeoutExpired:
-                _kill_group(proc)
-                raise PlanningTimeout(
-                    f"{what} exceeded the time limit of {limit:g} s; its process group "
-                    f"(pid {proc.pid}) was killed"
-                ) from None
-        finally:
-            _kill_group(proc)  # no-op once reaped; covers KeyboardInterrupt and errors
-    with open(out_path, encoding="utf-8", errors="replace") as f:
-        stdout = f.read()
-    with open(err_path, encoding="utf-8", errors="replace") as f:
-        stderr = f.read()
-    return code, stdout, stderr
-
-
-def _read_plan(workdir: str) -> tuple[tuple[str, ...], int | None]:
-    """Read ``sas_plan``: the action lines and the cost from its trailing comment."""
+    cmd: Sequence[str],
+    *,
+    stdin: bytes | None,
+    timeout: float,
+    what: str,
+    limit: float,
+    cwd: str | None = None,
+    plan_pipe: bool = False,
+) -> tuple[int, str, str, str | None]:
+    """Run ``cmd`` in its own session, feeding `stdin`; kill its process group on time-out,
+    error or interrupt. Returns (exit code, stdout, stderr, plan): with `plan_pipe`, the
+    search binary writes its plan to a pipe (``--internal-plan-file /dev/fd/N``), so no
+    file is written at all; otherwise plan is None."""
+    cmd, plan_r, plan_w, roomy = list(cmd), -1, -1, False
+    if plan_pipe:
+        plan_r, plan_w, roomy = _roomy_pipe()
+        cmd += ["--internal-plan-file", f"/dev/fd/{plan_w}"]
+    chunks: list[bytes] = []
+    reader = None
     try:
-        text = Path(workdir, "sas_plan").read_text()
-    except FileNotFoundError:
-        raise PlanningError("Fast Downward reported a plan but wrote no sas_plan file") from None
+        with subprocess.Popen(
+            cmd,
+            cwd=cwd,
+            stdin=subprocess.DEVNULL if stdin is None else subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            pass_fds=(plan_w,) if plan_pipe else (),
+            start_new_session=True,
+        ) as proc:
+            try:
+                if plan_pipe:
+                    os.close(plan_w)
+                    plan_w = -1
+                    if not roomy:
+                        reader = threading.Thread(target=_drain, args=(plan_r, chunks), daemon=True)
+                        reader.start()
+                try:
+                    out, err = proc.communicate(stdin, timeout=max(timeout, 0.0))
+                except subprocess.TimeoutExpired:
+                    _kill_group(proc)
+                    raise PlanningTimeout(
+                        f"{what} exceeded the time limit of {limit:g} s; its process group "
+                        f"(pid {proc.pid}) was killed",
+                        phase="search",
+                    ) from None
+            finally:
+                _kill_group(proc)  # no-op once reaped; covers KeyboardInterrupt and errors
+    finally:
+        if plan_w >= 0:
+            os.close(plan_w)
+        if reader is not None:
+            reader.join()  # the child is gone, so its end of the pipe is closed
+        elif plan_r >= 0 and plan_w < 0:
+            _drain(plan_r, chunks)  # the child is gone: all it wrote is in the pipe
+        if plan_r >= 0:
+            os.close(plan_r)
+    plan = b"".join(chunks).decode("utf-8", "replace") if plan_pipe else None
+    decode = lambda b: b.decode("utf-8", "replace")  # noqa: E731
+    return proc.returncode, decode(out), decode(err), plan
+
+
+def _parse_plan(text: str | None) -> tuple[tuple[str, ...], int | None]:
+    """The action lines of a plan file and the cost from its trailing comment."""
+    if not text:
+        raise PlanningError("Fast Downward reported a plan but wrote none")
     plan = tuple(
         ln.strip().lower() for ln in text.splitlines() if ln.strip() and not ln.startswith(";")
     )
@@ -292,7 +327,7 @@ def _interpret(
     code: int,
     stdout: str,
     stderr: str,
-    workdir: str,
+    plan_text: str | None,
     what: str,
     times: tuple[float, float | None, float | None],
 ) -> PlanResult:
@@ -300,7 +335,7 @@ def _interpret(
     expanded = _EXPANDED.findall(stdout)
     n_expanded = int(expanded[-1]) if expanded else None
     if code in _SOLVED_CODES:
-        plan, cost = _read_plan(workdir)
+        plan, cost = _parse_plan(plan_text)
         return PlanResult(True, plan, cost, *times, None, n_expanded)
     if code in _UNSOLVED_REASONS:
         by_translator = _TRANSLATOR_UNSOLVABLE.search(stdout)
@@ -310,11 +345,6 @@ def _interpret(
         return PlanResult(False, (), None, *times, reason, n_expanded)
     error = PddlError if code == _TRANSLATE_INPUT_ERROR else PlanningError
     raise error(f"{what} failed with exit code {code}:{_tail(stderr or stdout)}")
-
-
-def _check_timeout(timeout: float) -> None:
-    if not timeout > 0:
-        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
 
 
 TRANSLATORS = ("utamp", "fd")
@@ -334,10 +364,12 @@ def solve(
     """Plan for PDDL ``domain``/``problem`` texts: in-process translation, then the binary.
 
     ``search`` is one of :data:`SEARCH_CONFIGS`, ``translator`` one of :data:`TRANSLATORS`.
-    ``exclude``: ground actions (lower-case PDDL text) the plan must not use (our translator).
-    ``timeout`` (s) bounds translation plus search; exceeding it raises
-    :class:`PlanningTimeout`. An unsolvable task returns ``solved=False`` with a ``reason``;
-    bad PDDL raises :class:`PddlError`.
+    ``exclude``: ground actions (PDDL text) the plan must not use (our translator only).
+    ``timeout`` (s) bounds parsing, grounding, SAS writing and search; exceeding it raises
+    :class:`PlanningTimeout` naming the phase. (Fast Downward's own translator cannot be
+    interrupted: with ``translator="fd"`` the limit is checked when it returns.) An
+    unsolvable task returns ``solved=False`` with a ``reason``; bad PDDL raises
+    :class:`PddlError`.
     """
     if search not in _SEARCH_ARGS:
         raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
@@ -345,73 +377,55 @@ def solve(
         raise UnknownNameError("translator", translator, TRANSLATORS)
     if exclude and translator != "utamp":
         raise ValueError("exclude needs translator='utamp'")
-    _check_timeout(timeout)
+    deadline = Deadline.after(timeout)
+    if translator == "utamp":
+        from utamp_gym.planning.state_planner import StatePlanner, problem_atoms
+        from utamp_gym.symbolic.pddl import cached_domain, parse_problem
+
+        dom = cached_domain(domain, "domain")
+        prob = parse_problem(problem, source="problem")
+        deadline.check("grounding")
+        planner = StatePlanner(dom, search=search, timeout=timeout)
+        return planner.plan(
+            *problem_atoms(dom, prob), exclude=exclude, deadline=deadline, source=prob.source
+        )
     start = time.perf_counter()
-    task = None
-    if translator == "fd":
-        sas, reason = _translate(domain, problem, timeout)
-    else:
-        sas, reason, task = _ground_to_sas(domain, problem, exclude)
+    sas, reason = _translate(domain, problem, timeout)
     translate_time = time.perf_counter() - start
     if reason is not None:
         return PlanResult(False, (), None, translate_time, translate_time, 0.0, reason, None)
     assert sas is not None
-    result = _search_sas(
-        sas, search=search, timeout=timeout, start=start, translate_time=translate_time
-    )
-    if task is not None and result.solved and len(result.plan) > 1:
-        from utamp_gym.planning.postprocess import eliminate
-
-        plan = eliminate(result.plan, *task)
-        result = replace(
-            result, plan=plan, cost=len(plan), planning_time_s=time.perf_counter() - start
-        )
-    return result
-
-
-def _ground_to_sas(
-    domain: str, problem: str, exclude: frozenset[str] = frozenset()
-) -> tuple[str | None, str | None, tuple | None]:
-    """Our translator: parse, ground by relaxed reachability, write SAS.
-
-    Also returns (ops by name, init, goal) so that the plan can be post-processed."""
-    from utamp_gym.planning.sas import to_sas
-    from utamp_gym.symbolic.pddl import parse_domain, parse_problem
-    from utamp_gym.symbolic.reach import reachable_ops
-
-    dom = parse_domain(domain, source="domain")
-    prob = parse_problem(problem, source="problem")
-    ops, _, _ = reachable_ops(dom, prob)
-    if exclude:
-        ops = [op for op in ops if f"({op.name})" not in exclude]
-    sas = to_sas(ops, prob.init, prob.goal)
-    if sas is None:
-        return None, "goal unreachable (proved unsolvable by relaxed reachability)", None
-    return sas, None, ({op.name: op for op in ops}, frozenset(prob.init), prob.goal)
-
-
-def _search_sas(
-    sas: str, *, search: str, timeout: float, start: float, translate_time: float
-) -> PlanResult:
-    """Run the search binary on a SAS task within what is left of ``timeout``."""
-    binary, _ = downward_paths()
-    remaining = timeout - translate_time
-    if remaining <= 0:
+    if deadline.expired():
         raise PlanningTimeout(
             f"translation alone took {translate_time:.3f} s, using up the time limit of "
-            f"{timeout:g} s; the search was not started"
+            f"{timeout:g} s; the search was not started",
+            phase="grounding",
         )
-    with tempfile.TemporaryDirectory(prefix="utamp_fd_") as workdir:
-        sas_path = os.path.join(workdir, "output.sas")
-        with open(sas_path, "w") as f:
-            f.write(sas)
-        what = f"Fast Downward search '{search}'"
-        cmd = [str(binary), *_SEARCH_ARGS[search], "--internal-plan-file", "sas_plan"]
-        search_start = time.perf_counter()
-        code, stdout, stderr = _run(cmd, workdir, sas_path, remaining, what, timeout)
-        search_time = time.perf_counter() - search_start
-        times = (time.perf_counter() - start, translate_time, search_time)
-        return _interpret(code, stdout, stderr, workdir, what, times)
+    return search_sas(sas, search=search, deadline=deadline, start=start)
+
+
+def search_sas(sas: str, *, search: str, deadline: Deadline, start: float) -> PlanResult:
+    """Run the search binary on a SAS task until `deadline`; times count from `start`.
+
+    Raises `PlanningTimeout` (phase ``search``) if the deadline passes first; the binary's
+    process group is killed.
+    """
+    binary, _ = downward_paths()
+    translate_time = time.perf_counter() - start
+    deadline.check("search")
+    what = f"Fast Downward search '{search}'"
+    search_start = time.perf_counter()
+    code, stdout, stderr, plan = _run(
+        [str(binary), *_SEARCH_ARGS[search]],
+        stdin=sas.encode(),
+        timeout=deadline.remaining(),
+        what=what,
+        limit=deadline.limit,
+        plan_pipe=True,
+    )
+    search_time = time.perf_counter() - search_start
+    times = (time.perf_counter() - start, translate_time, search_time)
+    return _interpret(code, stdout, stderr, plan, what, times)
 
 
 def solve_with_driver(
@@ -427,7 +441,7 @@ def solve_with_driver(
     It runs the same search arguments as ``solve(search=...)``, or ``--alias ALIAS`` if
     given. Same result and time-out semantics as :func:`solve`; reads PDDL files.
     """
-    _check_timeout(timeout)
+    check_timeout(timeout)
     if alias is None and search not in _SEARCH_ARGS:
         raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
     _, driver = downward_paths()
@@ -435,6 +449,8 @@ def solve_with_driver(
     for path in files:
         if not path.is_file():
             raise PddlError(f"PDDL file not found: {path}")
+    import tempfile  # only the driver needs a working directory
+
     with tempfile.TemporaryDirectory(prefix="utamp_fd_driver_") as workdir:
         if alias is not None:
             what = f"Fast Downward driver (--alias {alias})"
@@ -443,7 +459,9 @@ def solve_with_driver(
             what = f"Fast Downward driver ({search})"
             cmd = [sys.executable, str(driver), *map(str, files), *_SEARCH_ARGS[search]]
         start = time.perf_counter()
-        code, stdout, stderr = _run(cmd, workdir, None, timeout, what, timeout)
+        code, stdout, stderr, _ = _run(
+            cmd, stdin=None, timeout=timeout, what=what, limit=timeout, cwd=workdir
+        )
         wall = time.perf_counter() - start
         translate = _DRIVER_TRANSLATE_TIME.search(stdout)
         search = _SEARCH_TOTAL_TIME.findall(stdout)
@@ -452,4 +470,6 @@ def solve_with_driver(
             float(translate.group(1)) if translate else None,
             float(search[-1]) if search else None,
         )
-        return _interpret(code, stdout, stderr, workdir, what, times)
+        plan_file = Path(workdir, "sas_plan")
+        plan = plan_file.read_text() if plan_file.is_file() else None
+        return _interpret(code, stdout, stderr, plan, what, times)

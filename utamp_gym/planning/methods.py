@@ -12,18 +12,20 @@ from __future__ import annotations
 import time
 import zlib
 from dataclasses import dataclass, field
-from typing import Any
-
-import numpy as np
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 from utamp_gym.affordances.facts import Fact, Scores, load_ground_truth, restrict, score
-from utamp_gym.affordances.noisy import detect_affordances
-from utamp_gym.affordances.rules import derive_affordances
+from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
-from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, solve
+from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
+from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.problem import build_problem, domain_text
+
+if TYPE_CHECKING:  # numpy, the rule parser and the noisy detector load only when used
+    import numpy as np
 
 METHODS = ("utamp2-gt", "utamp2-rules", "utamp2-noisy", "utamp1")
 AFFORDANCE_SOURCES = ("gt", "rules", "noisy")
@@ -57,19 +59,26 @@ def scene_types(scene: Scene) -> list[ObjectType]:
     return [scene.catalogue[n] for n in names]
 
 
+@lru_cache(maxsize=1)
+def _packaged_ground_truth() -> tuple[frozenset[Fact], frozenset[str]]:
+    """The packaged ground truth and the types it covers (read once: a planner reads it on
+    every call)."""
+    truth = load_ground_truth()
+    known = {n for f in truth for n in (f[1:2] if f[0] != "isP2PSupportive" else (f[2], f[4]))}
+    return truth, frozenset(known)
+
+
 def ground_truth_for(scene: Scene) -> frozenset[Fact]:
     """Ground truth for the scene's types; types without hand-written truth use the rules."""
     types = scene_types(scene)
     names = [t.name for t in types]
-    gt = restrict(load_ground_truth(), names)
-    known = {
-        n
-        for f in load_ground_truth()
-        for n in (f[1:2] if f[0] != "isP2PSupportive" else (f[2], f[4]))
-    }
+    truth, known = _packaged_ground_truth()
+    gt = restrict(truth, names)
     unknown = {t.name for t in types} - known
     if not unknown:
         return gt
+    from utamp_gym.affordances.rules import derive_affordances
+
     derived = derive_affordances(types)
     extra = {f for f in derived if any(x in unknown for x in f[1:])}
     return gt | frozenset(extra)
@@ -81,21 +90,31 @@ def detection_rng(seed: int, scene_name: str) -> np.random.Generator:
     Keyed on the scene name as well as the seed, so one seed of a sweep corrupts each
     scene differently (a per-seed stream would repeat one corruption in every scene).
     """
+    import numpy as np
+
     return np.random.default_rng([seed, zlib.crc32(scene_name.encode())])
 
 
 def affordances_for(
-    scene: Scene, source: str, rng: np.random.Generator, noise: float = DEFAULT_NOISE
+    scene: Scene, source: str, rng: np.random.Generator | None, noise: float = DEFAULT_NOISE
 ) -> tuple[frozenset[Fact], Scores]:
-    """Affordance facts of `source` for the scene, with their scores against the ground truth."""
+    """Affordance facts of `source` for the scene, with their scores against the ground truth.
+
+    `rng` drives the noisy detection (required for ``noisy``, unused otherwise)."""
     if source not in AFFORDANCE_SOURCES:
         raise UnknownNameError("affordance source", source, AFFORDANCE_SOURCES)
     gt = ground_truth_for(scene)
     if source == "gt":
         return gt, score(gt, gt)
     if source == "rules":
+        from utamp_gym.affordances.rules import derive_affordances
+
         facts = derive_affordances(scene_types(scene))
         return facts, score(facts, gt)
+    if rng is None:
+        raise ValueError("noisy affordance detection needs a random generator (rng)")
+    from utamp_gym.affordances.noisy import detect_affordances
+
     det = detect_affordances(scene_types(scene), noise, rng, gt)
     return det.facts, det.scores
 
@@ -117,6 +136,7 @@ class PlanOutcome:
     problem: str = field(repr=False, default="")
     facts: frozenset[Fact] = field(repr=False, default=frozenset())
     timed_out: bool = False
+    phase: str | None = None  # the phase that ran out of time (`utamp_gym.deadline.PHASES`)
 
     @property
     def plan_length(self) -> int:
@@ -134,6 +154,7 @@ class PlanOutcome:
             "planning_time_s": round(self.planning_time_s, 6),
             "reason": self.reason,
             "timed_out": self.timed_out,
+            "phase": self.phase,
             "affordance_precision": round(self.affordance_scores.precision, 4),
             "affordance_recall": round(self.affordance_scores.recall, 4),
             "affordance_f1": round(self.affordance_scores.f1, 4),
@@ -146,28 +167,54 @@ def plan_scene(
     *,
     seed: int = 0,
     timeout: float = 30.0,
-    search: str = DEFAULT_SEARCH,
+    search: str | None = None,
     noise: float = DEFAULT_NOISE,
     rng: np.random.Generator | None = None,
+    planner: StatePlanner | None = None,
+    deadline: Deadline | None = None,
 ) -> PlanOutcome:
     """Abstract the scene, plan with Fast Downward, and report.
 
-    The planning time covers affordance detection, problem generation, translation and
-    search. Without `rng`, noisy detection draws from `detection_rng(seed, scene.name)`.
-    An unsolvable task or a time-out comes back with ``solved=False`` and a reason.
+    The planning time covers affordance detection, problem generation, grounding, SAS
+    writing and search; `timeout` bounds all of it, or `deadline` if given (e.g. one that
+    started before the scene was loaded). Without `rng`, noisy detection draws from
+    `detection_rng(seed, scene.name)`. `planner` (a `StatePlanner` of the method's domain)
+    re-uses its cached groundings; `search` defaults to its configuration, else
+    `DEFAULT_SEARCH`. An unsolvable task or a time-out comes back with ``solved=False`` and
+    a reason (a time-out also with the phase that ran out of time).
     """
     spec = method_spec(method)
-    rng = rng if rng is not None else detection_rng(seed, scene.name)
     start = time.perf_counter()
+    if deadline is None:
+        deadline = Deadline.after(timeout, start)
+    if planner is None:
+        planner = StatePlanner(spec.domain, search=search or DEFAULT_SEARCH, timeout=timeout)
+    elif planner.domain.name != spec.domain or (search is not None and search != planner.search):
+        raise ValueError(
+            f"planner plans {planner.domain.name} with {planner.search}; method {method} "
+            f"needs {spec.domain}" + (f" with {search}" if search else "")
+        )
+    if rng is None and spec.affordances == "noisy":
+        rng = detection_rng(seed, scene.name)
+    timed_out, phase = False, None
+    late = deadline.expired()  # already out of time when called: the caller's phase
     facts, scores = affordances_for(scene, spec.affordances, rng, noise)
     domain = domain_text(spec.domain)
-    problem = build_problem(scene, facts, spec.domain).text
-    timed_out = False
+    problem = build_problem(scene, facts, spec.domain)
+    fluent = planner.domain.fluent_predicates()
+    static, state = [], []
+    for text in problem.init:
+        atom = text.lower()
+        (state if atom[1 : atom.find(" ")] in fluent else static).append(atom)
     try:
-        result = solve(domain, problem, search=search, timeout=timeout)
+        deadline.check("scene" if late else "problem")
+        result = planner.plan(
+            problem.objects, static, state, [g.lower() for g in problem.goal], deadline=deadline
+        )
         solved, plan, reason = result.solved, result.plan, result.reason
     except PlanningTimeout as exc:
         solved, plan, reason, timed_out = False, (), f"planner timed out: {exc}", True
+        phase = exc.phase
     elapsed = time.perf_counter() - start
     return PlanOutcome(
         scene=scene.name,
@@ -180,7 +227,8 @@ def plan_scene(
         seed=seed,
         affordance_scores=scores,
         domain=domain,
-        problem=problem,
+        problem=problem.text,
         facts=facts,
         timed_out=timed_out,
+        phase=phase,
     )

@@ -9,14 +9,21 @@ predicate and all arguments but the last (``oc on slot1 ?x``: what stands on slo
 ``oc in hand ?x``: what the hand holds) form one variable when exactly one of them is
 true initially and every action that makes one true makes another false (which it
 requires). The remaining atoms get a binary variable each. Fewer, richer variables give
-lama's landmark heuristic more to work with: plans get shorter.
+the search's heuristics more to work with.
+
+`build_sas` returns a `SasTask`: everything but the initial state, written once, so that a
+planner can re-plan from another state by writing only that state (`SasTask.text`), after
+`SasTask.covers` confirmed the task is valid for it.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
 
+from utamp_gym.deadline import Deadline
 from utamp_gym.symbolic.pddl import Atom, Literal
 from utamp_gym.symbolic.reach import GroundOp
 
@@ -28,86 +35,164 @@ def _name(a: Atom) -> str:
 def _exactly_one_groups(
     ops: Sequence[GroundOp], init: set[Atom], changing: set[Atom], goal: Sequence[Literal]
 ) -> list[list[Atom]]:
-    candidates: dict[tuple[str, tuple[str, ...]], list[Atom]] = defaultdict(list)
+    """Candidate groups (atoms sharing all arguments but the last) that are exactly-one
+    invariants; each is checked only against the operators that touch it."""
+    candidates: dict[tuple[str, tuple[str, ...]], set[Atom]] = defaultdict(set)
     for a in changing:
         if a.args:
-            candidates[(a.predicate, a.args[:-1])].append(a)
+            candidates[(a.predicate, a.args[:-1])].add(a)
     negated = {a for op in ops for a in op.pre_neg} | {lit.atom for lit in goal if not lit.positive}
+    ok = {
+        key
+        for key, members in candidates.items()
+        if len(members) >= 2 and not members & negated and len(members & init) == 1
+    }
+    touching: dict[tuple[str, tuple[str, ...]], list[GroundOp]] = defaultdict(list)
+    for op in ops:
+        keys = {(a.predicate, a.args[:-1]) for a in (*op.add, *op.delete) if a.args}
+        for key in keys & ok:
+            touching[key].append(op)
     groups = []
-    for atoms in candidates.values():
-        members = set(atoms)
-        if len(atoms) < 2 or members & negated or len(members & init) != 1:
-            continue
-        ok = True
-        for op in ops:
+    for key in ok:
+        members = candidates[key]
+        for op in touching[key]:
             made = [a for a in op.add if a in members and a not in op.pre]
             lost = [a for a in op.delete if a in members and a not in op.add]
             if len(made) != len(lost) or len(made) > 1 or any(a not in op.pre for a in lost):
-                ok = False
                 break
-        if ok:
-            groups.append(sorted(atoms, key=lambda a: a.args))
+        else:
+            groups.append(sorted(members, key=lambda a: a.args))
     return sorted(groups, key=lambda g: (g[0].predicate, g[0].args))
 
 
-def to_sas(ops: Sequence[GroundOp], init: Iterable[Atom], goal: Sequence[Literal]) -> str | None:
-    """SAS text of the task, or None when a goal literal can never hold (unsolvable)."""
+@dataclass(frozen=True, eq=False)
+class SasTask:
+    """A SAS task without its initial state (see the module docstring).
+
+    `variables[v]` lists the atoms of variable v: for the first `n_groups`, the values of a
+    multi-valued variable (exactly one is true); after them, one atom per binary variable
+    (value 0: true, 1: false). `changing` holds the atoms some operator changes, `fixed` the
+    atoms that were true initially and that no operator changes. If `solvable` is False a
+    goal literal can never hold (an atom outside `changing` has the wrong value) and the
+    task has no text.
+    """
+
+    ops: tuple[GroundOp, ...]
+    op_index: Mapping[str, int]
+    variables: tuple[tuple[Atom, ...], ...]
+    n_groups: int
+    group_of: Mapping[Atom, tuple[int, int]]  # atom of a multi-valued variable -> (var, value)
+    changing: frozenset[Atom]
+    fixed: frozenset[Atom]
+    head: str
+    goal: str
+    operators: tuple[str, ...]
+    solvable: bool = True
+
+    def covers(self, state: Collection[Atom], fixed: Collection[Atom] | None = None) -> str | None:
+        """Why this task cannot be used from `state` (None if it can).
+
+        Valid when `state` agrees with the task on the atoms no operator changes (`fixed`:
+        the part of `self.fixed` that can differ between states, default all of it) and
+        each multi-valued variable has exactly one true value. Atoms outside `changing`
+        and `fixed` (e.g. not reachable from the state the task was grounded for) fail it.
+        """
+        fixed = self.fixed if fixed is None else fixed
+        outside = [a for a in state if a not in self.changing]
+        if len(outside) != len(fixed) or any(a not in fixed for a in outside):
+            extra = next((a for a in outside if a not in fixed), None)
+            what = f"{extra} is not" if extra else "an atom that no action changes is no longer"
+            return f"{what} in the grounded task"
+        counts = [0] * self.n_groups
+        for a in state:
+            hit = self.group_of.get(a)
+            if hit is not None:
+                counts[hit[0]] += 1
+        bad = next((v for v, c in enumerate(counts) if c != 1), None)
+        if bad is not None:
+            return f"{counts[bad]} atoms of the exactly-one group of {self.variables[bad][0]} hold"
+        return None
+
+    def initial_values(self, state: Collection[Atom]) -> list[int]:
+        """The value of each variable in `state` (which `covers` accepted)."""
+        out = [0] * len(self.variables)
+        for a in state:
+            hit = self.group_of.get(a)
+            if hit is not None:
+                out[hit[0]] = hit[1]
+        for v in range(self.n_groups, len(self.variables)):
+            out[v] = 0 if self.variables[v][0] in state else 1
+        return out
+
+    def text(self, state: Collection[Atom], exclude: Collection[int] = ()) -> str:
+        """SAS text from `state`, without the operators whose indexes are in `exclude`."""
+        ops = self.operators
+        if exclude:
+            ops = tuple(o for i, o in enumerate(ops) if i not in exclude)
+        values = "\n".join(map(str, self.initial_values(state)))
+        return "".join((self.head, values, "\n", self.goal, str(len(ops)), "\n", *ops, "0\n"))
+
+
+def build_sas(
+    ops: Sequence[GroundOp],
+    init: Iterable[Atom],
+    goal: Sequence[Literal],
+    deadline: Deadline | None = None,
+) -> SasTask:
+    """The SAS task of `ops` from `init` (`solvable` False if a goal literal can never hold).
+
+    Raises `PlanningTimeout` (phase ``sas``) once `deadline` passes.
+    """
     init_set = set(init)
     changing: set[Atom] = set()
     for op in ops:
         changing.update(op.add)
         changing.update(op.delete)
-
-    def const_ok(atom: Atom, want: bool) -> bool:
-        return (atom in init_set) == want
+    fixed = frozenset(init_set - changing)
 
     kept = [
         op
         for op in ops
-        if all(a in changing or const_ok(a, True) for a in op.pre)
-        and all(a in changing or const_ok(a, False) for a in op.pre_neg)
+        if all(a in changing or a in init_set for a in op.pre)
+        and not any(a not in changing and a in init_set for a in op.pre_neg)
     ]
     goal_lits: list[tuple[Atom, bool]] = []
     for lit in goal:
         if lit.atom in changing:
             goal_lits.append((lit.atom, lit.positive))
-        elif not const_ok(lit.atom, lit.positive):
-            return None
+        elif (lit.atom in init_set) != lit.positive:
+            empty = MappingProxyType({})
+            return SasTask((), empty, (), 0, empty, frozenset(changing), fixed, "", "", (), False)
+    if deadline is not None:
+        deadline.check("sas")
 
-    # variables: (var, value when true, value when false or None for multi-valued)
     groups = _exactly_one_groups(kept, init_set, changing, goal)
+    if deadline is not None:
+        deadline.check("sas")
+    in_group = {a for g in groups for a in g}
+    binary = sorted(changing - in_group, key=lambda a: (a.predicate, a.args))
+    variables = (*map(tuple, groups), *((a,) for a in binary))
     where: dict[Atom, tuple[int, int, int | None]] = {}
-    out = ["begin_version", "3", "end_version", "begin_metric", "0", "end_metric"]
-    var_lines: list[str] = []
-    init_values: list[int] = []
-    for g in groups:
-        v = len(init_values)
-        for k, a in enumerate(g):
-            where[a] = (v, k, None)
-        var_lines += ["begin_variable", f"var{v}", "-1", str(len(g))]
-        var_lines += [f"Atom {_name(a)}" for a in g] + ["end_variable"]
-        init_values.append(next(k for k, a in enumerate(g) if a in init_set))
-    for a in sorted(changing - set(where), key=lambda a: (a.predicate, a.args)):
-        v = len(init_values)
-        where[a] = (v, 0, 1)
-        var_lines += [
-            "begin_variable",
-            f"var{v}",
-            "-1",
-            "2",
-            f"Atom {_name(a)}",
-            f"NegatedAtom {_name(a)}",
-            "end_variable",
-        ]
-        init_values.append(0 if a in init_set else 1)
-    out += [str(len(init_values)), *var_lines, "0", "begin_state"]
-    out += [str(x) for x in init_values]
+    lines = ["begin_version", "3", "end_version", "begin_metric", "0", "end_metric"]
+    lines.append(str(len(variables)))
+    for v, atoms in enumerate(variables):
+        if v < len(groups):
+            for k, a in enumerate(atoms):
+                where[a] = (v, k, None)
+            lines += ["begin_variable", f"var{v}", "-1", str(len(atoms))]
+            lines += [f"Atom {_name(a)}" for a in atoms] + ["end_variable"]
+        else:
+            (a,) = atoms
+            where[a] = (v, 0, 1)
+            lines += ["begin_variable", f"var{v}", "-1", "2", f"Atom {_name(a)}"]
+            lines += [f"NegatedAtom {_name(a)}", "end_variable"]
+    lines += ["0", "begin_state", ""]
     goal_vals = {
         where[a][0]: (where[a][1] if positive else where[a][2]) for a, positive in goal_lits
     }
-    out += ["end_state", "begin_goal", str(len(goal_vals))]
-    out += [f"{v} {val}" for v, val in sorted(goal_vals.items())]
-    out += ["end_goal", str(len(kept))]
+    goal_text = ["end_state", "begin_goal", str(len(goal_vals))]
+    goal_text += [f"{v} {val}" for v, val in sorted(goal_vals.items())] + ["end_goal", ""]
+    blocks = []
     for op in kept:
         pre: dict[int, int] = {}
         for a in op.pre:
@@ -115,7 +200,7 @@ def to_sas(ops: Sequence[GroundOp], init: Iterable[Atom], goal: Sequence[Literal
                 pre[where[a][0]] = where[a][1]
         for a in op.pre_neg:
             if a in where:
-                pre[where[a][0]] = where[a][2]  # binary variables only (groups exclude these)
+                pre[where[a][0]] = where[a][2]  # type: ignore[assignment]  # binary only
         post: dict[int, int] = {}
         for a in op.delete:
             v, _, false_value = where[a]
@@ -126,10 +211,31 @@ def to_sas(ops: Sequence[GroundOp], init: Iterable[Atom], goal: Sequence[Literal
             post[v] = true_value
         effects = [(v, pre.get(v, -1), val) for v, val in sorted(post.items()) if pre.get(v) != val]
         prevail = [(v, val) for v, val in sorted(pre.items()) if v not in post or post[v] == val]
-        out += ["begin_operator", op.name, str(len(prevail))]
-        out += [f"{v} {val}" for v, val in prevail]
-        out.append(str(len(effects)))
-        out += [f"0 {v} {p} {q}" for v, p, q in effects]
-        out += ["1", "end_operator"]
-    out.append("0")
-    return "\n".join(out) + "\n"
+        block = ["begin_operator", op.name, str(len(prevail))]
+        block += [f"{v} {val}" for v, val in prevail]
+        block.append(str(len(effects)))
+        block += [f"0 {v} {p} {q}" for v, p, q in effects]
+        block += ["1", "end_operator", ""]
+        blocks.append("\n".join(block))
+    return SasTask(
+        ops=tuple(kept),
+        op_index=MappingProxyType({op.name: i for i, op in enumerate(kept)}),
+        variables=variables,
+        n_groups=len(groups),
+        group_of=MappingProxyType({a: (v, k) for a, (v, k, f) in where.items() if f is None}),
+        changing=frozenset(changing),
+        fixed=fixed,
+        head="\n".join(lines),
+        goal="\n".join(goal_text),
+        operators=tuple(blocks),
+    )
+
+
+def to_sas(ops: Sequence[GroundOp], init: Iterable[Atom], goal: Sequence[Literal]) -> str | None:
+    """SAS text of the task, or None when a goal literal can never hold (unsolvable)."""
+    init = set(init)
+    task = build_sas(ops, init, goal)
+    return task.text(init) if task.solvable else None
+
+
+__all__ = ["SasTask", "build_sas", "to_sas"]

@@ -6,6 +6,12 @@ two-finger gripper with one force-limited actuator, high-friction finger pads,
 SRDF contact exclusions) and attaches it to the caller's world spec. Grasps hold
 by contact and friction only.
 
+The arm's gravity compensation is the controller's torque, as on the real robot: it
+goes through the actuators (`actuatorgravcomp`), and each joint's total torque (servo
+plus compensation) is clamped to the URDF's effort limit (87 N·m joints 1-4, 12 N·m
+joints 5-7). What the arm can hold is therefore bounded by its joint torques; the load
+on the hand is estimated from them in `utamp_gym.sim.payload`.
+
 The actuators' velocity gains are integrated implicitly only by the `implicitfast`
 and `implicit` integrators; use one of them (dt = 0.002 s is the tested step).
 """
@@ -210,15 +216,25 @@ def add_panda(
 def _tune_joints_and_bodies(spec: mujoco.MjSpec) -> None:
     for body in spec.bodies:
         if body.name != "world":
-            body.gravcomp = 1.0  # the Franka controller compensates gravity, as here
+            body.gravcomp = 1.0  # the Franka controller compensates the robot's own weight
     for name in ARM_JOINTS:
         joint = spec.joint(name)
         joint.armature = ARM_ARMATURE
         joint.damping = _damping(joint.damping, ARM_DAMPING)
+        # The compensation is the controller's torque, not buoyancy: it is added to the
+        # actuator force and the sum is clamped to the joint's torque limit.
+        joint.actgravcomp = True
+        joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        joint.actfrcrange = [-_effort(joint), _effort(joint)]
     for name in FINGER_JOINTS:
         joint = spec.joint(name)
         joint.armature = FINGER_ARMATURE
         joint.damping = _damping(joint.damping, 1.0)
+
+
+def _effort(joint: mujoco.MjsJoint) -> float:
+    """The joint's torque limit (N·m): the URDF's effort, 87 (joints 1-4) or 12 (5-7)."""
+    return float(joint.actfrcrange[1]) or (87.0 if int(joint.name[-1]) <= 4 else 12.0)
 
 
 def _damping(current: object, value: float) -> object:
@@ -260,7 +276,7 @@ def _name_geoms(spec: mujoco.MjSpec) -> tuple[str, str]:
 def _add_arm_actuators(spec: mujoco.MjSpec) -> None:
     for name, kp, kv in zip(ARM_JOINTS, ARM_KP, ARM_KV, strict=True):
         joint = spec.joint(name)
-        effort = float(joint.actfrcrange[1]) or (87.0 if int(name[-1]) <= 4 else 12.0)
+        effort = _effort(joint)
         act = spec.add_actuator(
             name=name.replace("panda_joint", "actuator"),
             target=name,

@@ -110,8 +110,7 @@ class ObjectType:
         attrs = self.parts[part]
         if attrs.center is not None:
             return attrs.center
-        c = self.bbox.center
-        return float(c[0]), float(c[1])
+        return self.bbox.center_xy
 
     def with_parts(self, parts: Mapping[str, PartAttrs]) -> ObjectType:
         return replace(self, parts=dict(parts))

@@ -1,14 +1,20 @@
 """Parts of a bounding box and axis-aligned boxes: the geometric vocabulary of U-TAMP.
 
 An object's *parts* are the six sides of its bounding box plus its inside (`in`).
-Frames: +x = front, +y = left, +z = on (up).
+Frames: +x = front, +y = left, +z = on (up). Plain Python arithmetic (numpy loads only for
+the array-valued `Box.size` and `Box.center`), so that the symbolic layer and `utamp plan`
+do not import numpy.
 """
 
 from __future__ import annotations
 
+import operator
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 PARTS: tuple[str, ...] = ("on", "under", "left", "right", "front", "back", "in")
 SIDES: tuple[str, ...] = PARTS[:6]
@@ -36,7 +42,12 @@ FINGER_PAIRS: tuple[tuple[str, str], ...] = (("left", "right"), ("front", "back"
 
 def axis_of(side: str) -> int:
     """Index (0, 1, 2) of the axis a side's normal lies on."""
-    return int(np.flatnonzero(NORMALS[side])[0])
+    return next(i for i, v in enumerate(NORMALS[side]) if v)
+
+
+def _vec3(values: Iterable[float]) -> tuple[float, float, float]:
+    x, y, z = values
+    return x, y, z
 
 
 def is_opposite(a: str, b: str) -> bool:
@@ -58,36 +69,38 @@ class Box:
 
     @property
     def size(self) -> np.ndarray:
+        import numpy as np
+
         return np.asarray(self.max) - np.asarray(self.min)
 
     @property
     def center(self) -> np.ndarray:
+        import numpy as np
+
         return (np.asarray(self.max) + np.asarray(self.min)) / 2.0
 
-    def union(self, other: Box) -> Box:
-        return Box(
-            tuple(np.minimum(self.min, other.min).tolist()),
-            tuple(np.maximum(self.max, other.max).tolist()),
-        )
+    @property
+    def center_xy(self) -> tuple[float, float]:
+        """x and y of the centre (plain floats)."""
+        return (self.max[0] + self.min[0]) / 2.0, (self.max[1] + self.min[1]) / 2.0
 
-    def translated(self, offset: np.ndarray) -> Box:
-        o = np.asarray(offset, dtype=float)
-        return Box(
-            tuple((np.asarray(self.min) + o).tolist()), tuple((np.asarray(self.max) + o).tolist())
-        )
+    def union(self, other: Box) -> Box:
+        lo, hi = map(min, self.min, other.min), map(max, self.max, other.max)
+        return Box(_vec3(lo), _vec3(hi))
+
+    def translated(self, offset: Sequence[float]) -> Box:
+        o = [float(x) for x in offset]
+        return Box(_vec3(map(operator.add, self.min, o)), _vec3(map(operator.add, self.max, o)))
 
     def flipped(self) -> Box:
         """The box after a half turn about the x axis through the origin (y -> -y, z -> -z)."""
-        lo, hi = np.asarray(self.min), np.asarray(self.max)
-        new_lo = np.array([lo[0], -hi[1], -hi[2]])
-        new_hi = np.array([hi[0], -lo[1], -lo[2]])
-        return Box(tuple(new_lo.tolist()), tuple(new_hi.tolist()))
+        lo, hi = self.min, self.max
+        return Box((float(lo[0]), -hi[1], -hi[2]), (float(hi[0]), -lo[1], -lo[2]))
 
     def face_size(self, side: str) -> tuple[float, float]:
         """Extents of the face `side` (the two axes orthogonal to its normal)."""
-        keep = [i for i in range(3) if i != axis_of(side)]
-        s = self.size
-        return float(s[keep[0]]), float(s[keep[1]])
+        i, j = (k for k in range(3) if k != axis_of(side))
+        return float(self.max[i] - self.min[i]), float(self.max[j] - self.min[j])
 
     def contains_xy(self, other: Box, tol: float = 1e-9) -> bool:
         """True if `other`'s footprint lies inside this box's footprint."""

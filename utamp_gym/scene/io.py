@@ -12,7 +12,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import tomli_w
 
 from utamp_gym.errors import SceneError
@@ -163,8 +162,9 @@ def _slots(value: Any, top: Box, names: _Names, file: str) -> list[Slot]:
                 raise SceneError(
                     "give either size or min and max, not both", file=file, field=f"{p}.size"
                 )
-            half = np.asarray(f.vec(s["size"], 2, file, f"{p}.size", positive=True)) / 2
-            lo, hi = tuple(np.asarray(pos) - half), tuple(np.asarray(pos) + half)
+            size = f.vec(s["size"], 2, file, f"{p}.size", positive=True)
+            lo = tuple(c - d / 2 for c, d in zip(pos, size, strict=True))
+            hi = tuple(c + d / 2 for c, d in zip(pos, size, strict=True))
         else:
             lo, hi = f.bounds(s, 2, file, p)
         slot = Slot(name, pos, Box((*lo, 0.0), (*hi, 0.0)))  # type: ignore[arg-type]

@@ -9,11 +9,9 @@ half turn about its x axis.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-
-import numpy as np
 
 from utamp_gym.errors import SceneError, UnknownNameError
 from utamp_gym.scene.catalogue import Catalogue, ObjectType
@@ -54,8 +52,8 @@ class Space:
 
     @property
     def box(self) -> Box:
-        c, h = np.asarray(self.position), np.asarray(self.size) / 2
-        return Box((*(c - h).tolist(), 0.0), (*(c + h).tolist(), 0.0))
+        (cx, cy), (hx, hy) = self.position, (self.size[0] / 2, self.size[1] / 2)
+        return Box((cx - hx, cy - hy, 0.0), (cx + hx, cy + hy, 0.0))
 
 
 @dataclass(frozen=True)
@@ -166,13 +164,15 @@ class Scene:
         box = self.type_of(name).bbox
         return box.flipped() if self.object(name).orientation == "inverted" else box
 
-    def support_surface(self, name: str, origin: np.ndarray) -> tuple[np.ndarray, float]:
+    def support_surface(
+        self, name: str, origin: Sequence[float]
+    ) -> tuple[tuple[float, float], float]:
         """World xy centre and height of the up-facing surface of `name` with origin `origin`."""
         t, inverted = self.type_of(name), self.object(name).orientation == "inverted"
         part = UP_PART[self.object(name).orientation]
         cx, cy = t.surface_center(part)
         h = t.surface_height(part)
-        centre = origin[:2] + (np.array([cx, -cy]) if inverted else np.array([cx, cy]))
+        centre = (origin[0] + cx, origin[1] + (-cy if inverted else cy))
         return centre, float(origin[2] - h if inverted else origin[2] + h)
 
     @cached_property
@@ -186,13 +186,14 @@ class Scene:
         out: dict[str, Pose] = {}
         for slot_name, chain in self.stacks.items():
             bottom = self.object(chain[0])
-            centre = np.asarray(
+            cx, cy = (
                 bottom.position if bottom.position is not None else self.slot(slot_name).position
             )
-            z = 0.0
+            centre, z = (float(cx), float(cy)), 0.0
             for name in chain:
                 box = self.oriented_bbox(name)
-                origin = np.array([*(centre - box.center[:2]), z - box.min[2]])
+                bx, by = box.center_xy
+                origin = (centre[0] - bx, centre[1] - by, z - box.min[2])
                 out[name] = Pose(
                     (float(origin[0]), float(origin[1]), float(origin[2])),
                     ORIENTATION_QUAT[self.object(name).orientation],
@@ -206,7 +207,7 @@ class Scene:
         box = t.bbox if member is None else t.members[member].box
         if self.object(name).orientation == "inverted":
             box = box.flipped()
-        return box.translated(np.asarray(self.poses[name].position))
+        return box.translated(self.poses[name].position)
 
     def in_workspace(self, box: Box) -> bool:
         return self.workspace.contains(box, tol=1e-6)

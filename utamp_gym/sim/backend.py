@@ -8,11 +8,19 @@ noise, pose-estimation noise, IK restarts, OMPL seeds) is drawn from the generat
 to `reset`, and faults from the one given to `disturb`, so the same seeds give the same
 rollout. Rendering is headless (set ``MUJOCO_GL=egl``) and cheap:
 shadows, reflections and skybox are off.
+
+**Frames while an action runs.** A macro action simulates several seconds; to see them,
+`watch(callback, period)` has `callback()` called every `period` s of simulated time while
+the physics steps (inside `execute` and `disturb`): a video recorder renders then (`render`),
+a live viewer syncs with `model` / `data`. `frame_sink` is the shortcut for videos: it
+receives an RGB frame (`frame_size` = width, height) every `frame_period` s. With no watcher
+and no sink the physics steps in bulk (no per-step Python call).
 """
 
 from __future__ import annotations
 
 import functools
+import itertools
 from collections.abc import Callable
 
 import mujoco
@@ -20,7 +28,7 @@ import numpy as np
 
 from utamp_gym.backend import DEFAULT_POSE_NOISE, Fault, MacroResult
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
-from utamp_gym.perception.state import FLOOR, Grasp, PhysicalState
+from utamp_gym.perception.state import Grasp, PhysicalState
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.model import Scene
@@ -29,12 +37,14 @@ from utamp_gym.sim.decode import parse_action
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
 from utamp_gym.sim.measure import SimState, believed_qpos, settle_objects
+from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
 from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top
 
 CAMERA = "overview"
-FLOOR_BELOW = -0.05  # m: an unsupported object this far below the table top fell off it
+#: receives one RGB frame (height, width, 3) of the overview camera
 FrameSink = Callable[[np.ndarray], None]
+__all__ = ["CAMERA", "FLOOR_BELOW", "FrameSink", "MujocoBackend"]
 
 
 class MujocoBackend:
@@ -43,9 +53,9 @@ class MujocoBackend:
     `pos_noise` (m) and `yaw_noise_deg` randomise where the scene's objects start (uniform,
     per episode). `pose_noise` (m) is the robot's pose-estimation error: grasp, place and
     slide targets are decoded from estimates (`utamp_gym.sim.estimate`), never from the
-    simulator's truth. `frame_sink`, if set before `reset`, receives an RGB frame
+    simulator's truth. `frame_sink` (settable at any time; None: off) receives an RGB frame
     (`frame_size` = width, height) every `frame_period` s of simulated time while actions
-    run (for videos).
+    run (for videos); `watch` registers any per-period callback (module docstring).
     """
 
     def __init__(
@@ -61,11 +71,17 @@ class MujocoBackend:
     ):
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
         self.pose_noise = pose_noise
-        self.frame_sink, self.frame_period, self.frame_size = frame_sink, frame_period, frame_size
+        if frame_period <= 0:
+            raise ValueError(f"frame_period must be > 0 s, got {frame_period!r}")
+        self.frame_period, self.frame_size = frame_period, frame_size
         self._kin: PandaKinematics | None = None
         self._state: SimState | None = None
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._steps = 0
+        self._watchers: dict[int, tuple[Callable[[], None], float]] = {}
+        self._tokens = itertools.count()
+        self._frame_sink: FrameSink | None = None
+        self.frame_sink = frame_sink
 
     # ------------------------------------------------------------ protocol
     def reset(self, scene: Scene, rng: np.random.Generator) -> None:
@@ -81,8 +97,7 @@ class MujocoBackend:
         data = mujoco.MjData(world.model)
         ids = handles.bind(world.model)
         set_home(world.model, data, ids)
-        on_step = self._on_step if self.frame_sink is not None else None
-        arm = ArmDriver(world.model, data, ids, self._kin, rng, on_step=on_step)
+        arm = ArmDriver(world.model, data, ids, self._kin, rng)
         self._state = SimState(
             world,
             data,
@@ -92,6 +107,7 @@ class MujocoBackend:
         )
         arm.belief = functools.partial(believed_qpos, self._state)
         self._steps = 0
+        self._hook()
         settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
         arm.timings = Timings()
 
@@ -105,23 +121,17 @@ class MujocoBackend:
         return run_skill(st, act)
 
     def physical_state(self) -> PhysicalState:
-        """Poses, what carries each object (contact forces), containment and the grasp."""
+        """Poses, what carries each object (contact forces), containment and the grasp
+        (`utamp_gym.sim.physical.measure_state`; the grasp is the one the pick skill made,
+        while the fingers still hold something)."""
         st = self._require()
-        stack = st.stack()
-        supports: dict[str, str | None] = {}
-        for name, support in stack.items():
-            below_table = st.data.xpos[st.world.body_ids[name]][2] < FLOOR_BELOW
-            supports[name] = FLOOR if support is None and below_table else support
-        on_top = {
-            n: s not in (None, FLOOR) and rests_on_top(st.world, st.data, n, s)
-            for n, s in supports.items()
-        }
         held = None
         if st.held is not None and st.arm.holds_something():
             sym = st.held.symbols
             held = Grasp(sym.obj, sym.member, sym.palm, sym.finger1, sym.finger2)
-        poses = {n: tuple(float(v) for v in p) for n, p in self.object_poses().items()}
-        return PhysicalState(poses, supports, on_top, held, st.arm.gap())
+        return measure_state(
+            st.world, st.data, held=held, gripper_gap=st.arm.gap(), scratch=st.scratch
+        )
 
     def disturb(self, rng: np.random.Generator) -> Fault | None:
         """Inject one fault (`utamp_gym.sim.faults`), chosen with `rng`."""
@@ -130,10 +140,7 @@ class MujocoBackend:
     def object_poses(self) -> dict[str, np.ndarray]:
         """Object name -> [x, y, z, qw, qx, qy, qz] of its frame in the world."""
         st = self._require()
-        return {
-            n: np.concatenate([st.data.xpos[b], st.data.xquat[b]])
-            for n, b in st.world.body_ids.items()
-        }
+        return object_poses(st.world, st.data)
 
     def joint_positions(self) -> np.ndarray:
         """7 arm joint angles (rad) and 2 finger positions (m)."""
@@ -180,6 +187,44 @@ class MujocoBackend:
         self._close_renderers()
         self._state = None
 
+    # ------------------------------------------------------------ frames
+    @property
+    def frame_sink(self) -> FrameSink | None:
+        """Receives an RGB frame every `frame_period` s of simulated time (None: off)."""
+        return self._frame_sink
+
+    @frame_sink.setter
+    def frame_sink(self, sink: FrameSink | None) -> None:
+        self._frame_sink = sink
+        self._hook()
+
+    def watch(self, callback: Callable[[], None], period: float) -> Callable[[], None]:
+        """Call `callback()` every `period` s of simulated time while the physics steps.
+
+        Returns a function that stops the calls. Watchers survive `reset`.
+        """
+        if period <= 0:
+            raise ValueError(f"period must be > 0 s, got {period!r}")
+        token = next(self._tokens)
+        self._watchers[token] = (callback, period)
+        self._hook()
+
+        def unwatch() -> None:
+            self._watchers.pop(token, None)
+            self._hook()
+
+        return unwatch
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The live model (a new one after every `reset`), e.g. for a viewer."""
+        return self._require().world.model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """The live simulation data (read it; stepping it is the backend's job)."""
+        return self._require().data
+
     # ------------------------------------------------------------ helpers
     @property
     def state(self) -> SimState:
@@ -191,16 +236,30 @@ class MujocoBackend:
             raise SimulationError("MujocoBackend: call reset(scene, rng) first")
         return self._state
 
+    def _hook(self) -> None:
+        """Step one by one (calling `_on_step`) only while someone watches."""
+        if self._state is not None:
+            watched = self._frame_sink is not None or bool(self._watchers)
+            self._state.arm.on_step = self._on_step if watched else None
+
     def _on_step(self) -> None:
         self._steps += 1
         st = self._state
-        if st is None or self.frame_sink is None:
+        if st is None:
             return
-        period = max(1, round(self.frame_period / st.arm.dt))
-        if self._steps % period == 0:
-            self.frame_sink(self.render(*self.frame_size))
+        dt = st.arm.dt
+        if self._frame_sink is not None and self._steps % _every(self.frame_period, dt) == 0:
+            self._frame_sink(self.render(*self.frame_size))
+        for callback, period in list(self._watchers.values()):
+            if self._steps % _every(period, dt) == 0:
+                callback()
 
     def _close_renderers(self) -> None:
         for r in self._renderers.values():
             r.close()
         self._renderers.clear()
+
+
+def _every(period: float, dt: float) -> int:
+    """Physics steps per `period` s (at least one)."""
+    return max(1, round(period / dt))

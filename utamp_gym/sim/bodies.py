@@ -1,17 +1,26 @@
 """Object bodies from the catalogue: collision primitives, mass, friction, colour, start pose.
 
-The same catalogue data the symbolic layer reads decides the physical shape:
+The same catalogue data the symbolic layer reads decides the physical shape, generically
+from the declared attributes (no per-object or per-type-name code). Every declared
+dimension is honoured: each member's box, the heights, sizes and centres of the `on`
+and `under` parts. The body member takes the shape of the parts it forms (the `on`
+part only if it reaches the top of the bounding box, likewise `under`):
 
-* a cylinder body with a ``round`` top gets a rounded (half-ellipsoid) head, so nothing
-  rests on it; a box body with a ``round`` top gets the same kind of cap;
-* an ``open`` top makes the body hollow: a ring of thin wall boxes on a flat floor;
-* a ``concave`` top gives a flat bottom (the ``under`` part's size) and a low flared rim;
-* a ``flat`` top smaller than the body's face becomes a plate with a raised rim around it;
-  the plate's top is the part's declared surface ``height`` (scene poses put objects
-  there), the rim rises to the body's full height;
+* a ``round`` top becomes a rounded (half-ellipsoid) head, so nothing rests on it;
+* an ``open`` or ``concave`` top makes the body hollow: a floor and walls around a
+  cavity. The walls are as thick as the rim the part's `size` leaves inside the body's
+  face (default `WALL`, `RIM_WALL`); a round body's walls flare from the `under` part's
+  size at the floor to the full radius at the top (a bowl, a pan), a box's are upright;
+* a ``flat`` top smaller than the body's face, or declared below the body's top
+  (`height`), becomes a plate at that height with a raised rim around the usable
+  surface (its `size` and `center`): a tray's floor inside its rims, a dinner plate's
+  well; the rim rises to the body's full height;
+* an `under` part smaller than the body's face (not hollow) becomes a foot `FOOT` high;
 * a handle big enough to leave a finger-sized opening becomes a loop of three bars, a
-  handle separated from the body by a gap is held by two posts, other members are solid;
-* edge members inside the body box are realised by the body itself.
+  handle separated from the body by a gap is held by two posts, other members are solid
+  (boxes or upright cylinders, per `geom`);
+* edge members inside the body box are realised by the body itself (a tray's rim, a
+  bowl's wall): the catalogue places them where the body has material.
 
 Primitives are in the object frame (origin at the bottom centre of the body). Each body
 weighs its catalogue mass (uniform density over its primitives).
@@ -21,29 +30,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from types import MappingProxyType
 
 import mujoco
 import numpy as np
-from numpy.typing import ArrayLike
 
-from utamp_gym.scene.catalogue import Member, ObjectType
+from utamp_gym.errors import SimulationError
+from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.model import Pose, Scene
+from utamp_gym.sim.prims import Prim, box, box_walls, cap, ring, slab
 
-WALL = 0.004  # m, wall thickness of hollow (open-top) bodies
+WALL = 0.004  # m, default wall thickness of hollow (open-top) bodies
 FLOOR = 0.008  # m, floor thickness of hollow bodies
-RIM_WALL = 0.003  # m, flared rim thickness of concave bodies
+RIM_WALL = 0.003  # m, default flared rim thickness of concave bodies
 CONCAVE_FLOOR = 0.005  # m, floor thickness of concave bodies
-RING_SEGMENTS = 8  # wall boxes of a hollow cylinder
-RIM_SEGMENTS = 12  # rim boxes of a concave cylinder
 PLATE_RIM = 0.003  # m, rim above the plate when the part declares no surface height
+FOOT = 0.008  # m, height of a foot (an `under` part smaller than the body's face)
 CAP_FRACTION = 0.4  # a round head is at most this fraction of the body height
 BAR = 0.008  # m, bar thickness of a loop handle
 LOOP_OPENING = (0.015, 0.03)  # m, smallest (outward, vertical) opening of a loop handle
 POST = 0.01  # m, width of the posts holding a detached handle bar
 EMBED = 0.003  # m, an attached handle reaches this far into the body (no seam)
+TOL = 1e-6  # m, declared dimensions closer than this are equal
+FLAT = PartAttrs("flat")
 
 BODY_PREFIX = "obj/"  # MuJoCo name prefix of object bodies and their geoms
 #: sliding friction per material (unknown materials: "default"); torsional and rolling below
@@ -65,152 +75,107 @@ COLOURS: Mapping[str, tuple[str, ...]] = MappingProxyType(
 ACCENT = "bfbfc7ff"  # metal parts such as a shaker's head
 
 
-@dataclass(frozen=True)
-class Prim:
-    """One collision primitive in the object frame; `size` uses MuJoCo's half-sizes."""
-
-    name: str
-    member: str
-    shape: str  # "box" | "cylinder" | "ellipsoid"
-    size: tuple[float, float, float]
-    pos: tuple[float, float, float]
-    quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
-    accent: bool = False  # drawn in the accent colour (e.g. a shaker's metal head)
-
-    @property
-    def volume(self) -> float:
-        a, b, c = self.size
-        if self.shape == "box":
-            return 8.0 * a * b * c
-        if self.shape == "cylinder":
-            return 2.0 * math.pi * a * a * b
-        return 4.0 / 3.0 * math.pi * a * b * c
-
-    @property
-    def geom_type(self) -> mujoco.mjtGeom:
-        return {
-            "box": mujoco.mjtGeom.mjGEOM_BOX,
-            "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
-            "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
-        }[self.shape]
+def _fail(t: ObjectType, what: str) -> SimulationError:
+    return SimulationError(f"object type '{t.name}': {what}")
 
 
-def _prim(
-    name: str,
-    member: str,
-    shape: str,
-    size: ArrayLike,
-    pos: ArrayLike,
-    quat: ArrayLike = (1.0, 0.0, 0.0, 0.0),
-    accent: bool = False,
-) -> Prim:
-    def f(v: ArrayLike) -> tuple[float, ...]:
-        return tuple(float(x) for x in np.asarray(v, dtype=float))
-
-    return Prim(name, member, shape, f(size), f(pos), f(quat), accent)  # type: ignore[arg-type]
-
-
-def _box(name: str, member: str, lo: np.ndarray, hi: np.ndarray) -> Prim:
-    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    return _prim(name, member, "box", (hi - lo) / 2, (hi + lo) / 2)
-
-
-def _cylinder(name: str, member: str, xy: np.ndarray, r: float, z0: float, z1: float) -> Prim:
-    return _prim(name, member, "cylinder", (r, (z1 - z0) / 2, 0.0), (*xy, (z0 + z1) / 2))
+def _body_parts(t: ObjectType) -> tuple[PartAttrs, PartAttrs]:
+    """The attributes of the body's own top and bottom faces (flat where another member
+    forms that face of the bounding box, e.g. a bottle's neck above its body)."""
+    body, bbox = t.body.box, t.bbox
+    top = t.parts["on"] if body.max[2] >= bbox.max[2] - TOL else FLAT
+    bottom = t.parts["under"] if body.min[2] <= bbox.min[2] + TOL else FLAT
+    if bottom.height is not None and abs(bottom.height - body.min[2]) > TOL:
+        raise _fail(t, "an `under` surface above the body's bottom is not supported")
+    face = body.size[:2]
+    for part, attrs in (("on", top), ("under", bottom)):
+        if attrs.size is not None and np.any(np.asarray(attrs.size) > face + TOL):
+            raise _fail(
+                t,
+                f"the `{part}` surface {list(attrs.size)} is larger than the body's face "
+                f"{face.round(4).tolist()}",
+            )
+    return top, bottom
 
 
-def _cap(name: str, xy: np.ndarray, half: tuple[float, float, float], z: float) -> Prim:
-    """Upper half of an ellipsoid centred at height z: a rounded head."""
-    return _prim(f"{name}/head", name, "ellipsoid", half, (*xy, z), accent=True)
+def _inner(
+    t: ObjectType, part: PartAttrs, half: np.ndarray, default_wall: float, round_: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """(centre offset, half-size) of the region inside the body's walls or rim: the part's
+    declared usable surface, else the face less `default_wall` on each side."""
+    usable = np.asarray(part.size, dtype=float) / 2 if part.size is not None else half
+    offset = np.asarray(part.center, dtype=float) if part.center is not None else np.zeros(2)
+    if np.all(usable >= half - TOL):  # the full face: walls of the default thickness
+        usable, offset = half - default_wall, np.zeros(2)
+    if round_ and (np.linalg.norm(offset) > TOL or abs(usable[0] - usable[1]) > TOL):
+        raise _fail(t, "a round body's usable top must be a centred circle")
+    return offset, usable
 
 
-def _ring(
-    member: str,
-    xy: np.ndarray,
-    bottom: tuple[float, float],
-    top: tuple[float, float],
-    thick: float,
-    n: int,
-) -> list[Prim]:
-    """Wall boxes whose outer polygon runs from (radius, z) `bottom` to `top` (wider: flared)."""
-    (r0, z0), (r1, z1) = bottom, top
-    dr, dz = (r1 - r0) * math.cos(math.pi / n), z1 - z0
-    length = math.hypot(dr, dz)
-    shift = thick * dr / length  # a flared wall's inner face rises this far above its outer
-    z0, z1 = (z0, z1 - shift) if shift > 0 else (z0 - shift, z1)
-    size = (thick / 2, math.sin(math.pi / n) * max(r0, r1), (z1 - z0) / 2 * length / dz)
+def _hollow(t: ObjectType, top: PartAttrs, bottom: PartAttrs) -> list[Prim]:
+    """A floor and walls around a cavity (open or concave top)."""
+    name, round_ = t.body.name, t.body.geom == "cylinder"
+    lo, hi = np.asarray(t.body.box.min), np.asarray(t.body.box.max)
+    xy, half = (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2
+    concave = top.shape == "concave"
+    default_wall = RIM_WALL if concave else WALL
+    z = lo[2] + min(CONCAVE_FLOOR if concave else FLOOR, (hi[2] - lo[2]) / 4)
+    offset, usable = _inner(t, top, half, default_wall, round_)
+    floor = half if bottom.size is None else np.minimum(np.asarray(bottom.size) / 2, half)
+    if round_:
+        r, rb = float(min(half)), float(min(floor))
+        wall = r - float(usable[0])
+        return [
+            slab(f"{name}/floor", name, True, xy, (rb, rb), lo[2], z),
+            *ring(name, xy, (rb, z), (r, hi[2]), wall),
+        ]
     out = []
-    for k in range(n):
-        phi = 2 * math.pi * k / n
-        e = np.array([math.cos(phi), math.sin(phi), 0.0])
-        t = np.array([-math.sin(phi), math.cos(phi), 0.0])
-        u = (dr * e + np.array([0.0, 0.0, dz])) / length
-        normal = np.cross(t, u)  # outward, perpendicular to the wall
-        r_mid = (r0 + r1) / 2 * math.cos(math.pi / n)
-        centre = np.array([*xy, (z0 + z1) / 2]) + r_mid * e - thick / 2 * normal
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, np.column_stack([normal, t, u]).ravel())
-        out.append(_prim(f"{member}/wall{k:02d}", member, "box", size, centre, quat))
-    return out
+    if np.any(floor < half - TOL):  # a foot under the floor
+        out.append(slab(f"{name}/foot", name, False, xy, floor, lo[2], lo[2] + FOOT))
+        lo = np.array([*lo[:2], lo[2] + FOOT])
+        z = max(z, lo[2] + FLOOR / 2)
+    out.append(box(f"{name}/floor", name, lo, (*hi[:2], z)))
+    inner = (xy + offset - usable, xy + offset + usable)
+    return [*out, *box_walls(name, (lo[:2], hi[:2]), inner, z, hi[2], name="wall")]
 
 
 def _body_prims(t: ObjectType) -> list[Prim]:
-    m, name = t.body, t.body.name
-    lo, hi = np.asarray(m.box.min), np.asarray(m.box.max)
-    xy, size = (lo[:2] + hi[:2]) / 2, hi - lo
-    top, bottom = t.parts["on"], t.parts["under"]
-    if m.geom == "cylinder":
-        r = float(min(size[0], size[1])) / 2
-        if top.shape == "round":
-            cap = min(r, CAP_FRACTION * size[2])
-            return [
-                _cylinder(f"{name}/base", name, xy, r, lo[2], hi[2] - cap),
-                _cap(name, xy, (r, r, cap), hi[2] - cap),
-            ]
-        if top.shape == "open":
-            z = lo[2] + min(FLOOR, size[2] / 4)
-            r_in = r * math.cos(math.pi / RING_SEGMENTS)
-            return [
-                _cylinder(f"{name}/floor", name, xy, r_in, lo[2], z),
-                *_ring(name, xy, (r, z), (r, hi[2]), WALL, RING_SEGMENTS),
-            ]
-        if top.shape == "concave":
-            rb = min(r, bottom.size[0] / 2 if bottom.size is not None else 0.8 * r)
-            z = lo[2] + min(CONCAVE_FLOOR, size[2] / 4)
-            return [
-                _cylinder(f"{name}/floor", name, xy, rb, lo[2], z),
-                *_ring(
-                    name, xy, (rb + RIM_WALL, (lo[2] + z) / 2), (r, hi[2]), RIM_WALL, RIM_SEGMENTS
-                ),
-            ]
-        return [_cylinder(name, name, xy, r, lo[2], hi[2])]
+    """The body member: hollow, capped, a plate in a rim or solid (see the module doc)."""
+    name, round_ = t.body.name, t.body.geom == "cylinder"
+    lo, hi = np.asarray(t.body.box.min), np.asarray(t.body.box.max)
+    xy, half, height = (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2, hi[2] - lo[2]
+    top, bottom = _body_parts(t)
+    if top.shape in ("open", "concave"):
+        return _hollow(t, top, bottom)
+    out, z0 = [], lo[2]
+    if bottom.size is not None and np.any(np.asarray(bottom.size) / 2 < half - TOL):
+        foot = min(FOOT, height / 4)
+        out.append(
+            slab(f"{name}/foot", name, round_, xy, np.asarray(bottom.size) / 2, z0, z0 + foot)
+        )
+        z0 += foot
     if top.shape == "round":
-        cap = min(size[0], size[1], 2 * CAP_FRACTION * size[2]) / 2
+        head = np.full(2, min(half)) if round_ else half
+        c = min(*head, CAP_FRACTION * height)
         return [
-            _box(f"{name}/base", name, lo, np.array([*hi[:2], hi[2] - cap])),
-            _cap(name, xy, (size[0] / 2, size[1] / 2, cap), hi[2] - cap),
+            *out,
+            slab(f"{name}/base", name, round_, xy, half, z0, hi[2] - c),
+            cap(name, name, xy, (head[0], head[1], c), hi[2] - c),
         ]
-    usable = np.asarray(top.size if top.size is not None else size[:2], dtype=float)
-    hollow = top.shape in ("open", "concave")
-    if not hollow and np.all(usable >= size[:2] - 1e-6):
-        return [_box(name, name, lo, hi)]
-    if hollow:  # an open box: walls (at least WALL thick) on a floor
-        usable = np.minimum(usable, size[:2] - 2 * WALL)
-        z = lo[2] + min(FLOOR, size[2] / 4)
-    else:  # a plate at the usable surface's height, a raised rim around it
-        z = top.height if top.height is not None else hi[2] - min(PLATE_RIM, size[2] / 2)
-    ilo, ihi = xy - usable / 2, xy + usable / 2
-    walls = (  # front/back span the full width, left/right fit between them
-        ((ihi[0], lo[1]), (hi[0], hi[1])),
-        ((lo[0], lo[1]), (ilo[0], hi[1])),
-        ((ilo[0], ihi[1]), (ihi[0], hi[1])),
-        ((ilo[0], lo[1]), (ihi[0], ilo[1])),
-    )
-    out = [_box(f"{name}/plate", name, lo, np.array([hi[0], hi[1], z]))]
-    for i, (a, b) in enumerate(walls):
-        if b[0] - a[0] > 1e-6 and b[1] - a[1] > 1e-6:
-            out.append(_box(f"{name}/rim{i}", name, np.array([*a, z]), np.array([*b, hi[2]])))
-    return out
+    full = top.size is None or np.all(np.asarray(top.size) / 2 >= half - TOL)
+    at_top = top.height is None or top.height >= hi[2] - TOL
+    if top.shape != "flat" or (at_top and (full or top.height is not None)):
+        return [*out, slab(name, name, round_, xy, half, z0, hi[2])]
+    offset, usable = _inner(t, top, half, WALL, round_)
+    z = top.height if top.height is not None else hi[2] - min(PLATE_RIM, height / 2)
+    if not z0 < z <= hi[2] + TOL:
+        raise _fail(t, f"the `on` surface height {z} lies outside the body ({z0}..{hi[2]})")
+    out.append(slab(f"{name}/plate", name, round_, xy, half, z0, z))
+    if round_:
+        r = float(min(half))
+        return [*out, *ring(name, xy, (r, z), (r, hi[2]), r - float(usable[0]))]
+    inner = (xy + offset - usable, xy + offset + usable)
+    return [*out, *box_walls(name, (lo[:2], hi[:2]), inner, z, hi[2])]
 
 
 def _touch_axis(a: Box, b: Box, tol: float = 1e-6) -> tuple[int, int] | None:
@@ -232,21 +197,22 @@ def _member_prims(t: ObjectType, m: Member) -> list[Prim]:
     if m.kind == "edge" and body.contains(m.box, tol=1e-6):
         return []  # realised by the body's own walls
     if m.geom == "cylinder":
-        r = float(min(hi[:2] - lo[:2])) / 2
-        return [_cylinder(m.name, m.name, (lo[:2] + hi[:2]) / 2, r, lo[2], hi[2])]
+        return [
+            slab(m.name, m.name, True, (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2, lo[2], hi[2])
+        ]
     side = _touch_axis(m.box, body)
     if side is None or side[0] == 2:
-        return [_box(m.name, m.name, lo, hi)]
+        return [box(m.name, m.name, lo, hi)]
     ax, sign = side
     gap = (lo[ax] - body.max[ax]) if sign > 0 else (body.min[ax] - hi[ax])
     if gap > 1e-6:  # detached bar: two posts at its ends bridge the gap to the body
         across = 1 - ax
-        out = [_box(m.name, m.name, lo, hi)]
+        out = [box(m.name, m.name, lo, hi)]
         for i, end in enumerate((lo[across], hi[across] - POST)):
             plo, phi = lo.copy(), hi.copy()
             plo[across], phi[across] = end, end + POST
             plo[ax], phi[ax] = (body.max[ax], lo[ax]) if sign > 0 else (hi[ax], body.min[ax])
-            out.append(_box(f"{m.name}/post{i}", m.name, plo, phi))
+            out.append(box(f"{m.name}/post{i}", m.name, plo, phi))
         return out
     inner = 0 if sign > 0 else 1  # the face that touches the body: reach into it
     (lo if inner == 0 else hi)[ax] -= sign * EMBED
@@ -262,9 +228,9 @@ def _member_prims(t: ObjectType, m: Member) -> list[Prim]:
         ):
             blo, bhi = lo.copy(), hi.copy()
             blo[2], bhi[2], blo[ax], bhi[ax] = z0, z1, a0, a1
-            bars.append(_box(f"{m.name}/{name}", m.name, blo, bhi))
+            bars.append(box(f"{m.name}/{name}", m.name, blo, bhi))
         return bars
-    return [_box(m.name, m.name, lo, hi)]
+    return [box(m.name, m.name, lo, hi)]
 
 
 def object_prims(t: ObjectType) -> list[Prim]:

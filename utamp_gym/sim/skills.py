@@ -3,10 +3,11 @@
 Each skill decodes its symbols against the *current* simulated poses (`decode`),
 grounds them with IK and OMPL (`control.ArmDriver`) and runs the motion through the
 position servos. Success is then measured, never assumed: the gap of the closed
-fingers, how far the object rose with the hand, whether it stayed in the grasp, what
-it rests on after release (`stack_from_poses`, `rests_on_top`), whether anything else
-moved. The symbolic layer is not consulted. Failures come back as a `MacroResult`
-with a reason naming the object.
+fingers, how far the object rose with the hand, whether it stayed in the grasp, the
+load on the hand from the joint torques (`payload`: over the Panda's 3 kg, or a joint at
+its torque limit, fails), what it rests on after release (`stack_from_poses`,
+`rests_on_top`), whether anything else moved. The symbolic layer is not consulted.
+Failures come back as a `MacroResult` with a reason naming the object.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from utamp_gym.sim.measure import (
     snapshot,
     verify_on,
 )
+from utamp_gym.sim.payload import hold_and_measure, payload_failure
 from utamp_gym.sim.world import object_orientation
 
 APPROACH = (0.25, 1.0)  # m/s, m/s^2: pre-grasp -> grasp, lift, retreat
@@ -61,6 +63,12 @@ MAX_TILT_DEG = 15.0  # held object rotation while lifting that counts as pivotin
 DROP_SLIP, DROP_TILT_DEG = 0.05, 30.0  # ... during transport: the object was dropped
 REGRASP_SLIP, REGRASP_TILT_DEG = 0.003, 1.0  # ... during transport: re-aim the placement
 SLIDE_TOL = 0.02  # m, slid footprint centre within this of the space centre
+CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measured
+#: a guarded descent: an upward push on the held object this strong (N, measured from the
+#: joint torques) at the place pose means it landed early; the arm backs up, looks again and
+#: aims anew, at most `PLACE_ATTEMPTS` times
+CONTACT_N = 5.0
+PLACE_ATTEMPTS = 3
 
 
 # ------------------------------------------------------------------ shared phases
@@ -181,12 +189,15 @@ def pick(st: SimState, act: MacroAction) -> None:
     finally:
         near.detach()
     arm.move_line(path, *APPROACH)
-    arm.step(round(0.15 / arm.dt))
+    load = hold_and_measure(arm)
     hand_rise = arm.tcp()[2, 3] - start_tcp[2, 3]
     obj_rise = obj_pose(st, sym.obj)[2, 3] - start_obj[2, 3]
     slip, tilt = grasp_drift(st, held)
     if not arm.holds_something():
         raise SkillFailure(f"{sym.obj} slipped out of the grasp while lifting")
+    overload = payload_failure(sym.obj, load, while_="lifting")
+    if overload:
+        raise SkillFailure(overload)
     if obj_rise < 0.5 * hand_rise or tilt > MAX_TILT_DEG or slip > MAX_SLIP:
         how = (
             "it stayed down"
@@ -197,7 +208,8 @@ def pick(st: SimState, act: MacroAction) -> None:
         )
         raise SkillFailure(
             f"{sym.obj} is not liftable by its {sym.member}: {how} "
-            f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm)"
+            f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm, "
+            f"bearing {load.describe()} of it)"
         )
     if object_orientation(st.world.model, st.data, sym.obj) is None:
         raise SkillFailure(f"{sym.obj} tilted over in the grasp (it was grasped off its centre)")
@@ -243,10 +255,25 @@ def place(st: SimState, act: MacroAction) -> None:
             f"{name} dropped during transport (moved {slip * 100:.1f} cm, {tilt:.0f} deg "
             "in the hand)"
         )
+    carried = hold_and_measure(arm, CARRY_HOLD_S)
+    overload = payload_failure(name, carried, while_="carrying")
+    if overload:
+        raise SkillFailure(overload)
     if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
         up = _plan_place(st, held, act)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
-    arm.move_line(up.reversed(), *PLACE)
+    for attempt in range(1, PLACE_ATTEMPTS + 1):  # a guarded descent
+        arm.move_line(up.reversed(), *PLACE)
+        push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]
+        if push <= CONTACT_N or attempt == PLACE_ATTEMPTS:
+            break
+        # it landed early (on a rim, say): back up, look again, aim anew
+        arm.move_line(up, *PLACE)
+        if st.estimator is not None:
+            st.estimator.forget(act.support)
+        _looked_again(st, held, always=True)
+        up = _plan_place(st, held, act)
+        arm.transfer(up.end, held=(held.body, held.belief), what=what)
     _release_and_retreat(st, name, held.opening)
     settle_objects(st)
     verify_on(st, name, act.support)
@@ -255,18 +282,21 @@ def place(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(f"placing {name} on {act.support} toppled the stack: {moved}")
 
 
-def _looked_again(st: SimState, held: Held) -> bool:
+def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
     """Look at the held object again before lowering it (a wrist camera) and adopt the new
     estimate if it differs from the belief by more than `REGRASP_SLIP` / `REGRASP_TILT_DEG`
-    beyond what estimation noise explains (3 standard deviations of a difference)."""
+    beyond what estimation noise explains (3 standard deviations of a difference), or
+    `always`."""
     if st.estimator is not None:
         st.estimator.forget(held.obj)
     new = np.linalg.inv(st.arm.tcp()) @ st.estimate(held.obj)
     shift, angle = pose_change(held.belief, new)
     noise = 0.0 if st.estimator is None else st.estimator.noise
     explained = 3 * math.sqrt(2)
-    if shift > REGRASP_SLIP + explained * noise or angle > REGRASP_TILT_DEG + explained * (
-        yaw_noise_deg(noise)
+    if (
+        always
+        or shift > REGRASP_SLIP + explained * noise
+        or angle > REGRASP_TILT_DEG + explained * yaw_noise_deg(noise)
     ):
         held.belief = new
         return True

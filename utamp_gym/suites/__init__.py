@@ -17,19 +17,29 @@ def packaged_scene_names() -> list[str]:
 
 
 def resolve_scene(ref: str) -> Scene:
-    """A scene from a suite name (``pick-place/017``), a packaged name or a file path."""
-    valid = [*packaged_scene_names(), *all_scene_names()]
-    if ref.split("/", 1)[0] in SUITES and not Path(ref).exists():
+    """A scene from a suite name (``pick-place/017``), a packaged name or a file path.
+
+    Only the scene asked for is built; the lists of valid names are made for errors only.
+    """
+    suite = ref.split("/", 1)[0]
+    if suite in SUITES and not Path(ref).exists():
         try:
             return get_scene(ref)
-        except UnknownNameError:
-            raise UnknownNameError("scene", ref, valid) from None
-    if ref in packaged_scene_names():
-        return load_scene(assets_dir() / "scenes" / f"{ref}.toml")
+        except UnknownNameError:  # list that suite's scenes (the first 40 are shown)
+            raise UnknownNameError(
+                "scene", ref, [*packaged_scene_names(), *all_scene_names(suite)]
+            ) from None
+    packaged = assets_dir() / "scenes" / f"{ref}.toml"
+    if "/" not in ref and ref != "layout" and packaged.is_file():
+        return load_scene(packaged)
     path = Path(ref)
     if path.suffix == ".toml" or path.exists():
         return load_scene(path)
-    raise UnknownNameError("scene", ref, valid)
+    raise UnknownNameError("scene", ref, _valid_names())
+
+
+def _valid_names() -> list[str]:
+    return [*packaged_scene_names(), *all_scene_names()]
 
 
 __all__ = [

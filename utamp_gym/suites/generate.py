@@ -1,8 +1,9 @@
-"""The paper's two benchmark suites, enumerated deterministically.
+"""The benchmark suites, enumerated deterministically: the paper's two and `extra`.
 
 **pick-place**: the tray plus a non-empty subset of {salt, mug, board, pan}
 (2 <= n <= 5). For every allowed orientation of each object (upright if it can rest
-on its bottom, inverted if it can rest on its top) and every partition of the objects
+on its bottom, inverted if it can rest on its top; either only if the hand can then
+grasp and lift it from above) and every partition of the objects
 into stacks in which each object can stand on the one below under the ground-truth
 affordances (the tray only on the table), the stacks are put in table slots: the
 tray's stack in slot1, the others in slots 2-5 in catalogue order of their bottom
@@ -16,6 +17,12 @@ object. A configuration is kept if
 **sliding**: the pick-place configurations whose tray starts empty, with the tray moved
 to the far end of slot1 (partly outside the workspace) and a free space in front of
 it, so `slide-support` is needed before anything can be stacked on it.
+
+**extra**: as pick-place, with the six objects of `assets/objects/extra.toml` (not in
+the paper) added to the paper's four: the tray plus one or two objects, at least one
+of them new. The new types' affordances come from the rule parser (there is no
+hand-written truth for them), the paper objects' from the ground truth; the scenes
+carry the new types in their `types` table, so an exported scene file is complete.
 """
 
 from __future__ import annotations
@@ -27,14 +34,14 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
-from utamp_gym.affordances.facts import Fact, load_ground_truth
+from utamp_gym.affordances.facts import Fact, fact_types, load_ground_truth
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
-from utamp_gym.scene.catalogue import load_catalogue
+from utamp_gym.scene.catalogue import Catalogue, load_catalogue, type_to_dict
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
 
-SUITES = ("pick-place", "sliding")
+SUITES = ("pick-place", "sliding", "extra")
 #: instance name -> catalogue type, in catalogue order
 MOVABLES: tuple[tuple[str, str], ...] = (
     ("salt", "salt-shaker"),
@@ -42,8 +49,37 @@ MOVABLES: tuple[tuple[str, str], ...] = (
     ("board", "cutting-board"),
     ("pan", "frying-pan"),
 )
+#: the objects beyond the paper (types in `assets/objects/extra.toml`), in catalogue order
+EXTRA_MOVABLES: tuple[tuple[str, str], ...] = (
+    ("bowl", "soup-bowl"),
+    ("plate", "deep-plate"),
+    ("teabox", "tea-box"),
+    ("bottle", "oil-bottle"),
+    ("pot", "stock-pot"),
+    ("spatula", "wooden-spatula"),
+)
+EXTRA_CATALOGUE = "extra.toml"
 TRAY = ("tray", "wooden-tray")
 TABLE_TYPE = "kitchen-table"
+
+
+@dataclass(frozen=True)
+class SuiteSpec:
+    """How a suite is enumerated: which objects, how many, from where."""
+
+    movables: tuple[tuple[str, str], ...]
+    sizes: tuple[int, ...]  # how many movable objects (besides the tray) a scene has
+    sliding: bool = False
+    new: tuple[str, ...] = ()  # instance names of which every scene has at least one
+
+
+SPECS = {
+    "pick-place": SuiteSpec(MOVABLES, (1, 2, 3, 4)),
+    "sliding": SuiteSpec(MOVABLES, (1, 2, 3, 4), sliding=True),
+    "extra": SuiteSpec(
+        (*MOVABLES, *EXTRA_MOVABLES), (1, 2), new=tuple(n for n, _ in EXTRA_MOVABLES)
+    ),
+}
 
 
 @dataclass(frozen=True)
@@ -69,13 +105,26 @@ def _supports(
     return ("isP2PSupportive", UP_PART[lori], ltype, STANDING_PART[uori], utype) in facts
 
 
+def _liftable_from_above(facts: frozenset[Fact], tname: str, up: str) -> bool:
+    """Can the hand grasp `tname` with the palm on its up-facing part `up` and lift it?"""
+    return any(
+        f[0] == "canGraspFrom"
+        and f[1] == tname
+        and f[3] == up
+        and ("canLift", tname, f[2]) in facts
+        for f in facts
+    )
+
+
 def _orientations(facts: frozenset[Fact], tname: str) -> list[str]:
-    out = []
-    if ("isSupportable", tname, "under") in facts:
-        out.append("upright")
-    if ("isSupportable", tname, "on") in facts:
-        out.append("inverted")
-    return out
+    """Orientations `tname` can rest in and be picked up from (an upside-down bowl rests
+    on its rim, but the hand cannot reach its rim through the floor)."""
+    return [
+        ori
+        for ori in ("upright", "inverted")
+        if ("isSupportable", tname, STANDING_PART[ori]) in facts
+        and _liftable_from_above(facts, tname, UP_PART[ori])
+    ]
 
 
 def _partitions(items: Sequence[str]) -> Iterator[list[list[str]]]:
@@ -107,11 +156,15 @@ def _layout() -> dict[str, Any]:
     return tomllib.loads(asset_path("scenes", "layout.toml").read_text())
 
 
-def _configurations(facts: frozenset[Fact]) -> Iterator[tuple[dict[str, str], list[list[str]]]]:
+def _configurations(
+    facts: frozenset[Fact], spec: SuiteSpec
+) -> Iterator[tuple[dict[str, str], list[list[str]]]]:
     """(orientation per object, stacks bottom->top) for every physically valid stacking."""
-    types = dict((*MOVABLES, TRAY))
-    for n_movable in range(1, len(MOVABLES) + 1):
-        for subset in itertools.combinations([m for m, _ in MOVABLES], n_movable):
+    types = dict((*spec.movables, TRAY))
+    for n_movable in spec.sizes:
+        for subset in itertools.combinations([m for m, _ in spec.movables], n_movable):
+            if spec.new and not set(subset) & set(spec.new):
+                continue
             options = [_orientations(facts, types[m]) for m in subset]
             for choice in itertools.product(*options):
                 orient = dict(zip(subset, choice, strict=True)) | {TRAY[0]: "upright"}
@@ -134,12 +187,13 @@ def _configurations(facts: frozenset[Fact]) -> Iterator[tuple[dict[str, str], li
 
 
 def _scene_dict(
-    name: str, orient: dict[str, str], stacks: list[list[str]], sliding: bool
+    name: str, orient: dict[str, str], stacks: list[list[str]], spec: SuiteSpec
 ) -> dict[str, Any]:
     layout = _layout()
     suite = layout["suite"]
-    types = dict((*MOVABLES, TRAY))
-    order = {m: i for i, (m, _) in enumerate(MOVABLES)}
+    sliding = spec.sliding
+    types = dict((*spec.movables, TRAY))
+    order = {m: i for i, (m, _) in enumerate(spec.movables)}
     tray_stack = next(s for s in stacks if s[0] == TRAY[0])
     others = sorted((s for s in stacks if s[0] != TRAY[0]), key=lambda s: order[s[0]])
     free_slots = [s["name"] for s in layout["slots"] if s["name"] != suite["tray_slot"]]
@@ -174,15 +228,39 @@ def _scene_dict(
     return data
 
 
-@cache
-def _suite_cached(suite: str) -> tuple[tuple[Scene, ...], SuiteStats]:
+def extra_catalogue() -> Catalogue:
+    """The object types beyond the paper (`assets/objects/extra.toml`)."""
+    return load_catalogue(asset_path("objects", EXTRA_CATALOGUE))
+
+
+def suite_facts(suite: str) -> frozenset[Fact]:
+    """The affordances a suite is enumerated with: the ground truth, and for the types
+    without hand-written truth (the extra catalogue's) the rule parser's facts."""
     facts = load_ground_truth()
-    catalogue = load_catalogue()
-    types = dict((*MOVABLES, TRAY))
-    kept: list[tuple[dict[str, str], list[list[str]]]] = []
+    if suite != "extra":
+        return facts
+    from utamp_gym.affordances.rules import derive_affordances  # numpy: off `utamp plan`'s path
+
+    new = extra_catalogue()
+    types = [*load_catalogue().types.values(), *new.types.values()]
+    derived = derive_affordances(types)
+    return facts | {f for f in derived if set(fact_types(f)) & set(new.types)}
+
+
+Configuration = tuple[dict[str, str], list[list[str]]]  # (orientation per object, stacks)
+
+
+@cache
+def _kept(suite: str) -> tuple[tuple[Configuration, ...], SuiteStats]:
+    """The suite's configurations in their stable order, and its statistics (no scenes are
+    built: `_scene` builds one on demand)."""
+    spec = SPECS[suite]
+    facts = suite_facts(suite)
+    types = dict((*spec.movables, TRAY))
+    kept: list[Configuration] = []
     enumerated = trivial = unachievable = 0
-    for orient, stacks in _configurations(facts):
-        if suite == "sliding" and next(s for s in stacks if s[0] == TRAY[0]) != [TRAY[0]]:
+    for orient, stacks in _configurations(facts, spec):
+        if spec.sliding and next(s for s in stacks if s[0] == TRAY[0]) != [TRAY[0]]:
             continue
         enumerated += 1
         if len(stacks) == 1:
@@ -194,45 +272,64 @@ def _suite_cached(suite: str) -> tuple[tuple[Scene, ...], SuiteStats]:
             continue
         kept.append((orient, stacks))
     kept.sort(key=lambda c: (len(c[0]), sorted(c[0].items()), [s for s in c[1]]))
-    scenes = tuple(
-        scene_from_dict(
-            _scene_dict(f"{suite}/{i:03d}", orient, stacks, suite == "sliding"),
-            file=f"<suite {suite}>",
-            catalogue=catalogue,
-        )
-        for i, (orient, stacks) in enumerate(kept)
-    )
     by_n: dict[int, int] = {}
-    for s in scenes:
-        by_n[s.n_objects] = by_n.get(s.n_objects, 0) + 1
-    return scenes, SuiteStats(
-        suite, enumerated, trivial, unachievable, len(scenes), dict(sorted(by_n.items()))
+    for orient, _ in kept:  # every object of a configuration has an orientation
+        by_n[len(orient)] = by_n.get(len(orient), 0) + 1
+    stats = SuiteStats(
+        suite, enumerated, trivial, unachievable, len(kept), dict(sorted(by_n.items()))
     )
+    return tuple(kept), stats
+
+
+@cache
+def _catalogue() -> Catalogue:
+    """The packaged catalogue, shared by every suite scene."""
+    return load_catalogue()
+
+
+@cache
+def _scene(suite: str, index: int) -> Scene:
+    spec = SPECS[suite]
+    orient, stacks = _kept(suite)[0][index]
+    data = _scene_dict(f"{suite}/{index:03d}", orient, stacks, spec)
+    if suite == "extra":  # the scene carries the types the default catalogue does not know
+        new_types = extra_catalogue().types
+        types = dict((*spec.movables, TRAY))
+        used = sorted({types[o] for o in orient} & set(new_types))
+        if used:
+            data["types"] = {n: type_to_dict(new_types[n]) for n in used}
+    return scene_from_dict(data, file=f"<suite {suite}>", catalogue=_catalogue())
+
+
+def _check_suite(suite: str) -> None:
+    if suite not in SUITES:
+        raise UnknownNameError("suite", suite, SUITES)
 
 
 def suite_scenes(suite: str) -> tuple[Scene, ...]:
     """All scenes of a suite, in their stable order."""
-    if suite not in SUITES:
-        raise UnknownNameError("suite", suite, SUITES)
-    return _suite_cached(suite)[0]
+    _check_suite(suite)
+    return tuple(_scene(suite, i) for i in range(len(_kept(suite)[0])))
 
 
 def suite_stats(suite: str) -> SuiteStats:
-    if suite not in SUITES:
-        raise UnknownNameError("suite", suite, SUITES)
-    return _suite_cached(suite)[1]
+    _check_suite(suite)
+    return _kept(suite)[1]
 
 
 def all_scene_names(suite: str | None = None) -> list[str]:
+    """Names of the scenes of one suite (default: all suites), without building them."""
     suites = SUITES if suite is None else (suite,)
-    return [s.name for name in suites for s in suite_scenes(name)]
+    for name in suites:
+        _check_suite(name)
+    return [f"{name}/{i:03d}" for name in suites for i in range(len(_kept(name)[0]))]
 
 
 def get_scene(name: str) -> Scene:
-    """A suite scene by its stable name, e.g. ``pick-place/017``."""
-    suite = name.split("/", 1)[0]
-    if suite in SUITES:
-        for s in suite_scenes(suite):
-            if s.name == name:
-                return s
+    """A suite scene by its stable name, e.g. ``pick-place/017`` (only that scene is built)."""
+    suite, _, number = name.partition("/")
+    if suite in SUITES and len(number) == 3 and number.isdigit():
+        index = int(number)
+        if index < len(_kept(suite)[0]):
+            return _scene(suite, index)
     raise UnknownNameError("scene", name, all_scene_names())

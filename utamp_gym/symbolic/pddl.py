@@ -16,6 +16,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from types import MappingProxyType
 
 from utamp_gym.errors import PddlError
@@ -28,6 +29,7 @@ __all__ = [
     "Domain",
     "Literal",
     "Problem",
+    "cached_domain",
     "check_problem",
     "parse_domain",
     "parse_plan",
@@ -208,6 +210,13 @@ class _Parser:
             kind = "variable" if bad[0].startswith("?") else "object"
             raise self.fail(node, f"unknown {kind} '{bad[0]}' in {what}")
         return Atom(pred, args)
+
+
+@lru_cache(maxsize=16)
+def cached_domain(text: str, source: str = "<string>") -> Domain:
+    """`parse_domain`, remembered: a `Domain` is immutable, and planners parse the same
+    domain text on every call."""
+    return parse_domain(text, source)
 
 
 def parse_domain(text: str, source: str = "<string>") -> Domain:

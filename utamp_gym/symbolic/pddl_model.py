@@ -8,11 +8,15 @@ from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 
-@dataclass(frozen=True)
-class Atom:
-    """A predicate applied to arguments (variables ``?x``, constants or objects)."""
+class Atom(NamedTuple):
+    """A predicate applied to arguments (variables ``?x``, constants or objects).
+
+    A named tuple: grounding hashes and compares atoms millions of times, and tuples do that
+    in C (an `Atom` equals the plain tuple ``(predicate, args)``).
+    """
 
     predicate: str
     args: tuple[str, ...] = ()
@@ -21,8 +25,7 @@ class Atom:
         return "(" + " ".join((self.predicate, *self.args)) + ")"
 
 
-@dataclass(frozen=True)
-class Literal:
+class Literal(NamedTuple):
     """An atom or its negation; predicate ``=`` means equality of its two arguments."""
 
     atom: Atom
@@ -33,7 +36,7 @@ class Literal:
 
 
 def _sub(a: Atom, sub: Mapping[str, str]) -> Atom:
-    return Atom(a.predicate, tuple(sub.get(x, x) for x in a.args))
+    return tuple.__new__(Atom, (a.predicate, tuple(map(sub.get, a.args, a.args))))
 
 
 def _holds(lit: Literal, facts: Collection[Atom]) -> bool:
@@ -124,13 +127,19 @@ class Action:
         """
         sub = dict(zip((v for v, _ in self.parameters), args, strict=True))
         pre = tuple(Literal(_sub(lit.atom, sub), lit.positive) for lit in self.precondition)
+        return (pre, *self.effects(sub, facts))
+
+    def effects(
+        self, sub: Mapping[str, str], facts: Collection[Atom] | None = None
+    ) -> tuple[tuple[Atom, ...], tuple[Atom, ...]]:
+        """(add, delete) effects under the parameter binding `sub` (see `instantiate`)."""
         add = [_sub(a, sub) for a in self.add_effects]
         dele = [_sub(a, sub) for a in self.del_effects]
         for ce in self.cond_effects if facts is not None else ():
             for binding in ce.bindings(sub, facts):
                 add += [_sub(a, binding) for a in ce.add]
                 dele += [_sub(a, binding) for a in ce.delete]
-        return pre, tuple(dict.fromkeys(add)), tuple(dict.fromkeys(dele))
+        return tuple(dict.fromkeys(add)), tuple(dict.fromkeys(dele))
 
 
 @dataclass(frozen=True)

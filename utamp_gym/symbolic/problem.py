@@ -9,10 +9,9 @@ tower on the base, each standing directly on the one below.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
-
-import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.errors import UnknownNameError
@@ -42,13 +41,13 @@ def _base_part(inverted: bool) -> str:
     `base` is static in the domains, so it is defined by orientation, which pick and
     place preserve, rather than by the (changing) position; a half turn about x keeps it.
     """
-    to_robot = np.array([-1.0, 0.0])
-    best, best_dot = "back", -np.inf
+    to_robot = (-1.0, 0.0)
+    best, best_dot = "back", -math.inf
     for side in ("front", "back", "left", "right"):
-        n = np.asarray(NORMALS[side][:2], dtype=float)
+        nx, ny = float(NORMALS[side][0]), float(NORMALS[side][1])
         if inverted:
-            n[1] = -n[1]  # a half turn about x mirrors y
-        d = float(n @ to_robot)
+            ny = -ny  # a half turn about x mirrors y
+        d = nx * to_robot[0] + ny * to_robot[1]
         if d > best_dot + 1e-12:
             best, best_dot = side, d
     return best

@@ -1,0 +1,128 @@
+"""StatePlanner: cached groundings, states the cache does not cover, banned actions, limits."""
+
+from __future__ import annotations
+
+import pytest
+
+from utamp_gym.deadline import Deadline
+from utamp_gym.errors import PddlError, PlanningTimeout
+from utamp_gym.planning.methods import PlanOutcome, plan_scene
+from utamp_gym.planning.state_planner import StatePlanner, action_name, problem_atoms
+from utamp_gym.suites import resolve_scene
+from utamp_gym.symbolic.pddl import parse_domain, parse_plan, parse_problem
+from utamp_gym.symbolic.validate import validate_plan
+
+SCENE = "pick-place/105"  # five objects
+
+
+@pytest.fixture(scope="module")
+def gt() -> PlanOutcome:
+    out = plan_scene(resolve_scene(SCENE), "utamp2-gt")
+    assert out.solved and out.plan_length >= 3
+    return out
+
+
+def task_args(out: PlanOutcome, steps: int = 0) -> tuple:
+    """(objects, static, fluent, goal) of the state after the first `steps` plan steps."""
+    domain, problem = parse_domain(out.domain), parse_problem(out.problem)
+    objects, static, _, goal = problem_atoms(domain, problem)
+    done = validate_plan(domain, problem, parse_plan("\n".join(out.plan[:steps])))
+    fluent = domain.fluent_predicates()
+    return objects, static, sorted(str(a) for a in done.final_state if a.predicate in fluent), goal
+
+
+def valid_from(out: PlanOutcome, state: list[str], plan: tuple[str, ...]) -> bool:
+    """Is `plan` valid from `state` (fluent atoms) in the task of `out`?"""
+    domain, problem = parse_domain(out.domain), parse_problem(out.problem)
+    _, static, _, goal = problem_atoms(domain, problem)
+    text = out.problem[: out.problem.index("(:init")] + "(:init " + " ".join([*static, *state])
+    text += ")\n  (:goal (and " + " ".join(goal) + ")))\n"
+    check = validate_plan(domain, parse_problem(text), parse_plan("\n".join(plan)))
+    return check.valid
+
+
+def test_replans_from_reached_states_hit_the_cache(gt: PlanOutcome) -> None:
+    planner = StatePlanner("utamp2")
+    first = planner.plan(*task_args(gt))
+    assert first.solved and len(first.plan) == gt.plan_length
+    for k in range(1, gt.plan_length):
+        args = task_args(gt, k)
+        result = planner.plan(*args)
+        assert result.solved and len(result.plan) == gt.plan_length - k  # still optimal
+        assert valid_from(gt, args[2], result.plan)
+    info = planner.cache_info()
+    assert (info.groundings, info.hits, info.uncovered, info.tasks) == (1, gt.plan_length - 1, 0, 1)
+
+
+@pytest.mark.parametrize(
+    ("change", "why"),
+    [
+        (lambda s: [*s, "(oc in hand mug)"], "two atoms of the exactly-one group 'in hand'"),
+        (lambda s: [a for a in s if a != "(oc in hand air)"], "no atom of 'in hand'"),
+        (lambda s: [*s, "(oc front mug tray)"], "an atom the first grounding never reached"),
+        (lambda s: [a for a in s if a != "(oc in workspace slot2)"], "a constant changed"),
+    ],
+)
+def test_states_the_cache_does_not_cover_are_grounded_anew(gt: PlanOutcome, change, why) -> None:
+    objects, static, state, goal = task_args(gt)
+    planner = StatePlanner("utamp2")
+    planner.plan(objects, static, state, goal)
+    odd = change(state)
+    assert odd != state, why
+    result = planner.plan(objects, static, odd, goal)
+    info = planner.cache_info()
+    assert (info.groundings, info.uncovered, info.tasks) == (2, 1, 2), why
+    fresh = StatePlanner("utamp2").plan(objects, static, odd, goal)  # the reference
+    assert (result.solved, len(result.plan)) == (fresh.solved, len(fresh.plan)), why
+    if result.solved:
+        assert valid_from(gt, odd, result.plan), why
+    planner.plan(objects, static, state, goal)  # the first task is still there
+    assert planner.cache_info().groundings == 2
+
+
+def test_excluded_actions_never_appear_and_need_no_grounding(gt: PlanOutcome) -> None:
+    args = task_args(gt)
+    planner = StatePlanner("utamp2")
+    planner.plan(*args)
+    banned = {gt.plan[0], gt.plan[0].upper().replace("(", "( ")}  # any spelling of it
+    assert action_name(gt.plan[0].upper()) == gt.plan[0][1:-1]
+    result = planner.plan(*args, exclude=banned)
+    assert result.solved and gt.plan[0] not in result.plan
+    assert len(result.plan) >= gt.plan_length and valid_from(gt, args[2], result.plan)
+    assert planner.cache_info().groundings == 1
+
+
+def test_keys_are_bounded(gt: PlanOutcome) -> None:
+    objects, static, state, goal = task_args(gt)
+    planner = StatePlanner("utamp2", max_keys=1)
+    planner.plan(objects, static, state, goal)
+    planner.plan(objects, static, state, goal[:-1])  # another goal: another key
+    assert planner.cache_info().tasks == 1
+    planner.plan(objects, static, state, goal)
+    assert planner.cache_info().groundings == 3
+
+
+def test_bad_atoms_raise_clear_errors(gt: PlanOutcome) -> None:
+    objects, static, state, goal = task_args(gt)
+    planner = StatePlanner("utamp2")
+    with pytest.raises(ValueError, match="expected a ground atom"):
+        planner.plan(objects, static, [*state, "oc in hand air"], goal)
+    with pytest.raises(ValueError, match="'ismember' is static"):
+        planner.plan(objects, static, [*state, "(ismember tray tray-body)"], goal)
+    with pytest.raises(ValueError, match="'oc' is fluent"):
+        planner.plan(objects, [*static, "(oc in hand air)"], state, goal)
+    with pytest.raises(PddlError, match="unknown predicate 'holding'"):
+        planner.plan(objects, static, [*state, "(holding mug)"], goal)
+    with pytest.raises(PddlError, match="unknown object 'spoon'"):
+        planner.plan(objects, static, [*state, "(oc in hand spoon)"], goal)
+
+
+def test_time_limits_name_the_phase() -> None:
+    out = plan_scene(resolve_scene(SCENE), "utamp1", timeout=0.3)  # grounding takes seconds
+    assert out.timed_out and not out.solved and out.phase == "grounding"
+    planner = StatePlanner("utamp1")
+    args = task_args(plan_scene(resolve_scene("pick-place/000"), "utamp1"))
+    planner.plan(*args)  # grounded; now only the search runs
+    with pytest.raises(PlanningTimeout) as info:
+        planner.plan(*args, deadline=Deadline.after(1e-9))
+    assert info.value.phase in ("sas", "search")
