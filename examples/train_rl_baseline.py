@@ -35,6 +35,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.backend import DEFAULT_POSE_NOISE
+from utamp_gym.eval.plots import write_plots
 from utamp_gym.eval.records import ResultRow, ResultsFile
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.eval.summary import summarize, write_summary
@@ -83,9 +85,8 @@ def evaluate(
     results = ResultsFile(out / "results.csv")
     for method in methods:  # one model at a time: the harness caches the loaded policy
         for scene in scenes:
-            task = EvalTask(
-                scene, method, 0, grounding, pose_noise=None if grounding == "symbolic" else 0.005
-            )
+            noise = None if grounding == "symbolic" else DEFAULT_POSE_NOISE
+            task = EvalTask(scene, method, 0, grounding, pose_noise=noise)
             if task.key not in results:
                 results.append(run_task(task))
     results.sort()
@@ -95,6 +96,7 @@ def evaluate(
         context={"suite": "pick-place", "grounding": grounding, "scenes": len(scenes), "seeds": 1},
     )
     write_summary(out, summary)
+    write_plots(out, summary)
     return rows
 
 
