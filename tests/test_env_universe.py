@@ -13,14 +13,13 @@ from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.universe import UniverseKey, ground_universe
 from utamp_gym.planning.methods import affordances_for, ground_truth_for, scene_types
 from utamp_gym.suites import suite_scenes
-from utamp_gym.symbolic.pddl import Problem, parse_domain
-from utamp_gym.symbolic.problem import domain_text
+from utamp_gym.symbolic.pddl import Problem
 from utamp_gym.symbolic.reach import GroundOp, reachable_ops
 
 
 def direct_ops(env: UTampKitchenEnv) -> list[GroundOp]:
     """Ground the episode's own problem (its static atoms + current fluents) with reach."""
-    domain = parse_domain(domain_text(env.options.domain))
+    domain = env.universe.domain  # the env's domain, or its geometric preconditions
     objects = scene_atoms(env.scene, (), env.options.domain, domain.fluent_predicates())[2]
     atoms = {*env.static_atoms, *env.true_atoms()}
     problem = Problem(
@@ -49,6 +48,8 @@ def applicable(ops: list[GroundOp], state: set[str]) -> set[str]:
         {"suite": "pick-place", "affordances": "noisy", "noise": 0.3},
         {"suite": "sliding", "affordances": "rules"},
         {"suite": "pick-place", "domain": "utamp1", "num_objects": 3},
+        {"suite": "pick-place", "masks": "geometric"},
+        {"suite": "sliding", "masks": "geometric"},
     ],
 )
 def test_mask_matches_the_episodes_own_grounding(config: dict[str, Any]) -> None:

@@ -1,21 +1,30 @@
-"""RL baselines: smoke trainings (MaskablePPO, PPO, DQN), loading, masked acting, the CLI."""
+"""RL baselines: smoke trainings (MaskablePPO, PPO, DQN), loading, masked acting, the CLI,
+saved env options, several seeds, and saved agents in `utamp eval` (``rl:PATH``)."""
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import shlex
+import zipfile
 from pathlib import Path
 
 import gymnasium as gym
+import numpy as np
 import pytest
 
 pytest.importorskip("sb3_contrib")
 
 import utamp_gym  # noqa: F401  (registers the env ids)
-from utamp_gym.rl.cli import add_train_parser
+from utamp_gym.cli import main
+from utamp_gym.env.options import MASKS
+from utamp_gym.eval.sweep import SweepConfig
+from utamp_gym.rl.cli import MASK_CHOICES, add_train_parser
+from utamp_gym.rl.harness import STEPS_PER_OBJECT
 from utamp_gym.rl.policy import RLPolicy, algo_of, evaluate_rl, load_rl_policy
-from utamp_gym.rl.train import train
+from utamp_gym.rl.saved import META_NAME, ModelError, read_meta, write_meta
+from utamp_gym.rl.train import TrainConfig, finished_run, train, train_seed
 
 ROW_KEYS = {"scene", "n_objects", "seed", "success", "steps", "invalid_actions", "episode_time_s"}
 
@@ -112,7 +121,18 @@ def test_train_parser_names() -> None:
     defaults = parser.parse_args(["train", "--out", "d"])
     got = (defaults.env, defaults.algo, defaults.grounding, defaults.num_objects)
     assert got == ("UTampKitchen-v0", "maskable-ppo", "symbolic", None)
-    for bad in (["--algo", "sac"], ["--num-objects", "7"], ["--steps", "0"], []):
+    assert (defaults.masks, defaults.seeds) == ("affordances", 1)
+    extra = parser.parse_args(["train", "--masks", "geometric", "--seeds", "3", "--out", "d"])
+    assert (extra.masks, extra.seeds) == ("geometric", 3)
+    assert MASK_CHOICES == MASKS  # the parser's copy of the env option's values
+    for bad in (
+        ["--algo", "sac"],
+        ["--num-objects", "7"],
+        ["--steps", "0"],
+        ["--masks", "oracle"],
+        ["--seeds", "0"],
+        [],
+    ):
         with pytest.raises(SystemExit):
             parser.parse_args(["train", *bad, *(["--out", "d"] if bad else [])])
 
@@ -122,3 +142,133 @@ def test_bad_config_is_rejected(tmp_path: Path) -> None:
         train(algo="a2c", out=tmp_path, progress=False)
     with pytest.raises(ValueError, match="steps"):
         train(steps=0, out=tmp_path, progress=False)
+    with pytest.raises(ValueError, match="affordances, geometric, none"):
+        train(masks="oracle", out=tmp_path, progress=False)
+
+
+def test_saved_model_predicts_on_raw_env_observations(maskable_run: Path) -> None:
+    """The observation filter travels with the model: SB3's own predict on gym.make's obs."""
+    from sb3_contrib import MaskablePPO
+
+    model = MaskablePPO.load(maskable_run / "model.zip", device="cpu")
+    env = gym.make("UTampKitchen-v0", grounding="symbolic", num_objects=3)
+    obs, info = env.reset(seed=0)
+    assert {"object_poses", "robot"} <= set(obs)  # entries the model was not trained on
+    action, _ = model.predict(obs, action_masks=info["action_mask"], deterministic=True)
+    assert info["action_mask"][int(action)]
+    env.close()
+
+
+def test_models_and_checkpoints_carry_their_env(maskable_run: Path) -> None:
+    meta = read_meta(maskable_run / "model.zip")
+    assert (meta.env_id, meta.suite, meta.algo, meta.masks) == (
+        "UTampKitchen-v0", "pick-place", "maskable-ppo", "affordances"
+    )  # fmt: skip
+    assert meta.obs_keys == ("symbolic", "present") and meta.n_actions == 206
+    for ckpt in (maskable_run / "checkpoints").glob("*.zip"):
+        assert read_meta(ckpt) == meta
+    assert load_rl_policy(maskable_run / "model.zip").meta == meta
+
+
+def test_model_without_metadata_is_a_clear_error(tmp_path: Path, maskable_run: Path) -> None:
+    bare = tmp_path / "bare.zip"
+    with zipfile.ZipFile(maskable_run / "model.zip") as src, zipfile.ZipFile(bare, "w") as dst:
+        for item in src.infolist():
+            if item.filename != META_NAME:
+                dst.writestr(item, src.read(item.filename))
+    with pytest.raises(ModelError, match=r"has no utamp_env\.json"):
+        read_meta(bare)
+    assert algo_of(bare) == "maskable-ppo"  # still loadable by the policy class
+    with pytest.raises(ModelError, match="does not exist"):
+        read_meta(tmp_path / "missing.zip")
+    with pytest.raises(ModelError, match=r"has no utamp_env\.json"):
+        SweepConfig(suite="pick-place", methods=(f"rl:{bare}",))
+
+
+def test_eval_rejects_a_model_that_does_not_fit(tmp_path: Path, maskable_run: Path) -> None:
+    model = tmp_path / "model.zip"
+    model.write_bytes((maskable_run / "model.zip").read_bytes())
+    with pytest.raises(ModelError, match=r"suite 'pick-place'.*'sliding' suite"):
+        SweepConfig(suite="sliding", methods=(f"rl:{model}",))
+    meta = read_meta(model)
+    write_meta(model, type(meta)(**{**meta.to_json(), "n_actions": 207, "obs_keys": ("x",)}))
+    with pytest.raises(ModelError, match="expects 207 actions"):
+        SweepConfig(suite="pick-place", methods=(f"rl:{model}",))
+    err = main(["eval", "--suite", "pick-place", "--methods", f"rl:{model}", "--out",
+                str(tmp_path / "e"), "--quiet"])  # fmt: skip
+    assert err == 2
+
+
+@pytest.fixture(scope="module")
+def cli_runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """`utamp train` with geometric masks and two seeds (a smoke budget)."""
+    out = tmp_path_factory.mktemp("geometric")
+    args = (
+        "train --algo maskable-ppo --masks geometric --num-objects 2 --steps 1024 --envs 2 "
+        f"--seed 3 --seeds 2 --eval-every 512 --eval-episodes 5 --no-progress --out {out}"
+    )
+    assert main(shlex.split(args)) == 0
+    return out
+
+
+def test_train_seeds_writes_runs_and_an_aggregate(cli_runs: Path) -> None:
+    agg = json.loads((cli_runs / "aggregate.json").read_text())
+    assert agg["seeds"] == [3, 4] and agg["config"]["masks"] == "geometric"
+    assert (cli_runs / "learning_curves.png").stat().st_size > 0
+    finals = []
+    for seed in (3, 4):
+        report = json.loads((cli_runs / f"seed_{seed}" / "train.json").read_text())
+        assert report["config"]["seed"] == seed and report["config"]["masks"] == "geometric"
+        finals.append(report["final_success"])
+        assert read_meta(cli_runs / f"seed_{seed}" / "model.zip").masks == "geometric"
+    assert agg["final_success"]["mean"] == pytest.approx(np.mean(finals))
+    assert [r["seed"] for r in agg["per_seed"]] == [3, 4]
+    assert 0 <= agg["reached"] <= 2
+
+
+def _eval_rows(out: Path) -> list[dict[str, str]]:
+    with (out / "results.csv").open() as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.mark.parametrize(
+    "grounding", ["symbolic", pytest.param("physics", marks=pytest.mark.physics)]
+)
+def test_utamp_eval_runs_a_trained_agent_next_to_the_planner(
+    cli_runs: Path, tmp_path: Path, grounding: str
+) -> None:
+    if grounding == "physics":
+        pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo backend is not available")
+    model = cli_runs / "seed_3" / "model.zip"
+    limit = "5" if grounding == "symbolic" else "1"
+    args = (
+        f"eval --suite pick-place --methods utamp2-gt,rl:{model} --grounding {grounding} "
+        f"--limit {limit} --workers 0 --quiet --out {tmp_path}"
+    )
+    assert main(shlex.split(args)) == 0
+    rows = _eval_rows(tmp_path)
+    assert {r["method"] for r in rows} == {"utamp2-gt", f"rl:{model}"}
+    assert len(rows) == 2 * int(limit)
+    for r in rows:
+        if r["method"].startswith("rl:"):
+            steps = int(r["plan_length"])
+            assert 1 <= steps <= STEPS_PER_OBJECT * int(r["n_objects"])
+            assert r["crashed"] == "false" and r["grounding"] == grounding
+            assert (r["success"] == "true") == (r["failure_reason"] == "")
+            assert len(r["plan"].split(" ; ")) == steps
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert {m["method"] for m in summary["methods"]} == {"utamp2-gt", f"rl:{model}"}
+
+
+def test_a_finished_seed_is_reused_not_retrained(cli_runs: Path) -> None:
+    run = cli_runs / "seed_3"
+    before = (run / "model.zip").stat().st_mtime_ns
+    kwargs = {
+        "algo": "maskable-ppo", "masks": "geometric", "num_objects": 2, "steps": 1024,
+        "n_envs": 2, "eval_every": 512, "eval_episodes": 5, "progress": False,
+    }  # fmt: skip
+    result = train_seed(3, cli_runs, **kwargs)
+    assert result.out == run and (run / "model.zip").stat().st_mtime_ns == before
+    assert result.curve == json.loads((run / "train.json").read_text())["curve"]
+    options = {k: v for k, v in kwargs.items() if k != "progress"}
+    assert finished_run(run, TrainConfig(**{**options, "seed": 3, "steps": 2048})) is None

@@ -186,7 +186,8 @@ def _add_eval_parser(sub: Any) -> None:
     ev.add_argument(
         "--methods",
         help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2-vlm, "
-        "vlm-planner (default: the first four; utamp2-noisy alone with --sweep-noise)",
+        "vlm-planner, rl:PATH (a model.zip from `utamp train`; its env options come from the "
+        "model) (default: the first four; utamp2-noisy alone with --sweep-noise)",
     )
     ev.add_argument("--seeds", type=int, default=1, help="K seeds per scene and method")
     ev.add_argument(

@@ -23,6 +23,7 @@ from utamp_gym.backend import (
 )
 from utamp_gym.env.atoms import InitialAtoms, parse_atom
 from utamp_gym.env.options import EnvOptions, action_id
+from utamp_gym.env.outcome import OutcomeModel
 from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
 from utamp_gym.env.poses import SymbolicPoses
 from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
@@ -101,7 +102,13 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array" |
       "rgb_array_list" | "human"), ``camera`` (adds ``image``), ``image_size`` /
       ``render_size`` ((height, width));
-    * ``masks``: "affordances" (default) | "geometric" | "none" (what `action_masks()` allows);
+    * ``masks``: "affordances" (default: the U-TAMP-2 precondition under the env's affordances),
+      "geometric" (U-TAMP-2 without affordance literals, over a larger action space that has
+      e.g. side grasps and picks of the tray; `utamp_gym.env.geometric`) or "none" (that
+      action space, every action whose objects are in the scene). Physics decides what the
+      mask allows; symbolic grounding decides it with the outcome model
+      (`utamp_gym.env.outcome`: the ground-truth U-TAMP-2 precondition; a failure names the
+      false affordance);
     * physics only: ``backend`` ("module:Class" or a callable, built as
       ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (wall-clock times in
       info), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
@@ -179,7 +186,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             len(opts.objects),
             opts.image_size if opts.camera else None,
         )
-        self._state = SymbolicState(self.universe)
+        self._state = SymbolicState(self.universe, opts.masks)
+        # masks geometric/none: the outcome model decides symbolic steps the mask allows
+        self._outcome = OutcomeModel(self.universe) if opts.masks != "affordances" else None
         self._poses = SymbolicPoses(opts.objects)
         self._renderer = SchematicRenderer(opts.objects)
         self._task = KitchenTask(
@@ -256,6 +265,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
         self._declared_static = atoms.static
         self._poses.reset(scene)
+        if self._outcome is not None:
+            self._outcome.reset(scene)
         self._renderer.reset(scene)
         self._labels.reset(scene)
         if self._physics is not None:
@@ -273,7 +284,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         executed: Executed | None = None
         timings: dict[str, float] = {}
         unexpected: list[str] = []
-        if not self._state.applicable(a):
+        if not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
             failure = self._state.failure(a)
         elif self._physics is not None:
             start = time.perf_counter()
@@ -292,8 +303,10 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
                 executed = replace(executed, macro=replace(macro, timings={}))
             if not macro.success:
                 failure = macro.reason or f"{self.universe.actions[a]} failed in simulation"
-        else:
-            self._apply(a)
+        else:  # masks geometric/none: the outcome model (ground truth) decides
+            failure = None if self._outcome is None else self._outcome.failure(self._state, a)
+            if failure is None:
+                self._apply(a)
         goal, height = self._progress(self.options.reward_shaping)
         reward, terminated = self._task.outcome(
             goal=goal, failed=failure is not None, tower_height=height

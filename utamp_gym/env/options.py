@@ -105,6 +105,11 @@ class EnvOptions:
         _choice("affordance source", self.affordances, AFFORDANCE_SOURCES)
         _unit("noise", self.noise)
         _choice("masks", self.masks, MASKS)
+        if self.masks != "affordances" and self.domain != "utamp2":
+            raise ValueError(
+                f"masks={self.masks!r} needs domain='utamp2' (it drops U-TAMP-2's affordance "
+                f"preconditions); domain {self.domain!r} has none, use masks='affordances'"
+            )
         object.__setattr__(self, "disturbance", _unit("disturbance", self.disturbance))
         if self.disturbance > 0 and self.grounding != "physics":
             raise ValueError("disturbance needs grounding='physics' (faults are physical)")
@@ -147,6 +152,8 @@ class EnvOptions:
             s.name for s in suite_scenes(self.suite)
         }
         extra = (self.scene,) if self.scene is not None and not in_suite else ()
+        if self.masks != "affordances":  # "geometric" and "none" share one action space
+            return UniverseKey(self.domain, "none", self.suite, extra, "geometric")
         affordances = "none" if self.domain == "utamp1" else self.affordances
         return UniverseKey(self.domain, affordances, self.suite, extra)
 

@@ -8,6 +8,11 @@ of violated literals, compare with 0. There is no Python loop over actions per s
 whose static precondition fails in the episode's scene (fixed at `reset`) are reduced to one
 always-violated literal. Explaining a failure walks one op's precondition in Python, which
 only happens on a failing step.
+
+Mask modes (the env option ``masks``): ``"affordances"`` and ``"geometric"`` show the agent
+the ops whose (universe) precondition holds; ``"none"`` shows every op whose objects are all
+in the episode's scene (`Universe.action_objects`), fixed per episode. `applicable` is always
+the precondition, whatever is shown: an op the mask allows may still not be applicable.
 """
 
 from __future__ import annotations
@@ -19,12 +24,18 @@ import numpy as np
 from utamp_gym.env.atoms import EpisodeAtoms
 from utamp_gym.env.universe import Universe, ground_universe
 
+MASK_MODES = ("affordances", "geometric", "none")
+
 
 class SymbolicState:
     """Fluent state over `universe.fluent_atoms`, the per-episode static filter and the mask."""
 
-    def __init__(self, universe: Universe) -> None:
+    def __init__(self, universe: Universe, masks: str = "affordances") -> None:
+        if masks not in MASK_MODES:
+            raise ValueError(f"unknown mask mode {masks!r}; valid: {', '.join(MASK_MODES)}")
         self.universe = universe
+        self.masks = masks
+        self._fluent_preds = universe.domain.fluent_predicates()
         half = universe.half
         self.bits = 0
         self._goal = 0
@@ -36,6 +47,8 @@ class SymbolicState:
         self._ext = np.zeros(2 * half, np.intp)
         self._mask = np.zeros(universe.n_actions, bool)
         self._tables: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._present = np.zeros(universe.n_actions, bool)  # masks "none": objects in scene
+        self._presence: dict[str, np.ndarray] = {}
         self.unrepresented: tuple[str, ...] = ()  # perceived atoms outside the universe
 
     def reset(self, atoms: EpisodeAtoms, cache_key: str | None = None) -> None:
@@ -51,6 +64,13 @@ class SymbolicState:
                 self._tables[cache_key] = table
         self._flat, self._ptr = table
         self._static = atoms.static
+        if self.masks == "none":
+            present = self._presence.get(cache_key) if cache_key is not None else None
+            if present is None:
+                present = self._objects_present(atoms.static)
+                if cache_key is not None:
+                    self._presence[cache_key] = present
+            self._present = present
         self.unrepresented = ()
         self.bits = self.universe.state_bits(atoms.fluent)
         self._goal = self.universe.state_bits(atoms.goal)
@@ -90,6 +110,18 @@ class SymbolicState:
         flat = np.where(ok[row], u.check_flat[src], u.half + len(u.fluent_atoms))
         return flat, ptr[:-1]
 
+    def _objects_present(self, static: frozenset[str]) -> np.ndarray:
+        """Read-only bool array: the ops all of whose scene symbols are in the scene (every
+        symbol of a scene has its ``isobjequal`` atom)."""
+        here = {a[1:-1].split()[1] for a in static if a.startswith("(isobjequal ")}
+        out = np.fromiter(
+            (all(o in here for o in objs) for objs in self.universe.action_objects),
+            bool,
+            self.universe.n_actions,
+        )
+        out.setflags(write=False)
+        return out
+
     def _refresh(self) -> None:
         x = self.bits | ((~self.bits & self._invert) << self.universe.half)
         raw = np.frombuffer(x.to_bytes(self._nbytes, "little"), np.uint8)
@@ -98,14 +130,21 @@ class SymbolicState:
 
     # ------------------------------------------------------------------ queries
     def mask(self) -> np.ndarray:
-        """A fresh bool mask over all actions: static and fluent preconditions hold."""
-        return self._mask.copy()
+        """A fresh bool mask over all actions, what the agent is shown: the applicable ones
+        (static and fluent preconditions hold), or with masks "none" those of the scene."""
+        return (self._present if self.masks == "none" else self._mask).copy()
+
+    def allowed(self, i: int) -> bool:
+        """Whether the mask shows action `i`."""
+        return bool((self._present if self.masks == "none" else self._mask)[i])
 
     def applicable(self, i: int) -> bool:
+        """Whether action `i`'s precondition (of the universe's domain) holds now."""
         return bool(self._mask[i])
 
     def dead_end(self) -> bool:
-        """No action is applicable (possible with noisy or rule-based affordances)."""
+        """No action is applicable (possible with noisy or rule-based affordances); with masks
+        "none" too this looks at the preconditions, not at what the agent is shown."""
         return not self._mask.any()
 
     def goal_reached(self) -> bool:
@@ -128,7 +167,7 @@ class SymbolicState:
         if self._mask[i]:
             return None
         u = self.universe
-        fluent = u.domain.fluent_predicates()
+        fluent = self._fluent_preds
         for lit in u.preconditions(i):
             text = str(lit.atom)
             if lit.atom.predicate == "=":

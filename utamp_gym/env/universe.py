@@ -18,6 +18,11 @@ a positive literal on atom j indexes ``half + j``, a negative one ``j``, so an o
 violated fluent literals is a gather and an `np.add.reduceat` over all ops at once. A fluent
 state is a Python int (bit j = atom j of `fluent_atoms`); effects are `add_bits`/`del_bits`.
 
+Precondition sets (`UniverseKey.preconditions`): ``"affordances"`` grounds the key's domain
+as written; ``"geometric"`` grounds `geometric.geometric_domain` (U-TAMP-2 without affordance
+literals) and prunes ops no real state allows (`geometric.prune`). The affordance universes
+are left exactly as they were: their action ids are fixed.
+
 Caching: `ground_universe` is a `functools.lru_cache` (bounded) on a pure function of the
 frozen, hashable `UniverseKey`; the result is immutable (read-only arrays, tuples, ints), so
 envs share it safely and pickle it by key. No registry or env holds a mutable cache of it;
@@ -35,6 +40,7 @@ import numpy as np
 
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
 from utamp_gym.env.atoms import parse_atom, scene_atoms, universe_facts
+from utamp_gym.env.geometric import geometric_domain, prune
 from utamp_gym.errors import PddlError, UnknownNameError
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.scene.model import Scene
@@ -52,20 +58,39 @@ ROLES: Mapping[str, tuple[str, str]] = MappingProxyType(
     }
 )
 _AFFORDANCE_PREDS = frozenset(p.lower() for p in AFFORDANCE_PREDICATES)
+#: which preconditions a universe's actions are grounded (and masked) with
+PRECONDITIONS = ("affordances", "geometric")
 
 
 @dataclass(frozen=True)
 class UniverseKey:
-    """What the universe depends on: domain, affordance source, and the scenes' references.
+    """What the universe depends on: domain, affordance source, the scenes' references and
+    the precondition set.
 
-    `affordances` is ``"none"`` for U-TAMP-1 (no affordance predicates); `scenes` are names
-    that `resolve_scene` understands (suite scenes are given by `suite`).
+    `affordances` is ``"none"`` for U-TAMP-1 (no affordance predicates) and for geometric
+    preconditions (they mention none); `scenes` are names that `resolve_scene` understands
+    (suite scenes are given by `suite`); `preconditions` is one of `PRECONDITIONS` (see the
+    module docstring; ``"geometric"`` needs the utamp2 domain).
     """
 
     domain: str
     affordances: str
     suite: str | None = None
     scenes: tuple[str, ...] = ()
+    preconditions: str = "affordances"
+
+    def __post_init__(self) -> None:
+        if self.preconditions not in PRECONDITIONS:
+            raise UnknownNameError("precondition set", self.preconditions, PRECONDITIONS)
+        if self.preconditions == "geometric" and (self.domain, self.affordances) != (
+            "utamp2",
+            "none",
+        ):
+            raise ValueError(
+                "geometric preconditions are U-TAMP-2's without affordances: they need "
+                f"domain 'utamp2' and affordances 'none', got {self.domain!r}, "
+                f"{self.affordances!r}"
+            )
 
     def resolve(self) -> tuple[Scene, ...]:
         base = suite_scenes(self.suite) if self.suite is not None else ()
@@ -102,6 +127,7 @@ class Universe:
     static_pre: np.ndarray  # static positive preconditions, (n_actions, static words)
     static_neg: np.ndarray  # static negative preconditions that some scene can violate
     roles: tuple[tuple[str, str, str], ...]  # (action name, moved object, target) per action
+    action_objects: tuple[tuple[str, ...], ...]  # scene symbols among each action's arguments
     action_index: Mapping[str, int]
     fluent_index: Mapping[str, int]
     static_index: Mapping[str, int]
@@ -155,9 +181,22 @@ class Universe:
         return ~viol.any(axis=1)
 
     def preconditions(self, i: int) -> tuple[Literal, ...]:
-        """Full precondition of action `i`, in the domain's order."""
-        name, *args = self.actions[i].strip("()").split()
-        return self.domain.actions[name].instantiate(args)[0]
+        """Full precondition of action `i`, in the domain's order (cached: failing steps of
+        agents without masks ask for it at every step)."""
+        return _preconditions(self, i)
+
+
+@lru_cache(maxsize=16_384)
+def _preconditions(universe: Universe, i: int) -> tuple[Literal, ...]:
+    name, *args = universe.actions[i].strip("()").split()
+    return universe.domain.actions[name].instantiate(args)[0]
+
+
+def universe_domain(key: UniverseKey) -> Domain:
+    """The domain whose preconditions a universe's actions are grounded with."""
+    if key.preconditions == "geometric":
+        return geometric_domain()
+    return parse_domain(domain_text(key.domain), source=f"{key.domain}.pddl")
 
 
 def _relaxed_domain(domain: Domain, keep: frozenset[str]) -> Domain:
@@ -203,12 +242,13 @@ def _uniform_predicates(
 @lru_cache(maxsize=16)
 def ground_universe(key: UniverseKey) -> Universe:
     """Ground the universe of `key` (cached: see the module docstring)."""
-    domain = parse_domain(domain_text(key.domain), source=f"{key.domain}.pddl")
+    domain = universe_domain(key)
     fluent_preds = domain.fluent_predicates()
     non_static = fluent_preds | {"="}
     # a noisy detection may add or drop any affordance fact in any episode
     varying = _AFFORDANCE_PREDS if key.affordances == "noisy" else frozenset()
     per_scene: list[tuple[frozenset[str], frozenset[str]]] = []
+    inits: list[tuple[frozenset[str], frozenset[str]]] = []
     union_static: set[str] = set()
     union_fluent: set[str] = set()
     goals: set[str] = set()
@@ -218,6 +258,7 @@ def ground_universe(key: UniverseKey) -> Universe:
             scene, universe_facts(scene, key.affordances), key.domain, fluent_preds
         )
         per_scene.append((static, frozenset(objs)))
+        inits.append((fluent, frozenset(objs) | set(domain.constants) | set(PARTS)))
         union_static |= static
         union_fluent |= fluent
         goals |= {str(parse_atom(g)) for g in goal_atoms(scene)}
@@ -242,6 +283,9 @@ def ground_universe(key: UniverseKey) -> Universe:
             f"between the scenes of {key}: {', '.join(sorted(differ))}"
         )
     ops, reached, _ = reachable_ops(_relaxed_domain(domain, uniform), problem)
+    if key.preconditions == "geometric":
+        ops = prune(ops, inits, problem.init)
+        reached = set(problem.init) | {a for op in ops for a in op.add}
     fluent_atoms = tuple(sorted({str(a) for a in reached if a.predicate in fluent_preds} | goals))
     static_atoms = tuple(sorted(union_static))
     f_index = {a: j for j, a in enumerate(fluent_atoms)}
@@ -250,7 +294,8 @@ def ground_universe(key: UniverseKey) -> Universe:
     rows: dict[str, list[list[int]]] = {k: [] for k in ("pre", "neg", "sp", "sn")}
     add_bits: list[int] = []
     del_bits: list[int] = []
-    names, roles, fixed_neg = [], [], []
+    names, roles, fixed_neg, arg_objects = [], [], [], []
+    symbols = set(objects)
     for op in sorted(ops, key=lambda o: f"({o.name})"):
         name, *args = op.name.split()
         act = domain.actions[name]
@@ -259,6 +304,7 @@ def ground_universe(key: UniverseKey) -> Universe:
         params = dict(zip((v for v, _ in act.parameters), args, strict=True))
         moved, target = ROLES.get(name, ("", ""))
         roles.append((name, params.get(moved, ""), params.get(target, "")))
+        arg_objects.append(tuple(dict.fromkeys(a for a in args if a in symbols)))
         add_bits.append(sum(1 << f_index[str(a)] for a in set(add)))
         del_bits.append(sum(1 << f_index[str(a)] for a in set(dele) if str(a) in f_index))
         fl = [(lit, str(lit.atom)) for lit in pre if lit.atom.predicate in fluent_preds]
@@ -310,6 +356,7 @@ def ground_universe(key: UniverseKey) -> Universe:
         static_pre=_pack([rows["sp"][i] for i in keep], ns),
         static_neg=_pack([rows["sn"][i] for i in keep], ns),
         roles=tuple(roles[i] for i in keep),
+        action_objects=tuple(arg_objects[i] for i in keep),
         action_index=MappingProxyType({a: i for i, a in enumerate(names)}),
         fluent_index=MappingProxyType(f_index),
         static_index=MappingProxyType(s_index),

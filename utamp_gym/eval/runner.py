@@ -6,6 +6,9 @@ first violated precondition or the planner's reason. Grounding ``physics``: the 
 executed in MuJoCo by `execute_plan`, the executor behind `run_episode` (same seed, same
 rollout), and physics decides. An unsolved U-TAMP-2 run is explained
 (`explain`). `run_task` never raises: a crash becomes a failure row.
+
+A method ``rl:PATH`` is a saved RL agent acting in the env of either grounding
+(`utamp_gym.rl.harness`: the env options come from the model, episodes have a step budget).
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import traceback
 from dataclasses import dataclass
 
 from utamp_gym.affordances.facts import Fact, Scores
-from utamp_gym.errors import EndpointError
+from utamp_gym.errors import EndpointError, UnknownNameError
 from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
@@ -30,6 +33,18 @@ from utamp_gym.scene.model import Scene
 
 EVAL_METHODS = (*METHODS, *VLM_METHODS)
 DEFAULT_TIMEOUT = 30.0
+RL_METHOD = "rl:PATH"  # a saved agent (utamp train's model.zip)
+
+
+def check_method(method: str, suite: str | None = None) -> None:
+    """Raise if `method` is neither one of `EVAL_METHODS` nor a usable ``rl:PATH`` model
+    (missing, without its env metadata, or trained on another suite)."""
+    if method.startswith("rl:"):
+        from utamp_gym.rl.harness import check_rl_method
+
+        check_rl_method(method, suite)
+    elif method not in EVAL_METHODS:
+        raise UnknownNameError("method", method, (*EVAL_METHODS, RL_METHOD))
 
 
 @dataclass(frozen=True)
@@ -91,6 +106,41 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
     return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts)
 
 
+def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
+    from utamp_gym.rl.harness import run_rl_episode
+
+    ep = run_rl_episode(
+        task.method,
+        scene.name,
+        task.seed,
+        task.grounding,
+        pose_noise=task.pose_noise,
+        disturbance=task.disturbance,
+    )
+    return ResultRow(
+        scene=scene.name,
+        suite=_suite_of(scene.name),
+        n_objects=scene.n_objects,
+        method=task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        noise=task.noise,
+        solved=ep.success,
+        success=ep.success,
+        failure_reason=ep.reason,
+        plan_length=len(ep.actions),
+        planning_time_s=ep.decision_time_s,
+        execution_time_s=ep.execution_time_s,
+        wall_time_s=time.perf_counter() - start,
+        affordance_precision=None,
+        affordance_recall=None,
+        affordance_f1=None,
+        plan=PLAN_SEPARATOR.join(ep.actions),
+        n_faults=ep.n_faults,
+        **task.settings(),  # type: ignore[arg-type]
+    )
+
+
 def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
     from utamp_gym.eval.closed_loop import run_closed_loop
     from utamp_gym.suites import resolve_scene
@@ -135,6 +185,8 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
 def _run(task: EvalTask, start: float) -> ResultRow:
     from utamp_gym.suites import resolve_scene
 
+    if task.method.startswith("rl:"):  # a saved agent acting in the env (always closed loop)
+        return _run_rl(task, resolve_scene(task.scene), start)
     if task.closed_loop:
         return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)

@@ -21,7 +21,7 @@ from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
 from utamp_gym.distributed import Executor, LocalExecutor
 from utamp_gym.errors import UnknownNameError, UtampError
 from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile, key_shard
-from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EVAL_METHODS, EvalTask, failure_row, run_task
+from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EvalTask, check_method, failure_row, run_task
 from utamp_gym.eval.vlm_methods import VLM_METHODS
 from utamp_gym.planning.methods import DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
@@ -58,8 +58,7 @@ class SweepConfig:
 
     def __post_init__(self) -> None:
         for m in self.methods:
-            if m not in EVAL_METHODS:
-                raise UnknownNameError("method", m, EVAL_METHODS)
+            check_method(m, self.suite)  # planners, VLM methods and rl:PATH models
         if self.grounding not in GROUNDINGS:
             raise UnknownNameError("grounding", self.grounding, GROUNDINGS)
         if self.seeds < 1 or (self.limit is not None and self.limit < 1):

@@ -9,6 +9,7 @@ same (scene, seed) episodes with the deterministic masked policy, so points are 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -61,8 +62,9 @@ class PeriodicEval(BaseCallback):
     """Every `every` steps (and at the end): evaluate, record an `EvalPoint`, checkpoint.
 
     `episodes` are (scene, seed) pairs replayed at every evaluation on `env`; checkpoints go
-    to ``out/checkpoints/step_<n>.zip``. With `stop_at` set, training stops at the first
-    evaluation whose success rate reaches it.
+    to ``out/checkpoints/step_<n>.zip``, written by ``save(model, path)`` (default
+    ``model.save``). With `stop_at` set, training stops at the first evaluation whose success
+    rate reaches it.
     """
 
     def __init__(
@@ -74,9 +76,11 @@ class PeriodicEval(BaseCallback):
         *,
         masks: bool = True,
         stop_at: float | None = None,
+        save: Callable[[Any, Path], None] | None = None,
     ) -> None:
         super().__init__()
         self.env, self.episodes, self.out, self.every = env, episodes, out, max(1, every)
+        self.save = save
         self.masks, self.stop_at = masks, stop_at
         self.points: list[EvalPoint] = []
         self._start = time.perf_counter()
@@ -110,7 +114,10 @@ class PeriodicEval(BaseCallback):
         policy = RLPolicy(self.model, masks=self.masks)
         rows = run_episodes(self.env, policy, self.episodes)
         ckpt = self.out / "checkpoints" / f"step_{self.num_timesteps}.zip"
-        self.model.save(ckpt)
+        if self.save is not None:
+            self.save(self.model, ckpt)
+        else:
+            self.model.save(ckpt)
         point = EvalPoint(
             steps=int(self.num_timesteps),
             wall_time_s=round(train_s, 3),
@@ -141,6 +148,48 @@ def plot_learning_curve(
     ax.set_ylabel("evaluation success rate")
     ax.set_ylim(-0.02, 1.02)
     ax.grid(alpha=0.3)
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def _at(curve: Sequence[Mapping[str, Any]], steps: int) -> float:
+    """Success of a curve at `steps`: its last point at or before (a run stopped at its
+    target keeps its last value)."""
+    before = [p["success_rate"] for p in curve if p["steps"] <= steps]
+    return float(before[-1]) if before else 0.0
+
+
+def plot_learning_curves(
+    groups: Mapping[str, Sequence[Sequence[Mapping[str, Any]]]],
+    path: Path,
+    title: str,
+    target: float | None = None,
+) -> None:
+    """Success against steps for several configurations, each the mean over its seeds with
+    a min-max band; `groups` maps a label to one curve (`EvalPoint` dicts) per seed."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 4.2), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for k, (label, curves) in enumerate(groups.items()):
+        grid = sorted({p["steps"] for c in curves for p in c})
+        values = [[_at(c, s) for s in grid] for c in curves]
+        cols = list(zip(*values, strict=True))
+        mean = [sum(v) / len(v) for v in cols]
+        color = f"C{k}"
+        ax.fill_between(grid, [min(v) for v in cols], [max(v) for v in cols], color=color,
+                        alpha=0.2, linewidth=0)  # fmt: skip
+        ax.plot(grid, mean, "-", color=color, label=f"{label} ({len(curves)} seeds)")
+    if target is not None:
+        ax.axhline(target, color="grey", linestyle="--", linewidth=1)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("evaluation success rate")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
     fig.savefig(path)

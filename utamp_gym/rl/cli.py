@@ -1,8 +1,11 @@
 """`utamp train`: the RL baselines on the command line (wired into `utamp_gym.cli`).
 
     utamp train --env UTampKitchen-v0 --algo maskable-ppo|ppo|dqn [--grounding symbolic|physics]
-        [--num-objects N] [--steps N] [--envs K] [--seed S] --out DIR
+        [--masks affordances|geometric|none] [--num-objects N] [--steps N] [--envs K]
+        [--seed S] [--seeds K] --out DIR
 
+With ``--seeds K`` (K > 1) the seeds S .. S+K-1 train independently into ``DIR/seed_<s>/``
+and ``DIR`` gets ``aggregate.json`` and ``learning_curves.png`` (mean and band across seeds).
 Heavy imports (torch, stable-baselines3) happen only when the command runs.
 """
 
@@ -10,6 +13,10 @@ from __future__ import annotations
 
 import argparse
 from typing import Any
+
+#: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
+#: the parser imports no env code; a test keeps the two equal)
+MASK_CHOICES = ("affordances", "geometric", "none")
 
 
 def _positive(text: str) -> int:
@@ -20,22 +27,37 @@ def _positive(text: str) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
-    from utamp_gym.rl.train import train
+    from utamp_gym.rl.train import train, train_seeds
 
-    result = train(
-        env_id=args.env,
-        algo=args.algo,
-        grounding=args.grounding,
-        num_objects=args.num_objects,
-        steps=args.steps,
-        n_envs=args.envs,
-        seed=args.seed,
-        out=args.out,
-        eval_every=args.eval_every,
-        eval_episodes=args.eval_episodes,
-        progress=not args.no_progress,
-        stop_at_target=args.stop_at_target,
-    )
+    kwargs: dict[str, Any] = {
+        "env_id": args.env,
+        "algo": args.algo,
+        "grounding": args.grounding,
+        "num_objects": args.num_objects,
+        "steps": args.steps,
+        "n_envs": args.envs,
+        "eval_every": args.eval_every,
+        "eval_episodes": args.eval_episodes,
+        "progress": not args.no_progress,
+        "stop_at_target": args.stop_at_target,
+        "masks": args.masks,
+    }
+    if args.seeds > 1:
+        agg = train_seeds(args.seeds, out=args.out, seed=args.seed, **kwargs)
+        steps = agg["steps_to_target"]["mean"]
+        reached = (
+            f"{agg['reached']}/{args.seeds} seeds, mean {steps:.0f} steps"
+            if steps is not None
+            else f"0/{args.seeds} seeds"
+        )
+        final = agg["final_success"]
+        print(
+            f"{args.algo} (masks {args.masks}), {args.seeds} seeds: final success "
+            f"{final['mean']:.2f} ± {final['std']:.2f}, target success reached by {reached}; "
+            f"wrote aggregate.json and learning_curves.png to {args.out}"
+        )
+        return 0
+    result = train(seed=args.seed, out=args.out, **kwargs)
     reached = (
         f"{result.steps_to_target} steps ({result.time_to_target_s:.1f} s)"
         if result.steps_to_target is not None
@@ -58,11 +80,19 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
         "train",
         help="train an RL baseline (MaskablePPO, PPO or DQN)",
         description="Train an RL agent on a kitchen env; writes model.zip, checkpoints/, "
-        "learning_curve.png and train.json to --out.",
+        "learning_curve.png and train.json to --out (with --seeds K > 1: one folder per "
+        "seed plus aggregate.json and learning_curves.png).",
     )
     p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids())
     p.add_argument("--algo", default="maskable-ppo", choices=ALGOS)
     p.add_argument("--grounding", default="symbolic", choices=GROUNDINGS)
+    p.add_argument(
+        "--masks",
+        default="affordances",
+        choices=MASK_CHOICES,
+        help="what the action mask shows: the U-TAMP-2 preconditions under ground-truth "
+        "affordances (default), the geometric ones only, or every action of the scene",
+    )
     p.add_argument(
         "--num-objects",
         type=int,
@@ -73,7 +103,10 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--steps", type=_positive, default=200_000, help="environment steps")
     p.add_argument("--envs", type=_positive, default=8, help="parallel envs")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed (of the first run with --seeds)")
+    p.add_argument(
+        "--seeds", type=_positive, default=1, help="independent runs, seeds S..S+K-1 (default 1)"
+    )
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--eval-every", type=_positive, default=10_000, help="steps between evals")
     p.add_argument("--eval-episodes", type=_positive, default=60, help="episodes per eval")

@@ -16,23 +16,36 @@ import time
 import zipfile
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
+
+if TYPE_CHECKING:
+    from utamp_gym.rl.saved import ModelMeta
 
 ALGOS = ("maskable-ppo", "ppo", "dqn")
 Policy = Callable[[Mapping[str, np.ndarray], Mapping[str, Any] | None], int]
 
 
 def algo_of(path: str | Path) -> str:
-    """Which of `ALGOS` saved the SB3 zip at `path` (read from its policy class)."""
+    """Which of `ALGOS` saved the SB3 zip at `path` (from its `ModelMeta`, else its policy
+    class)."""
+    from utamp_gym.rl.saved import ModelError, read_meta
+
+    try:
+        return read_meta(path).algo
+    except ModelError:
+        pass  # no metadata (saved by SB3 directly or by an older version)
     try:
         with zipfile.ZipFile(path) as z:
             data = json.loads(z.read("data"))
     except (OSError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: not a stable-baselines3 model zip ({exc})") from exc
     module = str(data.get("policy_class", {}).get("__module__", ""))
+    algo = data.get("policy_class", {}).get("utamp_algo")  # utamp_gym.rl.policies classes
+    if algo in ALGOS:
+        return str(algo)
     if module.startswith("sb3_contrib.common.maskable"):
         return "maskable-ppo"
     if module.startswith("stable_baselines3.dqn"):
@@ -80,6 +93,7 @@ class RLPolicy:
         seed: int = 0,
     ) -> None:
         self.model, self.env, self.masks, self.deterministic = model, env, masks, deterministic
+        self.meta: ModelMeta | None = None  # the saved env options, set by `load_rl_policy`
         self.keys = tuple(model.observation_space.spaces)
         self.algo = _algo_of_model(model)
         self._rng = np.random.default_rng(seed)
@@ -137,12 +151,20 @@ def load_rl_policy(
     deterministic: bool = True,
     seed: int = 0,
 ) -> RLPolicy:
-    """Load a model zip saved by `utamp_gym.rl.train` (algorithm detected from the zip)."""
+    """Load a model zip saved by `utamp_gym.rl.train` (algorithm detected from the zip); its
+    `ModelMeta` (None for zips without it) becomes the policy's `meta`."""
     import torch
+
+    from utamp_gym.rl.saved import ModelError, read_meta
 
     torch.set_num_threads(1)
     model = algo_class(algo_of(path)).load(str(path), device="cpu")
-    return RLPolicy(model, env=env, masks=masks, deterministic=deterministic, seed=seed)
+    policy = RLPolicy(model, env=env, masks=masks, deterministic=deterministic, seed=seed)
+    try:
+        policy.meta = read_meta(path)
+    except ModelError:
+        policy.meta = None
+    return policy
 
 
 def run_episodes(
@@ -189,7 +211,7 @@ def run_episodes(
 
 def evaluate_rl(
     path: str | Path | RLPolicy,
-    env_id: str = "UTampKitchen-v0",
+    env_id: str | None = None,
     *,
     scenes: Sequence[str] | None = None,
     num_objects: int | None = None,
@@ -203,11 +225,19 @@ def evaluate_rl(
     `scenes` defaults to every scene of the env (with `num_objects` objects if given). Rows
     hold ``scene, n_objects, seed, success, steps, invalid_actions, failed_actions,
     episode_time_s``; the env is built without reward shaping or termination on failure.
+    The env id and options (``masks``) default to the model's saved ones (`ModelMeta`).
     """
     import utamp_gym  # noqa: F401  (registers the env ids)
 
     policy = path if isinstance(path, RLPolicy) else load_rl_policy(path, masks=masks)
-    kwargs = {"reward_shaping": False, "terminate_on_failure": False, **(env_kwargs or {})}
+    meta = policy.meta
+    env_id = env_id or (meta.env_id if meta is not None else "UTampKitchen-v0")
+    kwargs = {
+        "reward_shaping": False,
+        "terminate_on_failure": False,
+        **(dict(meta.env_options) if meta is not None else {}),
+        **(env_kwargs or {}),
+    }
     env = gym.make(env_id, grounding=grounding, num_objects=num_objects, **kwargs)
     try:
         all_scenes = env.unwrapped.scenes  # type: ignore[attr-defined]

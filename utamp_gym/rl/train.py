@@ -10,21 +10,37 @@ chance to reach a rewarded state. Evaluation uses the deterministic policy with 
 every algorithm (PPO/DQN pick the best applicable action; ``eval_masks=False`` turns
 that off) on a fixed cycle of the env's scenes.
 
+Mask modes (``masks``, the env option): "affordances" shows the agent the U-TAMP-2
+precondition under ground-truth affordances (the planner's knowledge); "geometric" only the
+object-centric preconditions, with the symbolic outcome model rejecting what the ground truth
+forbids; "none" every action of the scene. MaskablePPO trains with the mode's masks; PPO and
+DQN never see masks in training (evaluation applies the mode's mask unless ``eval_masks`` is
+False).
+
 Outputs in `out`: ``model.zip`` (final), ``checkpoints/step_<n>.zip`` (at every
 evaluation), ``learning_curve.png`` and ``train.json`` (config, steps, wall times, curve).
+Every zip carries its `ModelMeta` (env id, masks, observation keys, space sizes), so
+``utamp eval --methods rl:PATH`` rebuilds its env. `train_seeds` runs `train` once per seed
+(``out/seed_<s>/``; one call per seed, so an executor may run them in parallel) and
+`aggregate_seeds` writes ``aggregate.json`` and ``learning_curves.png`` (mean and min-max
+band across seeds).
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import platform
+import statistics
 import time
-from dataclasses import asdict, dataclass, field
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, EVAL_SEED_OFFSET, make_env, make_vec_env
 from utamp_gym.rl.policy import ALGOS, algo_class
+from utamp_gym.rl.saved import ModelMeta, write_meta
 
 GROUNDINGS = ("symbolic", "physics")
 
@@ -41,6 +57,7 @@ class TrainConfig:
     algo: str = "maskable-ppo"
     grounding: str = "symbolic"
     num_objects: int | None = None
+    masks: str = "affordances"
     steps: int = 200_000
     n_envs: int = 8
     seed: int = 0
@@ -59,6 +76,10 @@ class TrainConfig:
             raise ValueError(f"unknown algo {self.algo!r}; valid: {', '.join(ALGOS)}")
         if self.grounding not in GROUNDINGS:
             raise ValueError(f"unknown grounding {self.grounding!r}; valid: symbolic, physics")
+        from utamp_gym.env.options import MASKS
+
+        if self.masks not in MASKS:
+            raise ValueError(f"unknown masks {self.masks!r}; valid: {', '.join(MASKS)}")
         for name in ("steps", "n_envs", "eval_every", "eval_episodes"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)}")
@@ -100,6 +121,27 @@ def default_hyperparams(algo: str, n_envs: int) -> dict[str, Any]:
     }  # fmt: skip
 
 
+def model_meta(config: TrainConfig, env: Any) -> ModelMeta:
+    """The `ModelMeta` of a run, read from its (unfiltered) evaluation env."""
+    kitchen = env.unwrapped
+    return ModelMeta(
+        env_id=config.env_id,
+        suite=str(kitchen.options.suite),
+        algo=config.algo,
+        obs_keys=tuple(config.obs_keys),
+        n_actions=int(env.action_space.n),
+        n_fluents=int(env.observation_space["symbolic"].n),
+        env_options={"masks": config.masks},
+        trained_grounding=config.grounding,
+    )
+
+
+def save_model(model: Any, path: str | Path, meta: ModelMeta) -> None:
+    """``model.save(path)`` plus the `ModelMeta` inside the zip."""
+    model.save(path)
+    write_meta(path, meta)
+
+
 def eval_episodes_of(config: TrainConfig) -> list[tuple[str, int]]:
     """The (scene, seed) pairs of every evaluation: the env's scenes in turn."""
     env = make_env(config.env_id, grounding="symbolic", num_objects=config.num_objects)
@@ -127,13 +169,14 @@ def train(
 ) -> TrainResult:
     """Train `algo` on `env_id` and write the outputs to `out` (see the module docstring).
 
-    `options` are the other `TrainConfig` fields (``eval_masks``, ``target_success``,
+    `options` are the other `TrainConfig` fields (``masks``, ``eval_masks``, ``target_success``,
     ``stop_at_target``, ``reward_shaping``, ``terminate_on_failure``, ``obs_keys``,
     ``hyperparams``). Physics grounding trains in ``SubprocVecEnv`` workers.
     """
     import torch
 
     from utamp_gym.rl.callbacks import PeriodicEval, ProgressBar, plot_learning_curve
+    from utamp_gym.rl.policies import POLICY_CLASSES
 
     config = TrainConfig(
         env_id=env_id, algo=algo, grounding=grounding, num_objects=num_objects, steps=steps,
@@ -145,17 +188,23 @@ def train(
     (out / "checkpoints").mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
 
-    env_kw: dict[str, Any] = {"grounding": grounding, "num_objects": num_objects}
+    env_kw: dict[str, Any] = {
+        "grounding": grounding,
+        "num_objects": num_objects,
+        "masks": config.masks,
+    }
     vec = make_vec_env(
         env_id, n_envs, seed=seed, subproc=grounding == "physics", obs_keys=config.obs_keys,
         reward_shaping=config.reward_shaping, terminate_on_failure=config.terminate_on_failure,
         **env_kw,
     )  # fmt: skip
     eval_env = make_env(env_id, obs_keys=None, **env_kw)
+    meta = model_meta(config, eval_env)
+    save = functools.partial(save_model, meta=meta)
     hyper = {**default_hyperparams(algo, n_envs), **config.hyperparams}
-    model = algo_class(algo)("MultiInputPolicy", vec, seed=seed, verbose=verbose, **hyper)
+    model = algo_class(algo)(POLICY_CLASSES[algo], vec, seed=seed, verbose=verbose, **hyper)
     evaluator = PeriodicEval(
-        eval_env, eval_episodes_of(config), out, eval_every,
+        eval_env, eval_episodes_of(config), out, eval_every, save=save,
         masks=config.eval_masks, stop_at=config.target_success if config.stop_at_target else None,
     )  # fmt: skip
     callbacks: list[Any] = [evaluator]
@@ -167,7 +216,7 @@ def train(
         vec.close()
         eval_env.close()
     model_path = out / "model.zip"
-    model.save(model_path)
+    save(model, model_path)
     wall = time.perf_counter() - start
 
     points = evaluator.points
@@ -183,7 +232,10 @@ def train(
         time_to_target_s=hit.wall_time_s if hit else None,
         curve=[p.to_json() for p in points],
     )
-    title = f"{algo} on {env_id} ({grounding}, {num_objects or '2-5'} objects, seed {seed})"
+    title = (
+        f"{algo}, masks {config.masks}, on {env_id} ({grounding}, {num_objects or '2-5'} "
+        f"objects, seed {seed})"
+    )
     plot_learning_curve(points, out / "learning_curve.png", title, config.target_success)
     (out / "train.json").write_text(json.dumps(_report(config, hyper, result), indent=2) + "\n")
     return result
@@ -207,3 +259,105 @@ def _report(config: TrainConfig, hyper: dict[str, Any], result: TrainResult) -> 
             "torch": torch.__version__,
         },
     }
+
+
+def seed_dir(out: str | Path, seed: int) -> Path:
+    """Where `train_seeds` puts the run of one seed."""
+    return Path(out) / f"seed_{seed}"
+
+
+def finished_run(out: str | Path, config: TrainConfig) -> TrainResult | None:
+    """The result of a finished run of exactly `config` in `out` (its ``train.json`` and
+    ``model.zip``), or None."""
+    out = Path(out)
+    report_path = out / "train.json"
+    if not report_path.is_file() or not (out / "model.zip").is_file():
+        return None
+    report = json.loads(report_path.read_text())
+    want = {**asdict(config), "obs_keys": list(config.obs_keys)}
+    if report.get("config") != want:
+        return None
+    names = {f.name for f in fields(TrainResult)}
+    data = {k: v for k, v in report.items() if k in names}
+    return TrainResult(**{**data, "out": out, "model_path": out / "model.zip"})
+
+
+def train_seed(seed: int, out: str | Path, **kwargs: Any) -> TrainResult:
+    """One seed of `train_seeds`: `train` into `seed_dir`, or its finished run if there is
+    one with the same configuration (so an interrupted or split job resumes)."""
+    options = {k: v for k, v in kwargs.items() if k not in ("progress", "verbose")}
+    config = TrainConfig(seed=seed, **options)
+    done = finished_run(seed_dir(out, seed), config)
+    return done if done is not None else train(seed=seed, out=seed_dir(out, seed), **kwargs)
+
+
+def train_seeds(
+    seeds: int = 1, *, out: str | Path = "runs/rl", seed: int = 0, **kwargs: Any
+) -> dict[str, Any]:
+    """`seeds` independent runs (seeds ``seed .. seed + seeds - 1``), one `train_seed` call
+    each (an executor may run them in parallel), then `aggregate_seeds`; `kwargs` are
+    `train`'s. Returns the aggregate."""
+    if seeds < 1:
+        raise ValueError(f"seeds must be a positive integer, got {seeds}")
+    results = [train_seed(s, out, **kwargs) for s in range(seed, seed + seeds)]
+    return aggregate_seeds(results, out)
+
+
+def _mean_std(xs: Sequence[float]) -> dict[str, float | None]:
+    if not xs:
+        return {"mean": None, "std": None}
+    return {"mean": statistics.fmean(xs), "std": statistics.stdev(xs) if len(xs) > 1 else 0.0}
+
+
+def aggregate_seeds(results: Sequence[TrainResult], out: str | Path) -> dict[str, Any]:
+    """Write ``aggregate.json`` and ``learning_curves.png`` (mean and min-max band) for the
+    runs of one configuration (read from each run's ``train.json``); returns the aggregate.
+
+    Steps and training time to the target are averaged over the seeds that reached it
+    (`reached` of `seeds`); final success over all seeds.
+    """
+    from utamp_gym.rl.callbacks import plot_learning_curves
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    reports = [json.loads((r.out / "train.json").read_text()) for r in results]
+    config = dict(reports[0]["config"])
+    config.pop("seed")
+    hit = [r for r in results if r.steps_to_target is not None]
+    aggregate = {
+        "config": config,
+        "seeds": [rep["config"]["seed"] for rep in reports],
+        "runs": [str(r.out) for r in results],
+        "target_success": config["target_success"],
+        "reached": len(hit),
+        "steps_to_target": _mean_std([float(r.steps_to_target or 0) for r in hit]),
+        "time_to_target_s": _mean_std([float(r.time_to_target_s or 0.0) for r in hit]),
+        "final_success": _mean_std([r.final_success for r in results]),
+        "best_success": _mean_std([max(p["success_rate"] for p in r.curve) for r in results]),
+        "train_time_s": _mean_std([r.train_time_s for r in results]),
+        "wall_time_s": _mean_std([r.wall_time_s for r in results]),
+        "per_seed": [
+            {
+                "seed": rep["config"]["seed"],
+                "steps": r.steps,
+                "final_success": r.final_success,
+                "steps_to_target": r.steps_to_target,
+                "time_to_target_s": r.time_to_target_s,
+                "train_time_s": r.train_time_s,
+            }
+            for rep, r in zip(reports, results, strict=True)
+        ],
+    }
+    label = f"{config['algo']}, masks {config['masks']}"
+    title = (
+        f"{label} on {config['env_id']} ({config['grounding']}, "
+        f"{config['num_objects'] or '2-5'} objects, {len(results)} seeds)"
+    )
+    plot_learning_curves(
+        {label: [r.curve for r in results]},
+        out / "learning_curves.png",
+        title,
+        config["target_success"],
+    )
+    (out / "aggregate.json").write_text(json.dumps(aggregate, indent=2) + "\n")
+    return aggregate

@@ -1,0 +1,164 @@
+"""A saved agent as an evaluation method: ``utamp eval --methods rl:PATH``.
+
+Why: learned agents and planners are compared on the same scenes, seeds and groundings, with
+rows side by side in ``results.csv``. An ``rl:PATH`` run builds the env the model was trained
+on from its `ModelMeta` (env id, ``masks``), in the eval's grounding, resets it to the task's
+scene and seed, and lets the deterministic policy act (choosing among the actions the mask
+shows) until the goal, a dead end, or the step budget.
+
+Step budget: `STEPS_PER_OBJECT` steps per object of the scene (20 for two objects, 50 for
+five), about four times the longest optimal plan (12 steps for five objects), so an agent
+gets room to recover from failed actions but a wandering one does not run the 100-step
+training limit through physics.
+
+A row's `plan` lists the actions taken (failed ones too), `plan_length` their number,
+`planning_time_s` the time spent choosing them (policy inference) and `execution_time_s` the
+time spent in the env's steps (the simulator in physics grounding).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from utamp_gym.rl.saved import ModelError, ModelMeta, check_model, check_spaces, read_meta
+
+if TYPE_CHECKING:
+    from utamp_gym.rl.policy import RLPolicy
+
+RL_PREFIX = "rl:"
+STEPS_PER_OBJECT = 10
+
+
+def is_rl_method(method: str) -> bool:
+    return method.startswith(RL_PREFIX)
+
+
+def model_path(method: str) -> Path:
+    """The model zip of an ``rl:PATH`` method."""
+    path = method[len(RL_PREFIX) :].strip()
+    if not path:
+        raise ModelError("method 'rl:' needs a model path, e.g. rl:runs/rl/model.zip")
+    return Path(path).expanduser()
+
+
+def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = True) -> ModelMeta:
+    """Fail fast (`ModelError`) if the model is missing, has no metadata, was trained on
+    another suite or (`spaces`) does not fit its env's action and observation sizes today
+    (checked on the symbolic env: both groundings share the spaces); returns its metadata."""
+    path = model_path(method)
+    meta = read_meta(path)
+    check_model(meta, path, suite=suite)
+    if spaces:
+        import gymnasium as gym
+
+        import utamp_gym  # noqa: F401  (registers the env ids)
+
+        try:
+            env = gym.make(meta.env_id, grounding="symbolic", **meta.env_options)
+        except (gym.error.Error, ValueError) as exc:
+            raise ModelError(f"{path}: cannot make its env {meta.env_id} ({exc})") from None
+        n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
+        check_spaces(meta, path, int(env.action_space.n), n_fluents)  # type: ignore[attr-defined]
+        env.close()
+    return meta
+
+
+def step_budget(n_objects: int) -> int:
+    """Steps an agent gets for a scene (see the module docstring)."""
+    return STEPS_PER_OBJECT * n_objects
+
+
+@dataclass(frozen=True)
+class RLEpisode:
+    """One evaluated episode of a saved agent."""
+
+    success: bool
+    reason: str  # "" on success
+    actions: tuple[str, ...]
+    failed_actions: int
+    decision_time_s: float
+    execution_time_s: float
+    n_faults: int = 0  # injected faults (physics grounding with disturbance)
+
+
+@lru_cache(maxsize=2)
+def _load(path: str, mtime_ns: int) -> RLPolicy:
+    """The policy of a model file (cached per process: a sweep runs it on many scenes)."""
+    from utamp_gym.rl.policy import load_rl_policy
+
+    return load_rl_policy(path)
+
+
+def run_rl_episode(
+    method: str,
+    scene: str,
+    seed: int,
+    grounding: str,
+    *,
+    pose_noise: float | None = None,
+    disturbance: float = 0.0,
+) -> RLEpisode:
+    """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
+    import gymnasium as gym
+
+    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.task import GOAL_REWARD
+
+    path = model_path(method)
+    meta = check_rl_method(method, spaces=False)  # checked below on the env itself
+    policy = _load(str(path.resolve()), path.stat().st_mtime_ns)
+    options: dict[str, Any] = {**meta.env_options, "disturbance": disturbance}
+    if grounding == "physics" and pose_noise is not None:
+        options["pose_noise"] = pose_noise
+    env = gym.make(
+        meta.env_id,
+        grounding=grounding,
+        reward_shaping=False,
+        terminate_on_failure=False,
+        record_timings=False,
+        **options,
+    )
+    try:
+        kitchen = env.unwrapped
+        n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
+        n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
+        check_spaces(meta, path, n_actions, n_fluents)
+        obs, info = env.reset(seed=seed, options={"scene": scene})
+        budget = step_budget(kitchen.scene.n_objects)  # type: ignore[attr-defined]
+        actions: list[str] = []
+        failed, faults, decide, execute = 0, 0, 0.0, 0.0
+        last_failure: str | None = None
+        policy.reset()
+        for _ in range(budget):
+            t0 = time.perf_counter()
+            action = policy(obs, info)
+            t1 = time.perf_counter()
+            obs, reward, terminated, _, info = env.step(action)
+            decide, execute = decide + t1 - t0, execute + time.perf_counter() - t1
+            actions.append(str(info["action"]))
+            faults += info.get("fault") is not None
+            if info["failure_reason"] is not None:
+                failed, last_failure = failed + 1, str(info["failure_reason"])
+            if terminated:
+                success = float(reward) >= GOAL_REWARD
+                why = "" if success else _terminal_reason(info, len(actions))
+                return RLEpisode(success, why, tuple(actions), failed, decide, execute, faults)
+        why = f"budget exhausted: no goal in {budget} steps ({failed} failed)"
+        if last_failure is not None:
+            why += f"; last failure: {last_failure}"
+        return RLEpisode(False, why, tuple(actions), failed, decide, execute, faults)
+    finally:
+        env.close()
+
+
+def _terminal_reason(info: dict[str, Any], steps: int) -> str:
+    """Why an episode ended without the goal: a perceived anomaly (physics) or a dead end."""
+    anomalies = info.get("anomalies") or {}
+    if anomalies:
+        shown = "; ".join(f"{k}: {v}" for k, v in sorted(anomalies.items()))
+        return f"anomaly after {steps} steps: {shown}"
+    return f"dead end: no applicable action after {steps} steps"
