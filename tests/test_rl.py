@@ -272,3 +272,49 @@ def test_a_finished_seed_is_reused_not_retrained(cli_runs: Path) -> None:
     assert result.curve == json.loads((run / "train.json").read_text())["curve"]
     options = {k: v for k, v in kwargs.items() if k != "progress"}
     assert finished_run(run, TrainConfig(**{**options, "seed": 3, "steps": 2048})) is None
+
+
+def test_train_seeds_as_parallel_ray_tasks(
+    cli_runs: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`utamp train --seeds 2 --executor ray --workers 2` trains both seeds as Ray tasks on a
+    2-CPU instance it starts (and stops) and learns exactly what the same seeds learned one
+    after another in this process."""
+    ray = pytest.importorskip("ray")
+    if ray.is_initialized():
+        ray.shutdown()
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    args = (
+        "train --algo maskable-ppo --masks geometric --num-objects 2 --steps 1024 --envs 2 "
+        "--seed 3 --seeds 2 --eval-every 512 --eval-episodes 5 --no-progress "
+        f"--executor ray --workers 2 --out {tmp_path}"
+    )
+    assert main(shlex.split(args)) == 0
+    assert not ray.is_initialized()
+    agg = json.loads((tmp_path / "aggregate.json").read_text())
+    assert agg["seeds"] == [3, 4]
+    for seed in (3, 4):
+        here = json.loads((cli_runs / f"seed_{seed}" / "train.json").read_text())
+        there = json.loads((tmp_path / f"seed_{seed}" / "train.json").read_text())
+        assert there["config"] == here["config"]
+        assert [p["success_rate"] for p in there["curve"]] == [
+            p["success_rate"] for p in here["curve"]
+        ]
+        assert _weights(tmp_path / f"seed_{seed}") == _weights(cli_runs / f"seed_{seed}")
+
+
+def _weights(run: Path) -> dict[str, list[float]]:
+    """The trained policy's parameters in a saved model, as plain lists."""
+    import io
+
+    import torch
+
+    with zipfile.ZipFile(run / "model.zip") as z:
+        state = torch.load(io.BytesIO(z.read("policy.pth")), weights_only=True)
+    return {k: v.flatten().tolist() for k, v in state.items()}
+
+
+def test_train_executor_options_need_several_seeds(tmp_path: Path, capsys) -> None:
+    args = f"train --steps 64 --executor ray --out {tmp_path}"
+    assert main(shlex.split(args)) == 2
+    assert "need --seeds K > 1" in capsys.readouterr().err

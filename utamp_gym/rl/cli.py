@@ -2,10 +2,13 @@
 
     utamp train --env UTampKitchen-v0 --algo maskable-ppo|ppo|dqn [--grounding symbolic|physics]
         [--masks affordances|geometric|none] [--num-objects N] [--steps N] [--envs K]
-        [--seed S] [--seeds K] --out DIR
+        [--seed S] [--seeds K [--executor local|ray] [--workers N] [--ray-address A]]
+        --out DIR
 
 With ``--seeds K`` (K > 1) the seeds S .. S+K-1 train independently into ``DIR/seed_<s>/``
-and ``DIR`` gets ``aggregate.json`` and ``learning_curves.png`` (mean and band across seeds).
+and ``DIR`` gets ``aggregate.json`` and ``learning_curves.png`` (mean and band across seeds);
+``--executor ray`` trains them as parallel Ray tasks, ``--executor local --workers N`` in N
+local processes.
 Heavy imports (torch, stable-baselines3) happen only when the command runs.
 """
 
@@ -13,6 +16,8 @@ from __future__ import annotations
 
 import argparse
 from typing import Any
+
+from utamp_gym.errors import UtampError
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
 #: the parser imports no env code; a test keeps the two equal)
@@ -42,8 +47,17 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "stop_at_target": args.stop_at_target,
         "masks": args.masks,
     }
+    parallel = args.executor != "local" or args.workers is not None or args.ray_address
+    if parallel and args.seeds == 1:
+        raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")
     if args.seeds > 1:
-        agg = train_seeds(args.seeds, out=args.out, seed=args.seed, **kwargs)
+        from utamp_gym.distributed import make_executor
+
+        workers = args.workers
+        if args.executor == "local" and workers is None:
+            workers = 0  # one seed after another in this process
+        executor = make_executor(args.executor, workers=workers, ray_address=args.ray_address)
+        agg = train_seeds(args.seeds, out=args.out, seed=args.seed, executor=executor, **kwargs)
         steps = agg["steps_to_target"]["mean"]
         reached = (
             f"{agg['reached']}/{args.seeds} seeds, mean {steps:.0f} steps"
@@ -106,6 +120,26 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed (of the first run with --seeds)")
     p.add_argument(
         "--seeds", type=_positive, default=1, help="independent runs, seeds S..S+K-1 (default 1)"
+    )
+    p.add_argument(
+        "--executor",
+        default="local",
+        choices=("local", "ray"),
+        help="with --seeds K: train the seeds in local worker processes (default: one after "
+        "another in this process) or as parallel Ray tasks (the utamp-gym[ray] extra)",
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="with --seeds K: local worker processes (default 0: in this process), or the "
+        "CPUs of a Ray instance started here (default: all)",
+    )
+    p.add_argument(
+        "--ray-address",
+        default=None,
+        help="with --executor ray: the cluster to join (default: RAY_ADDRESS, else a local "
+        "Ray instance started here)",
     )
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--eval-every", type=_positive, default=10_000, help="steps between evals")

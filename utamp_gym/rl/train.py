@@ -36,11 +36,15 @@ import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from utamp_gym.errors import UtampError
 from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, EVAL_SEED_OFFSET, make_env, make_vec_env
 from utamp_gym.rl.policy import ALGOS, algo_class
 from utamp_gym.rl.saved import ModelMeta, write_meta
+
+if TYPE_CHECKING:
+    from utamp_gym.distributed import Executor
 
 GROUNDINGS = ("symbolic", "physics")
 
@@ -292,15 +296,56 @@ def train_seed(seed: int, out: str | Path, **kwargs: Any) -> TrainResult:
 
 
 def train_seeds(
-    seeds: int = 1, *, out: str | Path = "runs/rl", seed: int = 0, **kwargs: Any
+    seeds: int = 1,
+    *,
+    out: str | Path = "runs/rl",
+    seed: int = 0,
+    executor: Executor | None = None,
+    **kwargs: Any,
 ) -> dict[str, Any]:
     """`seeds` independent runs (seeds ``seed .. seed + seeds - 1``), one `train_seed` call
-    each (an executor may run them in parallel), then `aggregate_seeds`; `kwargs` are
-    `train`'s. Returns the aggregate."""
+    each, then `aggregate_seeds`; `kwargs` are `train`'s. Returns the aggregate.
+
+    With an `executor` (`utamp_gym.distributed`: local worker processes or Ray tasks) the
+    seeds train in parallel; without one, one after another in this process. If a seed
+    fails, the others still finish (and are reused by the next call) and `UtampError`
+    names the failed seeds with their reasons.
+    """
     if seeds < 1:
         raise ValueError(f"seeds must be a positive integer, got {seeds}")
-    results = [train_seed(s, out, **kwargs) for s in range(seed, seed + seeds)]
+    todo = list(range(seed, seed + seeds))
+    if executor is None:
+        results = [train_seed(s, out, **kwargs) for s in todo]
+    else:
+        done: dict[int, TrainResult] = {}
+        failures: dict[int, str] = {}
+
+        def record(item: tuple[int, TrainResult | str]) -> None:
+            s, result = item
+            if isinstance(result, str):
+                failures[s] = result
+            else:
+                done[s] = result
+
+        executor.run(
+            functools.partial(_train_seed_task, out=str(out), kwargs=kwargs),
+            todo,
+            record,
+            lambda s, reason: (s, reason),
+        )
+        if failures:
+            listed = "; ".join(f"seed {s}: {r}" for s, r in sorted(failures.items()))
+            raise UtampError(
+                f"{len(failures)} of {seeds} training runs failed ({listed}); the finished "
+                "seeds are kept and reused when the same command runs again"
+            )
+        results = [done[s] for s in todo]
     return aggregate_seeds(results, out)
+
+
+def _train_seed_task(seed: int, *, out: str, kwargs: dict[str, Any]) -> tuple[int, TrainResult]:
+    """One executor task of `train_seeds` (a module-level function, so it pickles)."""
+    return seed, train_seed(seed, out, **kwargs)
 
 
 def _mean_std(xs: Sequence[float]) -> dict[str, float | None]:
