@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 import traceback
 from dataclasses import dataclass
+from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError, UnknownNameError
@@ -117,27 +118,19 @@ def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
         pose_noise=task.pose_noise,
         disturbance=task.disturbance,
     )
-    return ResultRow(
-        scene=scene.name,
-        suite=_suite_of(scene.name),
-        n_objects=scene.n_objects,
-        method=task.method,
-        seed=task.seed,
-        grounding=task.grounding,
-        noise=task.noise,
+    return _row(
+        task,
+        scene.name,
+        scene.n_objects,
+        start,
         solved=ep.success,
         success=ep.success,
         failure_reason=ep.reason,
         plan_length=len(ep.actions),
         planning_time_s=ep.decision_time_s,
         execution_time_s=ep.execution_time_s,
-        wall_time_s=time.perf_counter() - start,
-        affordance_precision=None,
-        affordance_recall=None,
-        affordance_f1=None,
         plan=PLAN_SEPARATOR.join(ep.actions),
         n_faults=ep.n_faults,
-        **task.settings(),  # type: ignore[arg-type]
     )
 
 
@@ -157,28 +150,20 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
         noise=noise,
         timeout=task.timeout,
     )
-    return ResultRow(
-        scene=scene.name,
-        suite=_suite_of(scene.name),
-        n_objects=scene.n_objects,
-        method=task.method,
-        seed=task.seed,
-        grounding=task.grounding,
-        noise=task.noise,
+    return _row(
+        task,
+        scene.name,
+        scene.n_objects,
+        start,
         solved=bool(out.actions) or out.success,
         success=out.success,
         failure_reason=out.failure,
         plan_length=len(out.actions),
         planning_time_s=out.planning_time_s,
         execution_time_s=out.execution_time_s,
-        wall_time_s=time.perf_counter() - start,
-        affordance_precision=None,
-        affordance_recall=None,
-        affordance_f1=None,
         plan=PLAN_SEPARATOR.join(out.actions),
         n_faults=out.n_faults,
         n_replans=out.n_replans,
-        **task.settings(),  # type: ignore[arg-type]
     )
 
 
@@ -218,28 +203,23 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         if task.explain and planned.facts is not None:
             failure += "; " + explain_unsolvable(scene, planned.facts).message
     s = planned.scores
-    return ResultRow(
-        scene=scene.name,
-        suite=_suite_of(scene.name),
-        n_objects=scene.n_objects,
-        method=task.method,
-        seed=task.seed,
-        grounding=task.grounding,
-        noise=task.noise,
+    return _row(
+        task,
+        scene.name,
+        scene.n_objects,
+        start,
         solved=planned.solved,
         success=bool(success),
         failure_reason="" if success else failure,
         plan_length=len(planned.plan),
         planning_time_s=planned.planning_time_s,
         execution_time_s=exec_time,
-        wall_time_s=time.perf_counter() - start,
         affordance_precision=None if s is None else s.precision,
         affordance_recall=None if s is None else s.recall,
         affordance_f1=None if s is None else s.f1,
         valid_gt=valid_gt,
         plan=PLAN_SEPARATOR.join(planned.plan),
         n_faults=n_faults,
-        **task.settings(),  # type: ignore[arg-type]
     )
 
 
@@ -251,14 +231,11 @@ def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> Result
         n_objects = resolve_scene(task.scene).n_objects
     except Exception:
         n_objects = 0
-    return ResultRow(
-        scene=task.scene,
-        suite=_suite_of(task.scene),
-        n_objects=n_objects,
-        method=task.method,
-        seed=task.seed,
-        grounding=task.grounding,
-        noise=task.noise,
+    return _row(
+        task,
+        task.scene,
+        n_objects,
+        None,
         solved=False,
         success=False,
         failure_reason=reason,
@@ -266,11 +243,33 @@ def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> Result
         planning_time_s=None,
         execution_time_s=0.0,
         wall_time_s=wall_time_s,
-        affordance_precision=None,
-        affordance_recall=None,
-        affordance_f1=None,
         crashed=True,
-        **task.settings(),  # type: ignore[arg-type]
+    )
+
+
+def _row(
+    task: EvalTask, scene: str, n_objects: int, start: float | None, **outcome: Any
+) -> ResultRow:
+    """The row of `task`: its identity and settings columns, the wall time since `start`
+    (if given), affordance scores None unless `outcome` has them, and `outcome`."""
+    columns: dict[str, Any] = {
+        "affordance_precision": None,
+        "affordance_recall": None,
+        "affordance_f1": None,
+    }
+    if start is not None:
+        columns["wall_time_s"] = time.perf_counter() - start
+    columns.update(outcome)
+    return ResultRow(
+        scene=scene,
+        suite=_suite_of(scene),
+        n_objects=n_objects,
+        method=task.method,
+        seed=task.seed,
+        grounding=task.grounding,
+        noise=task.noise,
+        **columns,
+        **task.settings(),
     )
 
 
