@@ -11,6 +11,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from procs import downward_children, process_alive
 
 from utamp_gym.cli import main
 from utamp_gym.deadline import PHASES
@@ -107,29 +108,6 @@ def test_grounding_watches_the_deadline() -> None:
     assert wall < 0.5, wall
 
 
-def _downward_children(pid: int) -> list[int]:
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:
-                continue
-            comm = stat[stat.index("(") + 1 : stat.rindex(")")]
-            state, ppid = stat[stat.rindex(")") + 2 :].split()[:2]
-            if comm == "downward" and int(ppid) == pid and state != "Z":
-                found.append(int(entry.name))
-    return found
-
-
-def _alive(pid: int) -> bool:
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat[stat.rindex(")") + 2] != "Z"
-
-
 def test_sigint_during_search_exits_130_and_kills_the_search() -> None:
     # UTAMP-1 with LM-cut on five objects: seconds of grounding, then a search of about a second
     cmd = [sys.executable, "-m", "utamp_gym.cli", "plan", "pick-place/105", "--method", "utamp1"]
@@ -146,7 +124,7 @@ def test_sigint_during_search_exits_130_and_kills_the_search() -> None:
         limit = time.monotonic() + 120
         children: list[int] = []
         while not children and proc.poll() is None and time.monotonic() < limit:
-            children = _downward_children(proc.pid)
+            children = downward_children(proc.pid)
             time.sleep(0.005)
         assert children, "the search never started (or finished before it could be seen)"
         proc.send_signal(signal.SIGINT)
@@ -156,9 +134,9 @@ def test_sigint_during_search_exits_130_and_kills_the_search() -> None:
     assert proc.returncode == 130 and out == ""
     assert err == "utamp: interrupted\n"
     deadline = time.monotonic() + 2.0
-    while any(map(_alive, children)) and time.monotonic() < deadline:
+    while any(map(process_alive, children)) and time.monotonic() < deadline:
         time.sleep(0.01)
-    assert not any(map(_alive, children))
+    assert not any(map(process_alive, children))
 
 
 def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:

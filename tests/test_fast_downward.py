@@ -18,6 +18,7 @@ from collections import deque
 from pathlib import Path
 
 import pytest
+from procs import downward_children, process_alive
 
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
 from utamp_gym.planning import fast_downward as fd
@@ -121,31 +122,6 @@ def optimal_length(towers: list[list[str]], goal: set[str]) -> int:
                 seen.add(nxt)
                 frontier.append((nxt, depth + 1))
     raise AssertionError("goal unreachable")
-
-
-def downward_children() -> list[int]:
-    """Pids of live (non-zombie) ``downward`` processes whose parent is this process."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-        except OSError:
-            continue
-        comm = stat[stat.index("(") + 1 : stat.rindex(")")]
-        state, ppid = stat[stat.rindex(")") + 2 :].split()[:2]
-        if comm == "downward" and int(ppid) == os.getpid() and state != "Z":
-            found.append(int(entry.name))
-    return found
-
-
-def process_alive(pid: int) -> bool:
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat[stat.rindex(")") + 2] != "Z"
 
 
 @pytest.mark.parametrize("search", fd.SEARCH_CONFIGS)
