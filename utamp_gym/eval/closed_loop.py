@@ -19,7 +19,8 @@ from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.errors import PlanningError
 from utamp_gym.planning.methods import DEFAULT_NOISE, method_spec
-from utamp_gym.suites import SUITES
+from utamp_gym.seeding import run_seed
+from utamp_gym.suites import SUITES, resolve_scene
 
 #: macro actions per closed-loop episode (five-object optimal plans have at most 14)
 MAX_STEPS = 40
@@ -70,7 +71,8 @@ def run_closed_loop(
     execution = 0.0
     try:
         start = time.perf_counter()
-        obs, info = env.reset(seed=seed)  # counted as execution, as in `execute_plan`
+        # counted as execution, as in `execute_plan`; seeded per (scene, seed) as it is
+        obs, info = env.reset(seed=run_seed(resolve_scene(scene).name, seed))
         execution += time.perf_counter() - start
         for _ in range(max_steps):
             try:

@@ -127,7 +127,13 @@ def run_rl_episode(
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
         check_spaces(meta, path, n_actions, n_fluents)
-        obs, info = env.reset(seed=seed, options={"scene": scene})
+        from utamp_gym.seeding import run_seed
+        from utamp_gym.suites import resolve_scene
+
+        # seeded per (scene, seed), as the planners' runs are
+        obs, info = env.reset(
+            seed=run_seed(resolve_scene(scene).name, seed), options={"scene": scene}
+        )
         budget = step_budget(kitchen.scene.n_objects)  # type: ignore[attr-defined]
         actions: list[str] = []
         failed, faults, decide, execute = 0, 0, 0.0, 0.0

@@ -22,6 +22,7 @@ import numpy as np
 from utamp_gym.backend import DEFAULT_POSE_NOISE
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.model import Scene
+from utamp_gym.seeding import run_seed
 from utamp_gym.sim.backend import FrameSink, MujocoBackend
 
 VIDEO_SIZE = (480, 360)  # width, height
@@ -98,22 +99,24 @@ def execute_plan(
 ) -> Execution:
     """Execute `plan` on `scene` in MuJoCo, stopping at the first failed step (open loop).
 
-    `seed` feeds one generator for initial pose noise, pose estimates, IK restarts and
-    OMPL; `pose_noise` is the robot's pose-estimation noise (m; ignored when `backend` is
-    given: its own applies). With `disturbance` p, each executed step is followed with
-    probability p by an injected fault (drawn from a second generator of `seed`).
+    `seed`, mixed with the scene's name (`utamp_gym.seeding.run_seed`), feeds one generator
+    for initial pose noise, pose estimates, IK restarts and OMPL; `pose_noise` is the
+    robot's pose-estimation noise (m; ignored when `backend` is given: its own applies).
+    With `disturbance` p, each executed step is followed with probability p by an injected
+    fault (drawn from a second generator of that seed).
     `success` means every step succeeded and all objects stand in one tower on the tray,
     as simulated.
     """
     plan = list(plan)
-    faults = np.random.default_rng([seed, FAULT_STREAM]) if disturbance > 0 else None
+    base = run_seed(scene.name, seed)  # independent per (scene, seed)
+    faults = np.random.default_rng([base, FAULT_STREAM]) if disturbance > 0 else None
     with _video(video) as sink:
         own = backend is None
         sim = backend or MujocoBackend(pose_noise=pose_noise)
         sim.frame_sink = sink
         try:
             start = time.perf_counter()
-            sim.reset(scene, np.random.default_rng(seed))
+            sim.reset(scene, np.random.default_rng(base))
             if sink is not None:
                 sink(sim.render(*VIDEO_SIZE))
             steps, failure, n_faults = _execute(sim, plan, disturbance, faults)
