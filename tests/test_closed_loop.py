@@ -17,7 +17,9 @@ from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.errors import PlanningError
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.perception.abstraction import perceive
+from utamp_gym.perception.state import PhysicalState
 from utamp_gym.planning.methods import plan_scene
+from utamp_gym.scene.model import Scene
 from utamp_gym.suites import suite_scenes
 from utamp_gym.symbolic.problem import scene_facts
 
@@ -248,3 +250,34 @@ def test_eval_closed_loop_rows(grounding: str) -> None:
     assert row.success and not row.crashed, row.failure_reason
     assert row.closed_loop and row.n_replans == 0 and row.n_faults == 0
     assert row.plan_length == 2 and row.plan.startswith("(pick-support salt")
+
+
+@physics
+def test_a_push_slides_the_shaker_and_perception_follows() -> None:
+    """The push fault moves an object like a flat pusher: the shaker slides 3 cm without
+    tipping (a push through its centre of mass alone would tip it: μ·h > r), and the
+    perceived atoms say it still stands on the same part."""
+    from utamp_gym.sim.faults import push
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene("pick-place/017")
+    backend = MujocoBackend()
+    backend.reset(scene, np.random.default_rng(0))
+
+    standing = _salt_orientation(scene, backend.physical_state())
+    before = backend.object_poses()["salt"]
+    fault = push(backend._require(), "salt", np.array([0.0, 1.0, 0.0]), 0.03)
+    after = backend.object_poses()["salt"]
+    backend_state = backend.physical_state()
+    backend.close()
+    moved = float(np.hypot(*(after[:2] - before[:2])))
+    assert 0.015 < moved < 0.035 and fault.kind == "push" and fault.obj == "salt", fault
+    assert abs(after[2] - before[2]) < 0.005  # its frame stayed at the same height: not tipped
+    assert standing and _salt_orientation(scene, backend_state) == standing
+    assert perceive(scene, backend_state).anomalies == {}
+
+
+def _salt_orientation(scene: Scene, state: PhysicalState) -> set[str]:
+    """The shaker's perceived `force` and `base` atoms: which of its parts face up and back."""
+    atoms = perceive(scene, state).atoms
+    return {a for a in atoms if a.startswith(("(force salt", "(base salt"))}

@@ -8,7 +8,13 @@ follows (a pushed stack may topple), or the robot's pose estimate of one object 
 
 * **push** – an object resting on the table or on a stack (not the held one) is pushed
   horizontally by `PUSH_RANGE` metres in a random direction, at `PUSH_SPEED`, the way a
-  finger would push it; what rests on it is carried along by friction or not.
+  flat pusher (a palm, a sliding tray's edge) pushes it: along its whole side, so it slides
+  without turning; what rests on it is carried along by friction or not. A push through
+  the centre of mass alone — a finger at mid-height — tips any object whose friction
+  moment exceeds its footprint's (μ·h > r: the shaker, an upright mug), an unrecoverable
+  state in U-TAMP-2, which has no action to right an object (measured with such pushes:
+  10 of 12 closed-loop failures on pick-place at p = 0.1 ended with a toppled shaker or
+  mug; see the README).
 * **drop** – while the hand carries an object, the gripper opens; the object falls.
 * **belief** – the robot's belief of one object's pose is offset by `BELIEF_RANGE` metres
   (and up to `BELIEF_YAW_DEG`) until it grasps the object or an action involving it fails.
@@ -66,8 +72,9 @@ def push(st: SimState, name: str, direction: np.ndarray, distance: float) -> Fau
     start = obj_pose(st, name)[:3, 3].copy()
     dof = st.world.dof_adr[name]
     n = max(1, round(distance / PUSH_SPEED / st.arm.dt))
-    for _ in range(n):  # a finger moving at constant speed: it sets the contact's speed
+    for _ in range(n):  # a flat pusher at constant speed: it sets the speed, holds the turn
         st.data.qvel[dof : dof + 2] = PUSH_SPEED * direction[:2]
+        st.data.qvel[dof + 3 : dof + 6] = 0.0
         st.arm.step(1)
     settle_objects(st)
     moved = float(np.linalg.norm((obj_pose(st, name)[:3, 3] - start)[:2]))
