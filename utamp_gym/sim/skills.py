@@ -87,7 +87,10 @@ def _plan_grasp(
     """
     arm, world = st.arm, st.world
     t = world.scene.type_of(sym.obj)
-    geoms = _member_geoms(st, sym.obj, sym.member)
+    member = _member_geoms(st, sym.obj, sym.member)
+    rest = [g for g in world.geom_ids[sym.obj] if g not in set(member)]
+    fingers = set(arm.ids.finger_geom_ids.tolist()) | set(arm.ids.finger_pad_geom_ids.tolist())
+    palm = [g for g in arm.ids.geom_ids.tolist() if g not in fingers]
     tried = []
     candidates = grasp_candidates(t, sym, st.estimate(sym.obj), prefer_x=arm.tcp()[:3, 0])
     noise = 0.0 if st.estimator is None else st.estimator.noise
@@ -98,7 +101,9 @@ def _plan_grasp(
         )
     for g in candidates:
         near = arm.sync(arm.near, gap=g.opening)
-        with ignoring(near, geoms):
+        # the fingers may touch the member only; the palm may rest against the rest of the
+        # object (an upside-down pot's floor above its lug), as it would in the real hand
+        with ignoring(near, member), allowing(near, palm, rest):
             for q in arm.ik_solutions(g.tcp, near.is_valid):
                 # the widest opening that fits: room for the error of the pose estimate
                 for opening in _openings(g, noise):
