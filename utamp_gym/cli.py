@@ -47,7 +47,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
     # Bounds the whole command: counted from `main`'s start (argument parsing and the
     # planner's imports included), not from when planning begins.
-    deadline = Deadline.after(args.timeout, getattr(args, "started", None))
+    deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
     outcome = plan_scene(
         scene,

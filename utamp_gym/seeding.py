@@ -18,9 +18,15 @@ import zlib
 import numpy as np
 
 
-def run_seed(scene_name: str, seed: int) -> int:
-    """A 63-bit seed mixed from `seed` and the scene's name (stable across processes)."""
+def scene_seed_sequence(scene_name: str, seed: int) -> np.random.SeedSequence:
+    """The entropy of (scene, seed): `seed` mixed with the scene name's CRC-32 (stable
+    across processes, unlike `hash`). Also keys the noisy affordance detection."""
     if seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed}")
-    sequence = np.random.SeedSequence([seed, zlib.crc32(scene_name.encode())])
-    return int(sequence.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+    return np.random.SeedSequence([seed, zlib.crc32(scene_name.encode())])
+
+
+def run_seed(scene_name: str, seed: int) -> int:
+    """A 63-bit seed mixed from `seed` and the scene's name (stable across processes)."""
+    state = scene_seed_sequence(scene_name, seed).generate_state(1, dtype=np.uint64)
+    return int(state[0] >> np.uint64(1))

@@ -10,7 +10,6 @@
 from __future__ import annotations
 
 import time
-import zlib
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
@@ -92,7 +91,9 @@ def detection_rng(seed: int, scene_name: str) -> np.random.Generator:
     """
     import numpy as np
 
-    return np.random.default_rng([seed, zlib.crc32(scene_name.encode())])
+    from utamp_gym.seeding import scene_seed_sequence  # numpy: not on `utamp plan`'s path
+
+    return np.random.default_rng(scene_seed_sequence(scene_name, seed))
 
 
 def affordances_for(

@@ -88,7 +88,7 @@ def _plan_grasp(
     arm, world = st.arm, st.world
     t = world.scene.type_of(sym.obj)
     member = _member_geoms(st, sym.obj, sym.member)
-    rest = [g for g in world.geom_ids[sym.obj] if g not in set(member)]
+    rest = [g for g in world.geom_ids[sym.obj] if g not in member]
     fingers = set(arm.ids.finger_geom_ids.tolist()) | set(arm.ids.finger_pad_geom_ids.tolist())
     palm = [g for g in arm.ids.geom_ids.tolist() if g not in fingers]
     tried = []
