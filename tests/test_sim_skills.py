@@ -292,8 +292,39 @@ def test_closing_on_nothing_is_a_failed_grasp(backend):
     backend.reset(scene, np.random.default_rng(0))
     res = backend.execute("(pick-support crate crate-hole on left right back on slot1 under on)")
     assert not res.success and "closed on nothing" in res.reason and "crate" in res.reason
+    # the first miss was undone and the grasp tried again, once, before failing
+    assert len(res.retries) == 1 and "closed on nothing" in res.retries[0]
     assert backend.state.held is None
     assert _on(backend, "crate") == ("slot1", True)
+
+
+PICK_MUG = "(pick-support mug mug-body under left right back under slot4 on on)"
+
+
+@physics
+def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, demo):
+    """The robot believes the inverted mug 2 cm off along the finger axis: a finger lands on
+    its rim (the joint torques measure the push), the hand backs off, looks again and
+    grasps the mug it left standing; with the true belief no retry is needed."""
+    backend.reset(demo, np.random.default_rng(0))
+    assert backend.execute(PICK_MUG).retries == ()
+    backend.reset(demo, np.random.default_rng(0))
+    backend.state.estimator.offset("mug", np.array([0.0, 0.02, 0.0]), 0.0)
+    res = backend.execute(PICK_MUG)
+    assert res.success, res.reason
+    assert len(res.retries) == 1
+    assert "N of resistance short of the body of mug" in res.retries[0]
+    assert backend.state.held is not None and backend.state.held.obj == "mug"
+
+
+def test_a_line_path_splits_at_a_waypoint():
+    from utamp_gym.sim.control import LinePath
+
+    line = LinePath(np.array([0.0, 0.01, 0.02, 0.03]), np.arange(4.0)[:, None] * np.ones(7))
+    test, rest = line.split(0.01)
+    assert test.s.tolist() == [0.0, 0.01] and test.q[:, 0].tolist() == [0.0, 1.0]
+    assert rest.s.tolist() == pytest.approx([0.0, 0.01, 0.02]) and rest.q[0, 0] == 1.0
+    assert line.split(0.0)[0].length == pytest.approx(0.01)  # never an empty first part
 
 
 # ------------------------------------------------------------------ failure detection

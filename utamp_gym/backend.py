@@ -44,11 +44,15 @@ FAULT_KINDS = ("push", "drop", "belief")
 
 @dataclass(frozen=True)
 class MacroResult:
-    """Outcome of one macro action in simulation; `timings` are seconds per phase."""
+    """Outcome of one macro action in simulation; `timings` are seconds per phase;
+    `retries` says why an attempt within the action was undone and tried again (a grasp
+    that missed, or an object that tilted or slipped in the first centimetre of its lift
+    and was set back down)."""
 
     success: bool
     reason: str | None = None
     timings: Mapping[str, float] = field(default_factory=dict)
+    retries: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -321,6 +321,13 @@ class LinePath:
     def reversed(self) -> LinePath:
         return LinePath(self.length - self.s[::-1], self.q[::-1])
 
+    def split(self, at: float) -> tuple[LinePath, LinePath]:
+        """(the line up to its first waypoint at or beyond `at` m, the rest from there)."""
+        k = max(1, min(int(np.searchsorted(self.s, at - 1e-9)), len(self.s) - 1))
+        return LinePath(self.s[: k + 1], self.q[: k + 1]), LinePath(
+            self.s[k:] - self.s[k], self.q[k:]
+        )
+
 
 def line_setpoints(
     line: LinePath, speed: float, acc: float, joint_vel: np.ndarray, dt: float

@@ -9,7 +9,7 @@ what an object rests on after release.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -53,6 +53,8 @@ class SimState:
     held: Held | None = None
     scratch: mujoco.MjData | None = None  # for forwarded copies (`world.forwarded_copy`)
     estimator: PoseEstimator | None = None  # None: the robot knows the true poses
+    #: why attempts within the current macro action were undone and retried (`MacroResult`)
+    retries: list[str] = field(default_factory=list)
 
     def estimate(self, name: str) -> np.ndarray:
         """The robot's estimate (4x4) of an object's pose: one look (`PoseEstimator`)."""

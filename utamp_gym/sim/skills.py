@@ -74,6 +74,16 @@ CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measur
 CONTACT_N = 5.0
 UNCERTAINTY_SIGMAS = 3.0  # the fingers open this many pose-noise deviations wider a side
 PLACE_ATTEMPTS = 3
+#: the first centimetre of a lift is a test: drift in the hand beyond these by then (or
+#: fingers that closed on nothing) undoes the grasp, which is tried again (`pick`)
+TEST_LIFT = 0.01  # m
+TEST_SLIP, TEST_TILT_DEG = 0.004, 3.0
+GRASP_ATTEMPTS = 2
+MAX_TURN_DEG = 15.0  # an object turned further by a failed attempt is not grasped again
+
+
+class MissedGrasp(SkillFailure):
+    """The fingers closed on nothing: the object was not moved, the grasp may be retried."""
 
 
 # ------------------------------------------------------------------ shared phases
@@ -169,6 +179,13 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
     arm.open_gripper(g.opening)
     arm.move_line(approach, *APPROACH)
+    push = hold_and_measure(arm, CARRY_HOLD_S).force[2]
+    if push > CONTACT_N:  # a guarded approach: it met something on the way; back off
+        arm.move_line(approach.reversed(), *APPROACH)
+        raise MissedGrasp(
+            f"the hand met {push:.0f} N of resistance short of the {sym.member} of {sym.obj} "
+            "(it landed on something)"
+        )
     gap = arm.close_gripper()
     if st.estimator is not None:
         st.estimator.forget(sym.obj)  # in the hand, it is looked at again
@@ -178,7 +195,7 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     body = st.world.body_ids[sym.obj]
     st.held = Held(sym.obj, sym.member, body, tcp_t_obj, g.opening, sym, belief)
     if not arm.holds_something():
-        raise SkillFailure(
+        raise MissedGrasp(
             f"grasp failed: the fingers closed on nothing at the {sym.member} of {sym.obj} "
             f"(gap {gap * 1000:.1f} mm)"
         )
@@ -206,33 +223,128 @@ def _release_and_retreat(st: SimState, obj: str, opening: float) -> None:
 
 # ------------------------------------------------------------------ skills
 def pick(st: SimState, act: MacroAction) -> None:
-    """Grasp the member and lift the object off its support; raises on failure."""
+    """Grasp the member and lift the object off its support; raises on failure.
+
+    The first `TEST_LIFT` of the lift is a test, as a careful robot lifts: if the fingers
+    closed on nothing, or the object slipped or turned in the hand by then (grasped off its
+    centre, say from a wrong pose estimate), the arm sets it back down, lets go, looks at it
+    again and grasps anew (`GRASP_ATTEMPTS` in all; the last one lifts without the test and
+    its failure is the action's). The object is still standing where it stood when the
+    retry starts, or the action fails."""
     sym = act.grasp
     if st.held is not None:
         raise SkillFailure(f"cannot pick {sym.obj}: the hand already holds {st.held.obj}")
-    arm = st.arm
     before = snapshot(st, {sym.obj})
+    support, yaw = st.stack().get(sym.obj), yaw_of(st.estimate(sym.obj)[:3, :3])
     lift = lift_height(st, sym.obj)
-    _, path, held = _grasp(st, sym, lift)
-    start_obj, start_tcp = obj_pose(st, sym.obj), arm.tcp()
-    near = arm.sync(arm.near, gap=arm.gap())
+    for attempt in range(1, GRASP_ATTEMPTS + 1):
+        last = attempt == GRASP_ATTEMPTS
+        try:
+            _, path, held = _grasp(st, sym, lift)
+        except MissedGrasp as exc:
+            if last:
+                raise
+            _let_go_and_look_again(st, sym.obj, (support, yaw), before, str(exc))
+            continue
+        start_obj, start_tcp = obj_pose(st, sym.obj), st.arm.tcp()
+        _check_lift(st, held, path)
+        if last:
+            st.arm.move_line(path, *APPROACH)
+            break
+        test, rest = path.split(TEST_LIFT)
+        st.arm.move_line(test, *APPROACH)
+        trouble = _test_lift_trouble(st, held)
+        if trouble is None:
+            st.arm.move_line(rest, *APPROACH)
+            break
+        st.arm.move_line(test.reversed(), *PLACE)  # set it back down where it stood
+        _let_go_and_look_again(st, sym.obj, (support, yaw), before, trouble)
+    _verify_lift(st, held, start_obj, start_tcp, before)
+
+
+def _check_lift(st: SimState, held: Held, path: LinePath) -> None:
+    """`GroundingError` if lifting the held object along `path` would collide (as believed)."""
+    near = st.arm.sync(st.arm.near, gap=st.arm.gap())
     near.attach(held.body, held.belief)
     try:
         with near.tolerating(path.q[0]):
             blocked = [q for q in path.q if not near.is_valid(q)]
             if blocked:
                 why = near.describe(near.contacts(blocked[0]))
-                raise GroundingError(f"lifting {sym.obj} would collide ({why})")
+                raise GroundingError(f"lifting {held.obj} would collide ({why})")
     finally:
         near.detach()
-    arm.move_line(path, *APPROACH)
+
+
+def _test_lift_trouble(st: SimState, held: Held) -> str | None:
+    """Why the grasp is not to be trusted after the test lift (`TEST_LIFT`), else None."""
+    slip, tilt = grasp_drift(st, held)
+    if not st.arm.holds_something():
+        how = "slipped out of the fingers"
+    elif tilt > TEST_TILT_DEG:
+        how = f"turned {tilt:.1f} deg in the grasp"
+    elif slip > TEST_SLIP:
+        how = f"slipped {slip * 1000:.0f} mm in the grasp"
+    else:
+        return None
+    return f"{held.obj} {how} in the first {TEST_LIFT * 100:.0f} cm of its lift"
+
+
+def _let_go_and_look_again(
+    st: SimState,
+    obj: str,
+    where: tuple[str | None, float],
+    before: dict[str, tuple[np.ndarray, str | None]],
+    trouble: str,
+) -> None:
+    """Open the hand, move up and look at `obj` again before another grasp, which is only
+    tried if `obj` still stands on the same support `where[0]`, turned by at most
+    `MAX_TURN_DEG` from the heading `where[1]` it was planned for (its sides are the
+    action's symbols), and nothing else moved."""
+    support, yaw = where
+    if st.held is not None:
+        _release_and_retreat(st, obj, st.held.opening)
+    settle_objects(st, min_s=0.1, max_s=0.6)
+    if st.estimator is not None:
+        st.estimator.forget(obj)
+    tipped = object_orientation(st.world.model, st.data, obj) is None
+    turned = abs(math.degrees(_wrap(yaw_of(st.estimate(obj)[:3, :3]) - yaw)))
+    what = (
+        f"{obj} tipped over"
+        if tipped
+        else f"{obj} left {support}"
+        if st.stack().get(obj) != support
+        else f"{obj} turned {turned:.0f} deg"
+        if turned > MAX_TURN_DEG
+        else disturbed(st, before)
+    )
+    if what:
+        raise SkillFailure(f"{trouble}; letting go of it: {what}")
+    st.retries.append(trouble)
+
+
+def _wrap(angle: float) -> float:
+    """`angle` (rad) wrapped into [-pi, pi)."""
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def _verify_lift(
+    st: SimState,
+    held: Held,
+    start_obj: np.ndarray,
+    start_tcp: np.ndarray,
+    before: dict[str, tuple[np.ndarray, str | None]],
+) -> None:
+    """Measure the lift just made: the load, how far the object rose with the hand, how it
+    sits in the grasp, the rest of the scene; raises `SkillFailure` naming what went wrong."""
+    arm, obj, member = st.arm, held.obj, held.member
     load = hold_and_measure(arm)
     hand_rise = arm.tcp()[2, 3] - start_tcp[2, 3]
-    obj_rise = obj_pose(st, sym.obj)[2, 3] - start_obj[2, 3]
+    obj_rise = obj_pose(st, obj)[2, 3] - start_obj[2, 3]
     slip, tilt = grasp_drift(st, held)
     if not arm.holds_something():
-        raise SkillFailure(f"{sym.obj} slipped out of the grasp while lifting")
-    overload = payload_failure(sym.obj, load, while_="lifting")
+        raise SkillFailure(f"{obj} slipped out of the grasp while lifting")
+    overload = payload_failure(obj, load, while_="lifting")
     if overload:
         raise SkillFailure(overload)
     if obj_rise < 0.5 * hand_rise or tilt > MAX_TILT_DEG or slip > MAX_SLIP:
@@ -244,20 +356,20 @@ def pick(st: SimState, act: MacroAction) -> None:
             else f"it slipped {slip * 100:.1f} cm in the grasp"
         )
         raise SkillFailure(
-            f"{sym.obj} is not liftable by its {sym.member}: {how} "
+            f"{obj} is not liftable by its {member}: {how} "
             f"(rose {obj_rise * 100:.1f} cm while the hand rose {hand_rise * 100:.1f} cm, "
             f"bearing {load.describe()} of it)"
         )
-    if object_orientation(st.world.model, st.data, sym.obj) is None:
-        raise SkillFailure(f"{sym.obj} tilted over in the grasp (it was grasped off its centre)")
+    if object_orientation(st.world.model, st.data, obj) is None:
+        raise SkillFailure(f"{obj} tilted over in the grasp (it was grasped off its centre)")
     moved = disturbed(st, before)
     if moved:
-        raise SkillFailure(f"picking {sym.obj} disturbed the scene: {moved}")
+        raise SkillFailure(f"picking {obj} disturbed the scene: {moved}")
     hand_t_world = np.linalg.inv(arm.tcp())  # as carried: measured, and looked at again
-    held.tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)
+    held.tcp_t_obj = hand_t_world @ obj_pose(st, obj)
     if st.estimator is not None:
-        st.estimator.forget(sym.obj)
-    held.belief = hand_t_world @ st.estimate(sym.obj)
+        st.estimator.forget(obj)
+    held.belief = hand_t_world @ st.estimate(obj)
 
 
 def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
@@ -429,6 +541,7 @@ def run_skill(st: SimState, act: MacroAction) -> MacroResult:
     if st.estimator is not None:
         st.estimator.new_look()
     held_before = st.held
+    st.retries.clear()
     try:
         SKILLS[act.kind](st, act)
         ok, reason = True, None
@@ -439,7 +552,8 @@ def run_skill(st: SimState, act: MacroAction) -> MacroResult:
         if st.held is not None and (st.held is not held_before or not _firmly_held(st)):
             _release_and_retreat(st, st.held.obj, st.held.opening)
             settle_objects(st, min_s=0.1, max_s=0.6)
-    return MacroResult(ok, reason, st.arm.timings.as_dict(time.perf_counter() - t0))
+    timings = st.arm.timings.as_dict(time.perf_counter() - t0)
+    return MacroResult(ok, reason, timings, retries=tuple(st.retries))
 
 
 def _firmly_held(st: SimState) -> bool:
