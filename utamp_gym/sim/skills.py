@@ -170,8 +170,11 @@ def _approach_and_lift(
 def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPose, LinePath, Held]:
     """Move to the pre-grasp, approach, close the fingers; check they hold something.
 
-    Returns the grasp, the planned lift path and what is held. Sets `st.held` as soon
-    as the fingers close, so a later failure lets go.
+    The approach is guarded: an upward push above `CONTACT_N` on the hand at the grasp
+    pose (from the joint torques) means a finger landed on something; the hand backs off
+    and `MissedGrasp` is raised, as when the fingers close on nothing. Returns the grasp,
+    the planned lift path and what is held. Sets `st.held` as soon as the fingers close,
+    so a later failure lets go.
     """
     g, approach, up = _plan_grasp(st, sym, lift)
     arm = st.arm
@@ -225,12 +228,12 @@ def _release_and_retreat(st: SimState, obj: str, opening: float) -> None:
 def pick(st: SimState, act: MacroAction) -> None:
     """Grasp the member and lift the object off its support; raises on failure.
 
-    The first `TEST_LIFT` of the lift is a test, as a careful robot lifts: if the fingers
-    closed on nothing, or the object slipped or turned in the hand by then (grasped off its
-    centre, say from a wrong pose estimate), the arm sets it back down, lets go, looks at it
-    again and grasps anew (`GRASP_ATTEMPTS` in all; the last one lifts without the test and
-    its failure is the action's). The object is still standing where it stood when the
-    retry starts, or the action fails."""
+    A wrong pose estimate shows physically, and the grasp is then undone and tried again
+    after a new look (`GRASP_ATTEMPTS` in all; the last one lifts without the test and its
+    failure is the action's): the approach met resistance (`_grasp`), the fingers closed on
+    nothing, or the object slipped or turned in the hand in the first `TEST_LIFT` of the
+    lift (grasped off its centre), after which the arm sets it back down. A retry starts
+    only if the object still stands where it stood (`_let_go_and_look_again`)."""
     sym = act.grasp
     if st.held is not None:
         raise SkillFailure(f"cannot pick {sym.obj}: the hand already holds {st.held.obj}")
