@@ -304,8 +304,9 @@ PICK_MUG = "(pick-support mug mug-body under left right back under slot4 on on)"
 @physics
 def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, demo):
     """The robot believes the inverted mug 2 cm off along the finger axis: a finger lands on
-    its rim (the joint torques measure the push), the hand backs off, looks again and
-    grasps the mug it left standing; with the true belief no retry is needed."""
+    its rim and holds the hand centimetres short of the grasp pose, the hand backs off,
+    looks again and grasps the mug it left standing; with the true belief no retry is
+    needed."""
     backend.reset(demo, np.random.default_rng(0))
     assert backend.execute(PICK_MUG).retries == ()
     backend.reset(demo, np.random.default_rng(0))
@@ -313,7 +314,7 @@ def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, de
     res = backend.execute(PICK_MUG)
     assert res.success, res.reason
     assert len(res.retries) == 1
-    assert "N of resistance short of the body of mug" in res.retries[0]
+    assert "the hand stopped short of the body of mug" in res.retries[0]
     assert backend.state.held is not None and backend.state.held.obj == "mug"
 
 
