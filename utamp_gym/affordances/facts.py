@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import tomllib
 from collections.abc import Iterable
-from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 from utamp_gym.errors import SceneError
 from utamp_gym.resources import asset_path
@@ -47,8 +47,7 @@ def restrict(facts: Iterable[Fact], types: Iterable[str]) -> frozenset[Fact]:
     return frozenset(f for f in facts if set(fact_types(f)) <= keep)
 
 
-@dataclass(frozen=True)
-class Scores:
+class Scores(NamedTuple):
     """Precision, recall and F1 of detected facts against a reference set."""
 
     precision: float

@@ -10,9 +10,8 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from utamp_gym.affordances.facts import Fact, Scores, load_ground_truth, restrict, score
 from utamp_gym.deadline import Deadline
@@ -31,8 +30,7 @@ AFFORDANCE_SOURCES = ("gt", "rules", "noisy")
 DEFAULT_NOISE = 0.01
 
 
-@dataclass(frozen=True)
-class MethodSpec:
+class MethodSpec(NamedTuple):
     name: str
     domain: str
     affordances: str  # gt | rules | noisy
@@ -120,8 +118,7 @@ def affordances_for(
     return det.facts, det.scores
 
 
-@dataclass(frozen=True)
-class PlanOutcome:
+class PlanOutcome(NamedTuple):
     """The result of planning one scene with one method (what `utamp plan --json` prints)."""
 
     scene: str
@@ -133,9 +130,9 @@ class PlanOutcome:
     reason: str | None
     seed: int
     affordance_scores: Scores
-    domain: str = field(repr=False, default="")
-    problem: str = field(repr=False, default="")
-    facts: frozenset[Fact] = field(repr=False, default=frozenset())
+    domain: str = ""
+    problem: str = ""
+    facts: frozenset[Fact] = frozenset()
     timed_out: bool = False
     phase: str | None = None  # the phase that ran out of time (`utamp_gym.deadline.PHASES`)
 

@@ -30,9 +30,8 @@ from __future__ import annotations
 import itertools
 import tomllib
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
 from functools import cache
-from typing import Any
+from typing import Any, NamedTuple
 
 from utamp_gym.affordances.facts import Fact, fact_types, load_ground_truth
 from utamp_gym.errors import UnknownNameError
@@ -63,8 +62,7 @@ TRAY = ("tray", "wooden-tray")
 TABLE_TYPE = "kitchen-table"
 
 
-@dataclass(frozen=True)
-class SuiteSpec:
+class SuiteSpec(NamedTuple):
     """How a suite is enumerated: which objects, how many, from where."""
 
     movables: tuple[tuple[str, str], ...]
@@ -82,8 +80,7 @@ SPECS = {
 }
 
 
-@dataclass(frozen=True)
-class SuiteStats:
+class SuiteStats(NamedTuple):
     """How many configurations were enumerated, dropped and kept."""
 
     suite: str
