@@ -350,8 +350,46 @@ LIGHT_COMMANDS = ("scenes", "plan", "validate")
 """Subcommands that never build an env: the Gymnasium env ids are not registered for them."""
 
 
+class _HelpFormatter(argparse.HelpFormatter):
+    """argparse's help formatter at the same width (``$COLUMNS``, else the terminal's, else
+    80 columns, less 2), found without importing `shutil` as argparse does: argparse builds a
+    formatter for every argument it adds, and that import (~3 ms) was on `utamp plan`'s path."""
+
+    def __init__(
+        self,
+        prog: str,
+        indent_increment: int = 2,
+        max_help_position: int = 24,
+        width: int | None = None,
+    ) -> None:
+        if width is None:
+            width = _terminal_columns() - 2
+        super().__init__(prog, indent_increment, max_help_position, width)
+
+
+def _terminal_columns() -> int:
+    """The columns `shutil.get_terminal_size` reports (same rules, same fallback of 80)."""
+    import os
+
+    try:
+        columns = int(os.environ["COLUMNS"])
+    except (KeyError, ValueError):
+        columns = 0
+    if columns <= 0:
+        try:
+            columns = os.get_terminal_size(sys.__stdout__.fileno()).columns
+        except (AttributeError, ValueError, OSError):
+            columns = 0
+    return columns or 80
+
+
 class _Parser(argparse.ArgumentParser):
-    """Reports a usage error as one line on stderr and exits 2."""
+    """Reports a usage error as one line on stderr and exits 2; formats help with
+    `_HelpFormatter` unless told otherwise."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _HelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
@@ -538,8 +576,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     for name, add_parser, help_line in SUBCOMMANDS:
         if command in (None, name):
             add_parser(sub)
-        else:
-            sub.add_parser(name, help=help_line)
+        else:  # its name and help line only: never parsed, its own help never shown
+            sub.add_parser(name, help=help_line, add_help=False)
     return parser
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import tomllib
 from collections.abc import Iterable
+from functools import lru_cache
 from pathlib import Path
 from typing import NamedTuple
 
@@ -65,6 +66,13 @@ def score(detected: Iterable[Fact], reference: Iterable[Fact]) -> Scores:
     recall = tp / (tp + fn) if tp + fn else 1.0
     f1 = 2 * precision * recall / (precision + recall) if precision + recall else 0.0
     return Scores(precision, recall, f1, tp, fp, fn)
+
+
+@lru_cache(maxsize=1)
+def packaged_ground_truth() -> frozenset[Fact]:
+    """The packaged ground truth, read once per process (the suites and every planner call
+    need it; a frozenset, so sharing it is safe)."""
+    return load_ground_truth()
 
 
 def load_ground_truth(path: str | Path | None = None) -> frozenset[Fact]:

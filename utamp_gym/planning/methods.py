@@ -13,7 +13,7 @@ import time
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from utamp_gym.affordances.facts import Fact, Scores, load_ground_truth, restrict, score
+from utamp_gym.affordances.facts import Fact, Scores, packaged_ground_truth, restrict, score
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
@@ -58,9 +58,9 @@ def scene_types(scene: Scene) -> list[ObjectType]:
 
 @lru_cache(maxsize=1)
 def _packaged_ground_truth() -> tuple[frozenset[Fact], frozenset[str]]:
-    """The packaged ground truth and the types it covers (read once: a planner reads it on
-    every call)."""
-    truth = load_ground_truth()
+    """The packaged ground truth and the types it covers (computed once: a planner needs
+    them on every call)."""
+    truth = packaged_ground_truth()
     known = {n for f in truth for n in (f[1:2] if f[0] != "isP2PSupportive" else (f[2], f[4]))}
     return truth, frozenset(known)
 

@@ -33,7 +33,7 @@ from collections.abc import Iterator, Sequence
 from functools import cache
 from typing import Any, NamedTuple
 
-from utamp_gym.affordances.facts import Fact, fact_types, load_ground_truth
+from utamp_gym.affordances.facts import Fact, fact_types, packaged_ground_truth
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
 from utamp_gym.scene.catalogue import Catalogue, load_catalogue, type_to_dict
@@ -261,7 +261,7 @@ def extra_catalogue() -> Catalogue:
 def suite_facts(suite: str) -> frozenset[Fact]:
     """The affordances a suite is enumerated with: the ground truth, and for the types
     without hand-written truth (the extra catalogue's) the rule parser's facts."""
-    facts = load_ground_truth()
+    facts = packaged_ground_truth()
     if suite != "extra":
         return facts
     from utamp_gym.affordances.rules import derive_affordances  # numpy: off `utamp plan`'s path
