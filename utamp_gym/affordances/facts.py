@@ -12,11 +12,12 @@ A fact is a tuple whose first entry is the predicate of the paper's Table I:
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Iterable
 from functools import lru_cache
 from pathlib import Path
 from typing import NamedTuple
+
+import tomli  # see utamp_gym.scene.fields
 
 from utamp_gym.errors import SceneError
 from utamp_gym.resources import asset_path
@@ -79,8 +80,8 @@ def load_ground_truth(path: str | Path | None = None) -> frozenset[Fact]:
     """Read the hand-written ground truth (default: the packaged kitchen objects)."""
     file = Path(path) if path is not None else asset_path("affordances", "ground_truth.toml")
     try:
-        data = tomllib.loads(file.read_text())
-    except tomllib.TOMLDecodeError as exc:
+        data = tomli.loads(file.read_text())
+    except tomli.TOMLDecodeError as exc:
         raise SceneError(f"invalid TOML: {exc}", file=str(file)) from exc
     facts: set[Fact] = set()
     for tname, d in data.items():

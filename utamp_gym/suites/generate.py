@@ -28,10 +28,11 @@ carry the new types in their `types` table, so an exported scene file is complet
 from __future__ import annotations
 
 import itertools
-import tomllib
 from collections.abc import Iterator, Sequence
 from functools import cache
 from typing import Any, NamedTuple
+
+import tomli  # see utamp_gym.scene.fields
 
 from utamp_gym.affordances.facts import Fact, fact_types, packaged_ground_truth
 from utamp_gym.errors import UnknownNameError
@@ -173,7 +174,7 @@ def _stacks(block: Sequence[str], on: set[tuple[str | None, str]]) -> list[list[
 
 
 def _layout() -> dict[str, Any]:
-    return tomllib.loads(asset_path("scenes", "layout.toml").read_text())
+    return tomli.loads(asset_path("scenes", "layout.toml").read_text())
 
 
 def _configurations(
