@@ -170,3 +170,19 @@ def test_help_lists_every_subcommand_and_each_subcommand_help_is_complete(capsys
         out = capsys.readouterr().out
         assert out.startswith(f"usage: utamp {command}"), out
         assert all(option in out for option in options), (command, out)
+
+
+def test_only_the_utamp_process_freezes_its_objects_before_exit(capsys) -> None:
+    """`main()` as the process (no argv) hands its objects to no more garbage collections
+    (the process ends next); `main(argv)` in a longer-lived process leaves the collector be."""
+    import gc
+
+    frozen = gc.get_freeze_count()
+    assert main(["scenes", "list", "--suite", "sliding"]) == 0
+    assert gc.get_freeze_count() == frozen
+    code = (
+        "import gc, sys; sys.argv = ['utamp', 'scenes', 'list', '--suite', 'sliding']; "
+        "from utamp_gym.cli import main; rc = main(); print(rc, gc.get_freeze_count() > 0)"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.splitlines()[-1] == "0 True"

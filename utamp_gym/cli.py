@@ -582,9 +582,29 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run one subcommand; returns the exit code (see the module docstring)."""
+    """Run one subcommand; returns the exit code (see the module docstring). Without `argv`
+    it runs as the `utamp` process, on ``sys.argv``, and the process exits next."""
     started = time.perf_counter()
-    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv is None:
+        try:
+            return _run(sys.argv[1:], started)
+        finally:
+            _before_exit()
+    return _run(argv, started)
+
+
+def _before_exit() -> None:
+    """Take every live object out of the garbage collector's sight (`gc.freeze`): Python's
+    shutdown runs full collections over all of them, the imported modules' included, which
+    took ~8 ms of a ~100 ms `utamp plan`; the process ends next, and nothing of it needs
+    collecting."""
+    import gc
+
+    gc.freeze()
+
+
+def _run(argv: Sequence[str], started: float) -> int:
+    argv = list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     try:
         args = build_parser(command).parse_args(argv)
