@@ -147,6 +147,8 @@ def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
     assert "utamp_gym.planning.state_planner" in imported  # the check sees our imports
     heavy = ("gymnasium", "torch", "mujoco", "pinocchio", "ompl", "matplotlib", "numpy")
     assert not {m for m in imported if m.split(".")[0] in heavy}
+    # nor the dataclasses machinery (it imports inspect, and each class execs its methods)
+    assert not imported & {"dataclasses", "inspect"}
 
 
 def test_help_lists_every_subcommand_and_each_subcommand_help_is_complete(capsys) -> None:
