@@ -140,6 +140,11 @@ class PlanOutcome(NamedTuple):
     def plan_length(self) -> int:
         return len(self.plan)
 
+    def __repr__(self) -> str:  # without the long `domain`, `problem` and `facts`
+        hidden = ("domain", "problem", "facts")
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields if n not in hidden)
+        return f"PlanOutcome({shown})"
+
     def to_json(self) -> dict[str, Any]:
         return {
             "scene": self.scene,

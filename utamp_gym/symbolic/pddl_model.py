@@ -161,6 +161,10 @@ class Domain(NamedTuple):
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Domain) and self[:6] == other[:6]
 
+    def __repr__(self) -> str:  # the compared fields only
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields[:6])
+        return f"Domain({shown})"
+
     def __ne__(self, other: object) -> bool:
         return not self == other
 
@@ -218,6 +222,10 @@ class Problem(NamedTuple):
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Problem) and self[:5] == other[:5]
+
+    def __repr__(self) -> str:  # the compared fields only
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields[:5])
+        return f"Problem({shown})"
 
     def __ne__(self, other: object) -> bool:
         return not self == other
