@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -57,17 +55,15 @@ def test_ground_truth_matches_the_paper(catalogue) -> None:
 def test_pan_body_does_not_fit_the_gripper_but_a_narrow_pan_does(catalogue) -> None:
     pan = catalogue["frying-pan"]
     assert all(m != "body" for m, *_ in geometric_grasps(pan))
-    narrow_body = replace(
-        pan.members["body"],
-        box=replace(pan.members["body"].box, min=(-0.03, -0.03, 0.0), max=(0.03, 0.03, 0.05)),
+    narrow_body = pan.members["body"]._replace(
+        box=pan.members["body"].box._replace(min=(-0.03, -0.03, 0.0), max=(0.03, 0.03, 0.05)),
     )
-    narrow = replace(pan, members={**pan.members, "body": narrow_body})
+    narrow = pan._replace(members={**pan.members, "body": narrow_body})
     assert any(m == "body" for m, *_ in geometric_grasps(narrow))
 
 
 def test_rules_give_sensible_affordances_for_a_new_object(catalogue) -> None:
-    plate = replace(
-        catalogue["cutting-board"],
+    plate = catalogue["cutting-board"]._replace(
         name="plate",
         mass=0.4,
         robustness="fragile",
@@ -78,7 +74,7 @@ def test_rules_give_sensible_affordances_for_a_new_object(catalogue) -> None:
     assert ("isP2PSupportive", "on", "plate", "under", "salt-shaker") in facts
     assert ("isP2PSupportive", "on", "plate", "under", "frying-pan") not in facts  # too large
     assert ("isP2PSupportive", "on", "wooden-tray", "under", "plate") in facts
-    heavy = replace(plate, name="anvil", mass=20.0)
+    heavy = plate._replace(name="anvil", mass=20.0)
     facts = derive_affordances([catalogue["kitchen-table"], heavy])
     assert not any(f[0] == "canLift" for f in facts)
     assert ("canSlide", "anvil", "kitchen-table", "under", "on") in facts

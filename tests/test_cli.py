@@ -147,3 +147,44 @@ def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
     assert "utamp_gym.planning.state_planner" in imported  # the check sees our imports
     heavy = ("gymnasium", "torch", "mujoco", "pinocchio", "ompl", "matplotlib", "numpy")
     assert not {m for m in imported if m.split(".")[0] in heavy}
+    # nor the dataclasses machinery (it imports inspect, and each class execs its methods)
+    assert not imported & {"dataclasses", "inspect"}
+
+
+def test_help_lists_every_subcommand_and_each_subcommand_help_is_complete(capsys) -> None:
+    """`utamp CMD` builds only CMD's parser; the top-level help still names them all."""
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    for name in ("scenes", "plan", "run", "view", "validate", "eval", "train"):
+        assert f"    {name} " in out, name
+    expected = {
+        "plan": ("--method", "--timeout", "--search", "--noise", "--out", "--explain"),
+        "run": ("--video", "--pose-noise", "--disturbance", "--closed-loop"),
+        "eval": ("--suite", "--methods", "--executor", "--pose-noise", "--closed-loop"),
+        "validate": ("domain", "problem", "plan"),
+    }
+    for command, options in expected.items():
+        with pytest.raises(SystemExit) as exc:
+            main([command, "--help"])
+        assert exc.value.code == 0
+        out = capsys.readouterr().out
+        assert out.startswith(f"usage: utamp {command}"), out
+        assert all(option in out for option in options), (command, out)
+
+
+def test_only_the_utamp_process_freezes_its_objects_before_exit(capsys) -> None:
+    """`main()` as the process (no argv) hands its objects to no more garbage collections
+    (the process ends next); `main(argv)` in a longer-lived process leaves the collector be."""
+    import gc
+
+    frozen = gc.get_freeze_count()
+    assert main(["scenes", "list", "--suite", "sliding"]) == 0
+    assert gc.get_freeze_count() == frozen
+    code = (
+        "import gc, sys; sys.argv = ['utamp', 'scenes', 'list', '--suite', 'sliding']; "
+        "from utamp_gym.cli import main; rc = main(); print(rc, gc.get_freeze_count() > 0)"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.splitlines()[-1] == "0 True"

@@ -66,6 +66,16 @@ def test_show_keeps_declared_spelling() -> None:
     assert d.show(Literal(Atom("fitson", ("a", "b")), False)) == "(not (fitsOn a b))"
 
 
+def test_domain_equality_ignores_spelling_and_source() -> None:
+    d = parse_domain(DOMAIN, source="bw.pddl")
+    assert d.spelling and d.source == "bw.pddl"
+    same = d._replace(spelling={}, source="elsewhere.pddl")
+    assert same == d and (same != d) is False
+    assert d._replace(name="other") != d
+    with pytest.raises(TypeError):
+        hash(d)  # its mappings are not hashable
+
+
 def test_problem_round_trip() -> None:
     d = parse_domain(DOMAIN)
     p = parse_problem(PROBLEM, source="bw.pddl", domain=d)

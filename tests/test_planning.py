@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
@@ -61,7 +59,7 @@ def test_rules_match_gt_and_noise_is_seeded() -> None:
 def test_noisy_detection_differs_between_scenes_of_one_seed() -> None:
     """One seed must not repeat one corruption in every scene of a sweep."""
     scene = resolve_scene("kitchen-demo")
-    twin = dataclasses.replace(scene, name="kitchen-demo-twin")  # same objects, other name
+    twin = scene._replace(name="kitchen-demo-twin")  # same objects, other name
     pairs = [
         (
             plan_scene(scene, "utamp2-noisy", seed=s, noise=0.2).facts,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import pickle
 from pathlib import Path
 
 import pytest
@@ -28,6 +29,26 @@ def test_demo_scene_loads_with_stacks_and_poses() -> None:
     assert mug.position[2] == pytest.approx(0.10)  # origin is the (upturned) bottom, 10 cm up
     box = scene.world_box("mug")
     assert box.min[2] == pytest.approx(0.0) and box.max[2] == pytest.approx(0.10)
+
+
+def test_scene_is_an_immutable_value() -> None:
+    scene = load_scene(asset_path("scenes", "kitchen-demo.toml"))
+    for again in (pickle.loads(pickle.dumps(scene)), copy.deepcopy(scene)):
+        assert again == scene and again is not scene
+        assert again.poses == scene.poses and again.catalogue == scene.catalogue
+    twin = scene._replace(name="twin")
+    assert twin != scene and twin.name == "twin" and scene.name == "kitchen-demo"
+    assert twin.objects == scene.objects and twin._replace(name=scene.name) == scene
+    with pytest.raises(AttributeError, match="immutable"):
+        scene.name = "other"  # type: ignore[misc]
+    with pytest.raises(AttributeError, match="immutable"):
+        scene.catalogue.types = {}  # type: ignore[misc]
+    with pytest.raises(AttributeError):
+        scene.objects[0].on = "slot2"  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        scene._replace(nmae="typo")
+    with pytest.raises(TypeError):
+        hash(scene)  # its catalogue holds mappings
 
 
 def test_stacked_object_stands_on_its_support(demo_dict) -> None:

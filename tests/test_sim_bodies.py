@@ -10,7 +10,6 @@ the walls behind each edge member, all within 1 mm.
 from __future__ import annotations
 
 import itertools
-from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -243,14 +242,14 @@ def test_a_round_plate_honours_its_surface_height() -> None:
 
 def test_unsupported_declarations_fail_clearly() -> None:
     board = CATALOGUE["cutting-board"]
-    too_big = replace(
-        board, parts={**board.parts, "on": replace(board.parts["on"], size=(0.5, 0.5))}
+    too_big = board._replace(
+        parts={**board.parts, "on": board.parts["on"]._replace(size=(0.5, 0.5))}
     )
     with pytest.raises(SimulationError, match=r"cutting-board.*larger than the body"):
         object_prims(too_big)
     bowl = CATALOGUE["soup-bowl"]
-    off_centre = replace(
-        bowl, parts={**bowl.parts, "on": replace(bowl.parts["on"], center=(0.01, 0.0))}
+    off_centre = bowl._replace(
+        parts={**bowl.parts, "on": bowl.parts["on"]._replace(center=(0.01, 0.0))}
     )
     with pytest.raises(SimulationError, match=r"soup-bowl.*centred circle"):
         object_prims(off_centre)

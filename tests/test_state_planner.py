@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import copy
+
 import pytest
 
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PddlError, PlanningTimeout
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
+from utamp_gym.planning.sas import build_sas
 from utamp_gym.planning.state_planner import StatePlanner, action_name, problem_atoms
 from utamp_gym.suites import resolve_scene
-from utamp_gym.symbolic.pddl import parse_domain, parse_plan, parse_problem
+from utamp_gym.symbolic.pddl import Atom, Literal, parse_domain, parse_plan, parse_problem
+from utamp_gym.symbolic.reach import GroundOp
 from utamp_gym.symbolic.validate import validate_plan
 
 SCENE = "pick-place/105"  # five objects
@@ -128,3 +132,14 @@ def test_time_limits_name_the_phase() -> None:
     with pytest.raises(PlanningTimeout) as info:
         planner.plan(*args, deadline=Deadline.after(1e-9))
     assert info.value.phase in ("sas", "search")
+
+
+def test_sas_task_is_immutable_and_copies() -> None:
+    on, off = Atom("on"), Atom("off")
+    ops = [GroundOp("switch", (off,), (), (on,), (off,))]
+    task = build_sas(ops, [off], [Literal(on)])
+    again = copy.copy(task)
+    assert again.text({off}) == task.text({off}) and "switch" in task.text({off})
+    assert again != task and task == task  # compared by identity
+    with pytest.raises(AttributeError, match="immutable"):
+        task.solvable = False  # type: ignore[misc]

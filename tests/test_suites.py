@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
 from utamp_gym.affordances.facts import load_ground_truth
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene import scene_from_dict, scene_to_dict
 from utamp_gym.suites import get_scene, resolve_scene, suite_scenes, suite_stats
-from utamp_gym.suites.generate import tower_achievable
+from utamp_gym.suites.generate import _orientations, _supports, tower_achievable
 
 
 def test_counts_are_stable_and_documented() -> None:
@@ -45,6 +47,20 @@ def test_achievability_is_a_combinatorial_check() -> None:
     assert not tower_achievable(gt, tray, [pan, mug_up])  # the pan only carries the board
     assert not tower_achievable(gt, tray, [mug_up, salt])  # an open mug top carries nothing
     assert tower_achievable(gt, tray, [mug_inv, salt])
+
+
+def test_pruned_tower_search_equals_trying_every_order() -> None:
+    gt = load_ground_truth()
+    tray = ("wooden-tray", "upright")
+    types = ("salt-shaker", "glass-mug", "cutting-board", "frying-pan")
+    nodes = [(t, o) for t in types for o in _orientations(gt, t)]
+    for n in range(1, 5):
+        for others in itertools.combinations_with_replacement(nodes, n):
+            every_order = any(
+                all(_supports(gt, a, b) for a, b in itertools.pairwise((tray, *order)))
+                for order in itertools.permutations(others)
+            )
+            assert tower_achievable(gt, tray, others) == every_order, others
 
 
 def test_scenes_export_and_reload_identically() -> None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from utamp_gym.errors import PlanningTimeout
 
@@ -23,8 +23,7 @@ def check_timeout(timeout: float) -> float:
     return float(timeout)
 
 
-@dataclass(frozen=True)
-class Deadline:
+class Deadline(NamedTuple):
     """The moment `at` (on the `time.perf_counter` clock) a limit of `limit` seconds ends."""
 
     at: float

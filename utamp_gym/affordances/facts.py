@@ -12,10 +12,12 @@ A fact is a tuple whose first entry is the predicate of the paper's Table I:
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Iterable
-from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
+from typing import NamedTuple
+
+import tomli  # see utamp_gym.scene.fields
 
 from utamp_gym.errors import SceneError
 from utamp_gym.resources import asset_path
@@ -47,8 +49,7 @@ def restrict(facts: Iterable[Fact], types: Iterable[str]) -> frozenset[Fact]:
     return frozenset(f for f in facts if set(fact_types(f)) <= keep)
 
 
-@dataclass(frozen=True)
-class Scores:
+class Scores(NamedTuple):
     """Precision, recall and F1 of detected facts against a reference set."""
 
     precision: float
@@ -68,12 +69,19 @@ def score(detected: Iterable[Fact], reference: Iterable[Fact]) -> Scores:
     return Scores(precision, recall, f1, tp, fp, fn)
 
 
+@lru_cache(maxsize=1)
+def packaged_ground_truth() -> frozenset[Fact]:
+    """The packaged ground truth, read once per process (the suites and every planner call
+    need it; a frozenset, so sharing it is safe)."""
+    return load_ground_truth()
+
+
 def load_ground_truth(path: str | Path | None = None) -> frozenset[Fact]:
     """Read the hand-written ground truth (default: the packaged kitchen objects)."""
     file = Path(path) if path is not None else asset_path("affordances", "ground_truth.toml")
     try:
-        data = tomllib.loads(file.read_text())
-    except tomllib.TOMLDecodeError as exc:
+        data = tomli.loads(file.read_text())
+    except tomli.TOMLDecodeError as exc:
         raise SceneError(f"invalid TOML: {exc}", file=str(file)) from exc
     facts: set[Fact] = set()
     for tname, d in data.items():

@@ -9,7 +9,7 @@ from the Generator passed in.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -44,7 +44,7 @@ def corrupt_type(t: ObjectType, p: float, rng: np.random.Generator) -> ObjectTyp
             c, half = box.center, box.size / 2 * scale
             box = Box(tuple((c - half).tolist()), tuple((c + half).tolist()))
         members[name] = Member(m.name, m.kind, box, m.geom)
-    return replace(t, parts=parts, mass=mass, robustness=robustness, members=members)
+    return t._replace(parts=parts, mass=mass, robustness=robustness, members=members)
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import replace
 from functools import lru_cache
 from types import MappingProxyType
 
@@ -65,9 +64,8 @@ def geometric_domain() -> Domain:
         kept = tuple(lit for lit in act.precondition if lit.atom.predicate not in GEOMETRIC_DROPPED)
         grasps = any(lit.atom.predicate == "isgraspfrom" and not lit.positive for lit in kept)
         extra = literals((*(GRASP_GEOMETRY if grasps else ()), *IMPLIED.get(name, ())))
-        actions[name] = replace(act, precondition=kept + extra)
-    return replace(
-        domain,
+        actions[name] = act._replace(precondition=kept + extra)
+    return domain._replace(
         name="utamp2-geometric",
         actions=MappingProxyType(actions),
         source="utamp2.pddl without affordance preconditions",

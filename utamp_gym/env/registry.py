@@ -14,7 +14,6 @@ nothing. A definition file holds::
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,6 +21,7 @@ from types import MappingProxyType
 from typing import Any
 
 import gymnasium
+import tomli  # see utamp_gym.scene.fields
 
 from utamp_gym.errors import UtampError
 from utamp_gym.resources import envs_dir
@@ -54,8 +54,8 @@ def load_definition(path: str | Path) -> EnvDefinition:
         return EnvDefinitionError(f"{path}: {message}")
 
     try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
+        data = tomli.loads(path.read_text())
+    except tomli.TOMLDecodeError as exc:
         raise fail(f"invalid TOML: {exc}") from exc
     unknown = sorted(set(data) - _KEYS)
     if unknown:

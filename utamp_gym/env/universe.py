@@ -32,7 +32,7 @@ each process (e.g. an async vector env worker) grounds once per key, in 0.2-5 s.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 from types import MappingProxyType
 
@@ -203,8 +203,7 @@ def _relaxed_domain(domain: Domain, keep: frozenset[str]) -> Domain:
     """The domain without the static negative preconditions whose predicate is not in `keep`."""
     fluent = domain.fluent_predicates()
     actions = {
-        name: replace(
-            act,
+        name: act._replace(
             precondition=tuple(
                 lit
                 for lit in act.precondition
@@ -213,7 +212,7 @@ def _relaxed_domain(domain: Domain, keep: frozenset[str]) -> Domain:
         )
         for name, act in domain.actions.items()
     }
-    return replace(domain, actions=MappingProxyType(actions))
+    return domain._replace(actions=MappingProxyType(actions))
 
 
 def _uniform_predicates(

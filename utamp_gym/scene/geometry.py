@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
     import numpy as np
@@ -60,8 +59,7 @@ def is_adjacent(a: str, b: str) -> bool:
     return a in NORMALS and b in NORMALS and axis_of(a) != axis_of(b)
 
 
-@dataclass(frozen=True)
-class Box:
+class Box(NamedTuple):
     """Axis-aligned box given by its min and max corners (metres)."""
 
     min: tuple[float, float, float]

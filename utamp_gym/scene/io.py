@@ -12,8 +12,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import tomli_w
-
 from utamp_gym.errors import SceneError
 from utamp_gym.scene import fields as f
 from utamp_gym.scene.catalogue import (
@@ -361,6 +359,8 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
 
 
 def scene_to_toml(scene: Scene) -> str:
+    import tomli_w  # only for writing: off the path of loading scenes
+
     return tomli_w.dumps(scene_to_dict(scene))
 
 

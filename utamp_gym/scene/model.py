@@ -10,8 +10,8 @@ half turn about its x axis.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any, NamedTuple
 
 from utamp_gym.errors import SceneError, UnknownNameError
 from utamp_gym.scene.catalogue import Catalogue, ObjectType
@@ -28,8 +28,7 @@ STANDING_PART = {"upright": "under", "inverted": "on"}
 UP_PART = {"upright": "on", "inverted": "under"}
 
 
-@dataclass(frozen=True)
-class Slot:
+class Slot(NamedTuple):
     """A region of the table top where a stack may stand; stacks stand at `position`."""
 
     name: str
@@ -41,8 +40,7 @@ class Slot:
         return self.region
 
 
-@dataclass(frozen=True)
-class Space:
+class Space(NamedTuple):
     """A free region inside a slot into which an object may be slid."""
 
     name: str
@@ -56,8 +54,7 @@ class Space:
         return Box((cx - hx, cy - hy, 0.0), (cx + hx, cy + hy, 0.0))
 
 
-@dataclass(frozen=True)
-class SceneObject:
+class SceneObject(NamedTuple):
     """An object instance: its type, its initial support and orientation."""
 
     name: str
@@ -67,18 +64,32 @@ class SceneObject:
     position: tuple[float, float] | None = None
 
 
-@dataclass(frozen=True)
-class Pose:
+class Pose(NamedTuple):
     """Position (m) and orientation quaternion (w, x, y, z) in the world frame."""
 
     position: tuple[float, float, float]
     quat: tuple[float, float, float, float]
 
 
-@dataclass(frozen=True)
 class Scene:
-    """A kitchen-table scene. Build with `load_scene` or `scene_from_dict` (they validate)."""
+    """A kitchen-table scene. Build with `load_scene` or `scene_from_dict` (they validate).
 
+    Immutable; equal when all fields are; `_replace` returns a copy with some fields changed.
+    """
+
+    _FIELDS = (
+        "name",
+        "catalogue",
+        "table_type",
+        "workspace",
+        "slots",
+        "spaces",
+        "objects",
+        "custom_types",
+        "description",
+        "source",
+        "goal_base",
+    )
     name: str
     catalogue: Catalogue
     table_type: str
@@ -86,10 +97,63 @@ class Scene:
     slots: tuple[Slot, ...]
     spaces: tuple[Space, ...]
     objects: tuple[SceneObject, ...]
-    custom_types: Mapping[str, ObjectType] = field(default_factory=dict)
-    description: str = ""
-    source: str = "<scene>"
-    goal_base: str | None = None
+    custom_types: Mapping[str, ObjectType]
+    description: str
+    source: str
+    goal_base: str | None
+
+    def __init__(
+        self,
+        name: str,
+        catalogue: Catalogue,
+        table_type: str,
+        workspace: Box,
+        slots: tuple[Slot, ...],
+        spaces: tuple[Space, ...],
+        objects: tuple[SceneObject, ...],
+        custom_types: Mapping[str, ObjectType] | None = None,
+        description: str = "",
+        source: str = "<scene>",
+        goal_base: str | None = None,
+    ) -> None:
+        # the instance dict holds the fields and what `cached_property` computes
+        self.__dict__.update(
+            name=name,
+            catalogue=catalogue,
+            table_type=table_type,
+            workspace=workspace,
+            slots=slots,
+            spaces=spaces,
+            objects=objects,
+            custom_types={} if custom_types is None else custom_types,
+            description=description,
+            source=source,
+            goal_base=goal_base,
+        )
+
+    def _fields(self) -> tuple[Any, ...]:
+        return tuple(self.__dict__[f] for f in Scene._FIELDS)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"cannot assign to field {name!r}: a Scene is immutable")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"cannot delete field {name!r}: a Scene is immutable")
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Scene) and self._fields() == other._fields()
+
+    __hash__ = None  # type: ignore[assignment]  # its catalogue is not hashable
+
+    def __repr__(self) -> str:
+        return f"Scene({', '.join(f'{f}={self.__dict__[f]!r}' for f in Scene._FIELDS)})"
+
+    def __reduce__(self) -> tuple[type[Scene], tuple[Any, ...]]:
+        return Scene, self._fields()
+
+    def _replace(self, **changes: Any) -> Scene:
+        """A copy with the fields in `changes` replaced (as on the named tuples)."""
+        return Scene(**{f: changes.pop(f, self.__dict__[f]) for f in Scene._FIELDS}, **changes)
 
     @property
     def tower_base(self) -> str:

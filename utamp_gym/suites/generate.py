@@ -28,13 +28,13 @@ carry the new types in their `types` table, so an exported scene file is complet
 from __future__ import annotations
 
 import itertools
-import tomllib
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
 from functools import cache
-from typing import Any
+from typing import Any, NamedTuple
 
-from utamp_gym.affordances.facts import Fact, fact_types, load_ground_truth
+import tomli  # see utamp_gym.scene.fields
+
+from utamp_gym.affordances.facts import Fact, fact_types, packaged_ground_truth
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
 from utamp_gym.scene.catalogue import Catalogue, load_catalogue, type_to_dict
@@ -63,8 +63,7 @@ TRAY = ("tray", "wooden-tray")
 TABLE_TYPE = "kitchen-table"
 
 
-@dataclass(frozen=True)
-class SuiteSpec:
+class SuiteSpec(NamedTuple):
     """How a suite is enumerated: which objects, how many, from where."""
 
     movables: tuple[tuple[str, str], ...]
@@ -82,8 +81,7 @@ SPECS = {
 }
 
 
-@dataclass(frozen=True)
-class SuiteStats:
+class SuiteStats(NamedTuple):
     """How many configurations were enumerated, dropped and kept."""
 
     suite: str
@@ -142,18 +140,41 @@ def _partitions(items: Sequence[str]) -> Iterator[list[list[str]]]:
 def tower_achievable(
     facts: frozenset[Fact], base: tuple[str, str], others: Sequence[tuple[str, str]]
 ) -> bool:
-    """Can `others` (type, orientation) be ordered so that each stands on the one below?"""
+    """Can `others` (type, orientation) be ordered so that each stands on the one below?
+
+    A depth-first search that abandons an order as soon as one object cannot stand on the
+    one below (not every permutation is tried)."""
+    if not others:
+        return True
     return any(
-        all(
-            _supports(facts, lower, upper)
-            for lower, upper in zip((base, *order[:-1]), order, strict=True)
-        )
-        for order in itertools.permutations(others)
+        _supports(facts, base, upper)
+        and tower_achievable(facts, upper, [*others[:i], *others[i + 1 :]])
+        for i, upper in enumerate(others)
+        if upper not in others[:i]  # an equal object already tried in this position
     )
 
 
+def _stacks(block: Sequence[str], on: set[tuple[str | None, str]]) -> list[list[str]]:
+    """Every order of `block` (bottom->top) in which the bottom object stands on the table
+    and each other on the one below (`(lower, upper) in on`, lower None = the table), in
+    `itertools.permutations` order; a depth-first search that prunes at the first failure."""
+    stacks: list[list[str]] = []
+
+    def extend(stack: list[str], rest: Sequence[str]) -> None:
+        if not rest:
+            stacks.append(stack)
+            return
+        below = stack[-1] if stack else None
+        for i, obj in enumerate(rest):
+            if (below, obj) in on:
+                extend([*stack, obj], [*rest[:i], *rest[i + 1 :]])
+
+    extend([], block)
+    return stacks
+
+
 def _layout() -> dict[str, Any]:
-    return tomllib.loads(asset_path("scenes", "layout.toml").read_text())
+    return tomli.loads(asset_path("scenes", "layout.toml").read_text())
 
 
 def _configurations(
@@ -161,27 +182,32 @@ def _configurations(
 ) -> Iterator[tuple[dict[str, str], list[list[str]]]]:
     """(orientation per object, stacks bottom->top) for every physically valid stacking."""
     types = dict((*spec.movables, TRAY))
+    orientations = {m: _orientations(facts, types[m]) for m, _ in spec.movables}
     for n_movable in spec.sizes:
         for subset in itertools.combinations([m for m, _ in spec.movables], n_movable):
             if spec.new and not set(subset) & set(spec.new):
                 continue
-            options = [_orientations(facts, types[m]) for m in subset]
-            for choice in itertools.product(*options):
+            for choice in itertools.product(*(orientations[m] for m in subset)):
                 orient = dict(zip(subset, choice, strict=True)) | {TRAY[0]: "upright"}
                 names = [TRAY[0], *subset]
+                # the support relation among these objects, looked up once per pair
+                on = {
+                    (lower, upper)
+                    for upper in names
+                    for lower in (None, *names)
+                    if lower != upper
+                    and _supports(
+                        facts,
+                        None if lower is None else (types[lower], orient[lower]),
+                        (types[upper], orient[upper]),
+                    )
+                }
+                block_stacks: dict[tuple[str, ...], list[list[str]]] = {}  # blocks recur
                 for blocks in _partitions(names):
-                    stacks_per_block = []
                     for block in blocks:
-                        valid = [
-                            list(order)
-                            for order in itertools.permutations(block)
-                            if _supports(facts, None, (types[order[0]], orient[order[0]]))
-                            and all(
-                                _supports(facts, (types[a], orient[a]), (types[b], orient[b]))
-                                for a, b in itertools.pairwise(order)
-                            )
-                        ]
-                        stacks_per_block.append(valid)
+                        if tuple(block) not in block_stacks:
+                            block_stacks[tuple(block)] = _stacks(block, on)
+                    stacks_per_block = [block_stacks[tuple(block)] for block in blocks]
                     for stacks in itertools.product(*stacks_per_block):
                         yield orient, list(stacks)
 
@@ -236,7 +262,7 @@ def extra_catalogue() -> Catalogue:
 def suite_facts(suite: str) -> frozenset[Fact]:
     """The affordances a suite is enumerated with: the ground truth, and for the types
     without hand-written truth (the extra catalogue's) the rule parser's facts."""
-    facts = load_ground_truth()
+    facts = packaged_ground_truth()
     if suite != "extra":
         return facts
     from utamp_gym.affordances.rules import derive_affordances  # numpy: off `utamp plan`'s path
@@ -259,6 +285,7 @@ def _kept(suite: str) -> tuple[tuple[Configuration, ...], SuiteStats]:
     types = dict((*spec.movables, TRAY))
     kept: list[Configuration] = []
     enumerated = trivial = unachievable = 0
+    achievable: dict[tuple[tuple[str, str], ...], bool] = {}  # by the objects' orientations
     for orient, stacks in _configurations(facts, spec):
         if spec.sliding and next(s for s in stacks if s[0] == TRAY[0]) != [TRAY[0]]:
             continue
@@ -266,8 +293,10 @@ def _kept(suite: str) -> tuple[tuple[Configuration, ...], SuiteStats]:
         if len(stacks) == 1:
             trivial += 1
             continue
-        others = [(types[o], orient[o]) for o in orient if o != TRAY[0]]
-        if not tower_achievable(facts, (TRAY[1], "upright"), others):
+        others = tuple((types[o], orient[o]) for o in orient if o != TRAY[0])
+        if others not in achievable:
+            achievable[others] = tower_achievable(facts, (TRAY[1], "upright"), others)
+        if not achievable[others]:
             unachievable += 1
             continue
         kept.append((orient, stacks))

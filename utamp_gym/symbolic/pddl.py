@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 from functools import lru_cache
 from types import MappingProxyType
 
@@ -48,12 +47,14 @@ _STEP = re.compile(r"\(\s*([^\s()]+(?:\s+[^\s()]+)*)\s*\)")
 _KEYWORDS = ("and", "not", "or", "imply", "forall", "exists", "when", "either", "increase")
 
 
-@dataclass
 class _Node:
     """A parenthesised list with the line it opens on (tokens keep their original case)."""
 
-    line: int
-    items: list[str | _Node] = field(default_factory=list)
+    __slots__ = ("items", "line")
+
+    def __init__(self, line: int, items: list[str | _Node] | None = None) -> None:
+        self.line = line
+        self.items: list[str | _Node] = [] if items is None else items
 
 
 def _fail(source: str, line: int | None, message: str) -> PddlError:

@@ -7,7 +7,7 @@ the grounder, the SAS writer and the envs. Names are lower-case.
 from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import NamedTuple
 
 
@@ -35,6 +35,9 @@ class Literal(NamedTuple):
         return str(self.atom) if self.positive else f"(not {self.atom})"
 
 
+_NO_SPELLING: Mapping[str, str] = MappingProxyType({})
+
+
 def _sub(a: Atom, sub: Mapping[str, str]) -> Atom:
     return tuple.__new__(Atom, (a.predicate, tuple(map(sub.get, a.args, a.args))))
 
@@ -45,8 +48,7 @@ def _holds(lit: Literal, facts: Collection[Atom]) -> bool:
     return true == lit.positive
 
 
-@dataclass(frozen=True)
-class CondEffect:
+class CondEffect(NamedTuple):
     """``(forall (?v - t ...) (when (and cond ...) (and eff ...)))`` in an action's effect.
 
     For every binding of `variables` under which all `condition` literals hold, the atoms of
@@ -95,8 +97,7 @@ class CondEffect:
         yield from rec(0, dict(sub))
 
 
-@dataclass(frozen=True)
-class Action:
+class Action(NamedTuple):
     """An action schema: typed parameters, precondition literals, add and delete effects.
 
     `cond_effects` are the conditional effects (`CondEffect`); `instantiate` resolves them
@@ -142,9 +143,11 @@ class Action:
         return tuple(dict.fromkeys(add)), tuple(dict.fromkeys(dele))
 
 
-@dataclass(frozen=True)
-class Domain:
-    """A parsed domain; mappings are read-only and `types` maps each type to its parent."""
+class Domain(NamedTuple):
+    """A parsed domain; mappings are read-only and `types` maps each type to its parent.
+
+    Equality ignores `spelling` and `source` (the same domain read from another file).
+    """
 
     name: str
     requirements: tuple[str, ...]
@@ -152,8 +155,20 @@ class Domain:
     constants: Mapping[str, str]  # name -> type
     predicates: Mapping[str, tuple[str, ...]]  # name -> argument types
     actions: Mapping[str, Action]
-    spelling: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
-    source: str = field(default="<string>", compare=False, repr=False)
+    spelling: Mapping[str, str] = _NO_SPELLING
+    source: str = "<string>"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Domain) and self[:6] == other[:6]
+
+    def __repr__(self) -> str:  # the compared fields only
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields[:6])
+        return f"Domain({shown})"
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    __hash__ = None  # type: ignore[assignment]  # its mappings are not hashable
 
     def is_subtype(self, sub: str, sup: str) -> bool:
         """True if type `sub` equals `sup` or inherits from it."""
@@ -192,13 +207,27 @@ class Domain:
         )
 
 
-@dataclass(frozen=True)
-class Problem:
-    """A parsed problem; `objects` maps object name to type (domain constants excluded)."""
+class Problem(NamedTuple):
+    """A parsed problem; `objects` maps object name to type (domain constants excluded).
+
+    Equality ignores `source`.
+    """
 
     name: str
     domain_name: str
     objects: Mapping[str, str]
     init: frozenset[Atom]
     goal: tuple[Literal, ...]
-    source: str = field(default="<string>", compare=False, repr=False)
+    source: str = "<string>"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Problem) and self[:5] == other[:5]
+
+    def __repr__(self) -> str:  # the compared fields only
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields[:5])
+        return f"Problem({shown})"
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    __hash__ = None  # type: ignore[assignment]  # `objects` is not hashable

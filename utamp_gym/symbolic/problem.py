@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.errors import UnknownNameError
@@ -53,8 +53,7 @@ def _base_part(inverted: bool) -> str:
     return best
 
 
-@dataclass(frozen=True)
-class Problem:
+class Problem(NamedTuple):
     """A generated problem: its PDDL text and the symbols it uses."""
 
     name: str

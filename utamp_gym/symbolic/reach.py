@@ -23,9 +23,9 @@ from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from functools import lru_cache
 from operator import itemgetter
+from typing import NamedTuple
 
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PddlError
@@ -36,8 +36,7 @@ _CHECK_EVERY = 255  # join steps between two deadline checks (a mask: 2**k - 1)
 _CHECK_OPS = 31  # ground operators between two deadline checks (a mask: 2**k - 1)
 
 
-@dataclass(frozen=True)
-class GroundOp:
+class GroundOp(NamedTuple):
     """A ground action: name with arguments, fluent conditions and effects."""
 
     name: str  # "pick-support a b c"
@@ -95,8 +94,7 @@ def _variables(atom: Atom) -> list[str]:
     return [a for a in atom.args if a[0] == "?"]
 
 
-@dataclass(frozen=True)
-class _Join:
+class _Join(NamedTuple):
     """A conjunction to enumerate: positive atoms, checks tested once their variables are bound
     (static negative literals, equalities) and the variables of each result."""
 
@@ -105,8 +103,7 @@ class _Join:
     variables: tuple[str, ...]
 
 
-@dataclass(frozen=True)
-class _Group:
+class _Group(NamedTuple):
     """Connected positive static literals of a schema, joined once per task into the relation
     of the synthetic atom `atom` (predicate ``#action/k``, its variables as arguments)."""
 
@@ -114,8 +111,7 @@ class _Group:
     atom: Atom
 
 
-@dataclass(frozen=True)
-class _Schema:
+class _Schema(NamedTuple):
     action: Action
     types: Mapping[str, str]
     groups: tuple[_Group, ...]
@@ -125,8 +121,7 @@ class _Schema:
     pre_neg: tuple[Atom, ...]  # negative fluent preconditions (templates)
 
 
-@dataclass(frozen=True)
-class _Step:
+class _Step(NamedTuple):
     """One literal of a join plan: look its tuples up in the table of its constants keyed by
     the variables bound earlier (`getter` reads them from the binding) and bind the new
     variables (`free`)."""
