@@ -87,7 +87,8 @@ MAX_TURN_DEG = 15.0  # an object turned further by a failed attempt is not grasp
 
 
 class MissedGrasp(SkillFailure):
-    """The fingers closed on nothing: the object was not moved, the grasp may be retried."""
+    """The hand stopped short of the grasp pose or the fingers closed on nothing: the object
+    was not lifted, the grasp may be retried."""
 
 
 # ------------------------------------------------------------------ shared phases
@@ -241,7 +242,7 @@ def pick(st: SimState, act: MacroAction) -> None:
 
     A wrong pose estimate shows physically, and the grasp is then undone and tried again
     after a new look (`GRASP_ATTEMPTS` in all; the last one lifts without the test and its
-    failure is the action's): the approach met resistance (`_grasp`), the fingers closed on
+    failure is the action's): the approach stopped short (`_grasp`), the fingers closed on
     nothing, or the object slipped or turned in the hand in the first `TEST_LIFT` of the
     lift (grasped off its centre), after which the arm sets it back down. A retry starts
     only if the object still stands where it stood (`_let_go_and_look_again`)."""
@@ -249,7 +250,7 @@ def pick(st: SimState, act: MacroAction) -> None:
     if st.held is not None:
         raise SkillFailure(f"cannot pick {sym.obj}: the hand already holds {st.held.obj}")
     before = snapshot(st, {sym.obj})
-    support, yaw = st.stack().get(sym.obj), yaw_of(st.estimate(sym.obj)[:3, :3])
+    support, looked = st.stack().get(sym.obj), st.estimate(sym.obj)
     lift = lift_height(st, sym.obj)
     for attempt in range(1, GRASP_ATTEMPTS + 1):
         last = attempt == GRASP_ATTEMPTS
@@ -258,7 +259,7 @@ def pick(st: SimState, act: MacroAction) -> None:
         except MissedGrasp as exc:
             if last:
                 raise
-            _let_go_and_look_again(st, sym.obj, (support, yaw), before, str(exc))
+            _let_go_and_look_again(st, sym.obj, (support, looked), before, str(exc))
             continue
         start_obj, start_tcp = obj_pose(st, sym.obj), st.arm.tcp()
         _check_lift(st, held, path)
@@ -272,7 +273,7 @@ def pick(st: SimState, act: MacroAction) -> None:
             st.arm.move_line(rest, *APPROACH)
             break
         st.arm.move_line(test.reversed(), *PLACE)  # set it back down where it stood
-        _let_go_and_look_again(st, sym.obj, (support, yaw), before, trouble)
+        _let_go_and_look_again(st, sym.obj, (support, looked), before, trouble)
     _verify_lift(st, held, start_obj, start_tcp, before)
 
 
@@ -307,22 +308,22 @@ def _test_lift_trouble(st: SimState, held: Held) -> str | None:
 def _let_go_and_look_again(
     st: SimState,
     obj: str,
-    where: tuple[str | None, float],
+    where: tuple[str | None, np.ndarray],
     before: dict[str, tuple[np.ndarray, str | None]],
     trouble: str,
 ) -> None:
     """Open the hand, move up and look at `obj` again before another grasp, which is only
     tried if `obj` still stands on the same support `where[0]`, turned by at most
-    `MAX_TURN_DEG` from the heading `where[1]` it was planned for (its sides are the
+    `MAX_TURN_DEG` from the estimated pose `where[1]` it was planned for (its sides are the
     action's symbols), and nothing else moved."""
-    support, yaw = where
+    support, looked = where
     if st.held is not None:
         _release_and_retreat(st, obj, st.held.opening)
     settle_objects(st, min_s=0.1, max_s=0.6)
     if st.estimator is not None:
         st.estimator.forget(obj)
     tipped = object_orientation(st.world.model, st.data, obj) is None
-    turned = abs(math.degrees(_wrap(yaw_of(st.estimate(obj)[:3, :3]) - yaw)))
+    turned = pose_change(looked, st.estimate(obj))[1]  # estimates are level: the yaw
     what = (
         f"{obj} tipped over"
         if tipped
@@ -335,11 +336,6 @@ def _let_go_and_look_again(
     if what:
         raise SkillFailure(f"{trouble}; letting go of it: {what}")
     st.retries.append(trouble)
-
-
-def _wrap(angle: float) -> float:
-    """`angle` (rad) wrapped into [-pi, pi)."""
-    return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
 def _verify_lift(
