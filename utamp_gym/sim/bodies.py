@@ -29,8 +29,6 @@ weighs its catalogue mass (uniform density over its primitives).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from types import MappingProxyType
 
 import mujoco
 import numpy as np
@@ -38,6 +36,7 @@ import numpy as np
 from utamp_gym.errors import SimulationError
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
+from utamp_gym.scene.materials import DEFAULT, MATERIALS, hex_rgba, material
 from utamp_gym.scene.model import Pose, Scene
 from utamp_gym.sim.prims import Prim, box, box_walls, cap, ring, slab
 
@@ -56,22 +55,9 @@ TOL = 1e-6  # m, declared dimensions closer than this are equal
 FLAT = PartAttrs("flat")
 
 BODY_PREFIX = "obj/"  # MuJoCo name prefix of object bodies and their geoms
-#: sliding friction per material (unknown materials: "default"); torsional and rolling below
-FRICTION: Mapping[str, float] = MappingProxyType(
-    {"wood": 0.5, "glass": 0.45, "steel": 0.4, "default": 0.5}
-)
 TORSIONAL, ROLLING = 0.005, 0.0001  # m; torsional acts on handles and edges (condim 4)
 SOLREF = (0.01, 1.0)  # 5 dt at dt = 0.002: stiff, still well resolved
 SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
-#: colours (hex RGBA) per material, each used once per scene, then a generic palette
-COLOURS: Mapping[str, tuple[str, ...]] = MappingProxyType(
-    {
-        "wood": ("8c572bff", "dbb073ff", "b3804dff"),
-        "glass": ("9ed1f2cc", "b8f2cccc"),
-        "steel": ("38383fff", "9e9eadff"),
-        "default": ("d94040ff", "408cd9ff", "f2bf33ff", "804db3ff", "4db366ff", "e680b3ff"),
-    }
-)
 ACCENT = "bfbfc7ff"  # metal parts such as a shaker's head
 
 
@@ -242,8 +228,9 @@ def object_prims(t: ObjectType) -> list[Prim]:
     return out
 
 
-def _rgba(hex_colour: str) -> tuple[float, ...]:
-    return tuple(int(hex_colour[i : i + 2], 16) / 255 for i in range(0, 8, 2))
+def friction_of(material_name: str) -> float:
+    """Sliding friction of a material (`utamp_gym.scene.materials`)."""
+    return material(material_name).friction
 
 
 def object_colours(scene: Scene) -> dict[str, tuple[float, ...]]:
@@ -254,7 +241,8 @@ def object_colours(scene: Scene) -> dict[str, tuple[float, ...]]:
         t = scene.type_of(o.name)
         rgba = t.extra.get("rgba")
         if rgba is None:
-            options = [_rgba(c) for c in (*COLOURS.get(t.material, ()), *COLOURS["default"])]
+            own = MATERIALS[t.material].palette if t.material in MATERIALS else ()
+            options = [hex_rgba(c) for c in (*own, *DEFAULT.palette)]
             rgba = next((c for c in options if c not in used), options[len(out) % len(options)])
         out[o.name] = tuple(float(v) for v in rgba)
         used.add(out[o.name])
@@ -268,7 +256,7 @@ def add_object_body(
     t = scene.type_of(name)
     prims = object_prims(t)
     volume = sum(p.volume for p in prims)
-    friction = [FRICTION.get(t.material, FRICTION["default"]), TORSIONAL, ROLLING]
+    friction = [friction_of(t.material), TORSIONAL, ROLLING]
     body = spec.worldbody.add_body(
         name=BODY_PREFIX + name, pos=list(pose.position), quat=list(pose.quat)
     )
@@ -281,7 +269,7 @@ def add_object_body(
             size=list(p.size),
             pos=list(p.pos),
             quat=list(p.quat),
-            rgba=list(_rgba(ACCENT) if p.accent else rgba),
+            rgba=list(hex_rgba(ACCENT) if p.accent else rgba),
             friction=friction,
             condim=3 if t.members[p.member].kind == "body" else 4,  # see TORSIONAL
             solref=list(SOLREF),
@@ -320,13 +308,13 @@ def initial_poses(
 
 __all__ = [
     "BODY_PREFIX",
-    "FRICTION",
     "ROLLING",
     "SOLIMP",
     "SOLREF",
     "TORSIONAL",
     "Prim",
     "add_object_body",
+    "friction_of",
     "initial_poses",
     "object_colours",
     "object_prims",

@@ -29,12 +29,12 @@ from utamp_gym.perception.abstraction import TILT_DEG
 from utamp_gym.scene.model import Pose, Scene
 from utamp_gym.sim.bodies import (
     BODY_PREFIX,
-    FRICTION,
     ROLLING,
     SOLIMP,
     SOLREF,
     TORSIONAL,
     add_object_body,
+    friction_of,
     initial_poses,
     object_colours,
 )
@@ -111,7 +111,7 @@ def _add_environment(spec: mujoco.MjSpec, scene: Scene) -> None:
         rgba=[0.93, 0.9, 0.84, 1.0],
         solref=list(SOLREF),
         solimp=list(SOLIMP),
-        friction=[FRICTION.get(scene.table.material, FRICTION["default"]), TORSIONAL, ROLLING],
+        friction=[friction_of(scene.table.material), TORSIONAL, ROLLING],
     )
     spec.worldbody.add_geom(
         name="floor",
