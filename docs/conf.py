@@ -3,7 +3,9 @@
 `make docs` first runs ``docs/_scripts/generate.py``, which writes the pages generated from
 the code (one per env id in ``envs/``, the CLI reference, the suite table) and
 ``_generated/facts.json``: figures the prose quotes (``{{ name }}`` substitutions), so they
-come from the code, never from a hand-copied number. Nothing is fetched from the network.
+come from the code, never from a hand-copied number; ``{{ results.NAME.FIELD }}`` quotes a field
+of ``docs/results/NAME.json``, written by the script that measured it. Nothing is fetched from
+the network.
 """
 
 from __future__ import annotations
@@ -44,6 +46,12 @@ templates_path = ["_templates"]
 # MyST: ``{{ name }}`` substitutions from the generated facts; ```{include}``` of results.
 myst_enable_extensions = ["substitution", "colon_fence", "deflist"]
 myst_substitutions = json.loads(FACTS.read_text())
+# what the benchmarks measured: {{ results.outcome_model.agreement }} is the field of
+# docs/results/outcome_model.json, written by the script that measured it
+myst_substitutions["results"] = {
+    path.stem.replace("-", "_"): json.loads(path.read_text())
+    for path in sorted((HERE / "results").glob("*.json"))
+}
 myst_heading_anchors = 3
 
 # API reference from the docstrings (autosummary writes one page per module).
