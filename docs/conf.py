@@ -72,6 +72,9 @@ default_role = "py:obj"
 # heavy optional stacks are documented from their own modules; none is mocked
 suppress_warnings = ["autosummary.import_cycle"]
 
+# "--flag" stays two hyphens (no en dash), quotes stay straight: this is a reference
+smartquotes = False
+
 html_theme = "furo"
 html_title = "utamp_gym"
 html_static_path: list[str] = []

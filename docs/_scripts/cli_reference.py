@@ -54,7 +54,7 @@ def _arguments(parser: argparse.ArgumentParser) -> list[argparse.Action]:
 
 def _positional_name(action: argparse.Action) -> str:
     metavar = action.metavar
-    return str(metavar if isinstance(metavar, str) else action.dest.upper())
+    return str(metavar if isinstance(metavar, str) else action.dest)
 
 
 def _usage(parser: argparse.ArgumentParser) -> str:
@@ -77,6 +77,8 @@ def _help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
 def _value(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
     if action.nargs == 0:
         return "flag"
+    if not action.option_strings and action.choices is None:
+        return "positional" + (", one or more" if action.nargs == "+" else "")
     if action.choices is not None:
         return " \\| ".join(f"`{c}`" for c in action.choices)
     metavar = action.metavar if isinstance(action.metavar, str) else action.dest.upper()
