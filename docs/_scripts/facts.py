@@ -145,7 +145,7 @@ def facts(envs: Iterable[EnvFacts]) -> dict[str, Any]:
         "default_pose_noise_mm": f"{DEFAULT_POSE_NOISE * 1000:g}",
         "max_pose_noise_mm": f"{MAX_POSE_NOISE * 1000:g}",
         "default_noise": f"{DEFAULT_NOISE:g}",
-        "default_search": DEFAULT_SEARCH,
+        "default_search": f"`{DEFAULT_SEARCH}`",
         "search_configs": ", ".join(f"`{c}`" for c in SEARCH_CONFIGS),
         "methods": ", ".join(f"`{m}`" for m in METHODS),
         "control_timestep_ms": f"{CONTROL_TIMESTEP * 1000:g}",
