@@ -133,8 +133,9 @@ def test_every_info_key_is_documented(env_id: str) -> None:
     mask = env.unwrapped.action_masks()
     *_, info_step = env.step(int(mask.nonzero()[0][0]))
     env.close()
-    keys = set(info_reset) | set(info_step)
     measured, page = env_page(env_id)
+    # and the keys of a whole episode (some are set on its last step only)
+    keys = set(info_reset) | set(info_step) | set(measured.info_keys)
     described = measured.sections.get("Info", "")
     for key in sorted(keys):
         assert re.search(rf"^\| `{key}` \|", page, re.M), f"{env_id}: info key {key} not listed"

@@ -54,7 +54,7 @@ class EnvFacts:
     docstring: str
     parameters: list[inspect.Parameter]
     action_space: str
-    n_actions: int
+    n_actions: int | None  # None: not a Discrete action space
     n_actions_by_masks: dict[str, int]
     observation_space: dict[str, str]
     n_scenes: int
@@ -64,13 +64,14 @@ class EnvFacts:
     info_at_step: dict[str, Any]
     info_at_end: dict[str, Any]
     physics_info: dict[str, Any]
-    mask_at_reset: tuple[int, int]
+    mask_at_reset: tuple[int, int] | None  # (applicable, all); None: no action_masks()
     episode: list[str]
     episode_return: float
     example_actions: list[str]
     sections: dict[str, str] = field(default_factory=dict)
     pictures: dict[str, str] = field(default_factory=dict)
     picture_scene: str = ""
+    grounded: bool = True  # the entry point takes ``grounding`` (symbolic and physics)
 
     @property
     def info_keys(self) -> list[str]:
@@ -134,13 +135,47 @@ def _kind(value: Any) -> str:
     return type(value).__name__
 
 
+def _policy(env: gym.Env[Any, Any], seed: int = 0) -> Any:
+    """The planner policy for the kitchen envs; a seeded masked-random policy otherwise."""
+    from utamp_gym.env.kitchen import UTampKitchenEnv
+    from utamp_gym.env.planner_policy import PlannerPolicy
+
+    base = env.unwrapped
+    if isinstance(base, UTampKitchenEnv):
+        return PlannerPolicy(base)
+    rng = np.random.default_rng(seed)
+    env.action_space.seed(seed)
+
+    def act(obs: Any, info: dict[str, Any]) -> Any:
+        mask = getattr(base, "action_masks", None)
+        if mask is not None:
+            return int(rng.choice(np.flatnonzero(mask())))
+        return env.action_space.sample()
+
+    return act
+
+
+def _episode(env: gym.Env[Any, Any]) -> tuple[dict[str, Any], list[dict[str, Any]], float]:
+    """(info at reset, info of every step, return) of one episode from ``reset(seed=0)``."""
+    policy = _policy(env)
+    obs, info = env.reset(seed=0)
+    first, infos, total, done = info, [], 0.0, False
+    while not done:
+        obs, reward, terminated, truncated, info = env.step(policy(obs, info))
+        infos.append(info)
+        total += float(reward)
+        done = terminated or truncated
+    return first, infos, total
+
+
 def measure(env_id: str, *, pictures: Path | None = None) -> EnvFacts:
     """Build `env_id` with `gym.make`, run it, and (with `pictures`) render its pictures there.
 
-    Runs a symbolic-grounding episode with the planner policy (reset, steps, its end) and a
-    physics reset and step, so the ``info`` keys are the ones a user sees.
+    Runs an episode from ``reset(seed=0)`` to its end in symbolic grounding (fast) with the
+    planner policy, and with `pictures` a physics reset and step, so the ``info`` keys are the
+    ones a user sees. Options an entry point does not take (``grounding``, ``masks``) are
+    left out, so an id of another env class gets its page too.
     """
-    from utamp_gym.env.planner_policy import PlannerPolicy
     from utamp_gym.env.registry import env_definitions, register_envs
 
     register_envs()
@@ -150,30 +185,28 @@ def measure(env_id: str, *, pictures: Path | None = None) -> EnvFacts:
     parameters = [
         p
         for p in inspect.signature(cls.__init__).parameters.values()
-        if p.name != "self" and p.kind is not p.VAR_KEYWORD
+        if p.name != "self" and p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)
     ]
-    sym = gym.make(env_id, grounding="symbolic")
+    takes = {p.name for p in parameters}
+    fast = {"grounding": "symbolic"} if "grounding" in takes else {}
+    sym = gym.make(env_id, **fast)
     base = sym.unwrapped
+    discrete = isinstance(sym.action_space, gym.spaces.Discrete)
     by_masks = {}
-    for masks in MASK_MODES:
-        other = gym.make(env_id, grounding="symbolic", masks=masks)
-        by_masks[masks] = int(other.action_space.n)
-        other.close()
-    obs, info0 = sym.reset(seed=0)
-    mask = base.action_masks()
-    policy = PlannerPolicy(base)
-    episode: list[str] = []
-    infos: list[dict[str, Any]] = []
-    total, done = 0.0, False
-    while not done:
-        obs, reward, terminated, truncated, info = sym.step(
-            policy(obs, info0 if not infos else infos[-1])
-        )
-        infos.append(info)
-        episode.append(str(info["action"]))
-        total += float(reward)
-        done = terminated or truncated
-    scenes = base.scenes
+    if discrete and "masks" in takes:
+        for masks in MASK_MODES:
+            other = gym.make(env_id, **fast, masks=masks)
+            by_masks[masks] = int(other.action_space.n)
+            other.close()
+    info0, infos, total = _episode(sym)
+    sym.reset(seed=0)
+    mask = base.action_masks() if hasattr(base, "action_masks") else None
+    scenes = tuple(getattr(base, "scenes", ()))
+    spaces = (
+        sym.observation_space.spaces
+        if isinstance(sym.observation_space, gym.spaces.Dict)
+        else {"(whole observation)": sym.observation_space}
+    )
     facts = EnvFacts(
         env_id=env_id,
         description=definition.description,
@@ -183,40 +216,43 @@ def measure(env_id: str, *, pictures: Path | None = None) -> EnvFacts:
         source=f"envs/{definition.source.name}",
         docstring=inspect.cleandoc(cls.__doc__ or ""),
         parameters=parameters,
-        action_space=str(sym.action_space),
-        n_actions=int(sym.action_space.n),
+        action_space=space_text(sym.action_space),
+        n_actions=int(sym.action_space.n) if discrete else None,
         n_actions_by_masks=by_masks,
-        observation_space={k: space_text(v) for k, v in sym.observation_space.spaces.items()},
+        observation_space={k: space_text(v) for k, v in spaces.items()},
         n_scenes=len(scenes),
         objects_per_scene=sorted({s.n_objects for s in scenes}),
         render_modes=list(base.metadata.get("render_modes", [])),
         info_at_reset=info0,
-        info_at_step=infos[0],
-        info_at_end=infos[-1],
+        info_at_step=infos[0] if infos else {},
+        info_at_end=infos[-1] if infos else {},
         physics_info={},
-        mask_at_reset=(int(np.count_nonzero(mask)), len(mask)),
-        episode=episode,
+        mask_at_reset=None if mask is None else (int(np.count_nonzero(mask)), len(mask)),
+        episode=[str(i.get("action")) for i in infos],
         episode_return=total,
-        example_actions=list(base.action_strings[:3]),
+        example_actions=list(getattr(base, "action_strings", ())[:3]),
         sections=split_docstring(cls.__doc__ or ""),
+        grounded=bool(fast),
     )
-    if pictures is not None:
+    if pictures is not None and "rgb_array" in facts.render_modes:
         pictures.mkdir(parents=True, exist_ok=True)
-        sym_r = gym.make(env_id, grounding="symbolic", render_mode="rgb_array")
-        sym_r.reset(seed=0)
-        facts.pictures["symbolic"] = _write_png(pictures / f"{env_id}-symbolic.png", sym_r.render())
-        sym_r.close()
-        phys = gym.make(env_id, render_mode="rgb_array")
+        if fast:
+            schematic = gym.make(env_id, **fast, render_mode="rgb_array")
+            schematic.reset(seed=0)
+            path = pictures / f"{env_id}-symbolic.png"
+            facts.pictures["symbolic"] = _write_png(path, schematic.render())
+            schematic.close()
+        phys = gym.make(env_id, render_mode="rgb_array")  # the id's default grounding
         pobs, pinfo = phys.reset(seed=0)
-        facts.picture_scene = str(pinfo["scene"])
+        facts.picture_scene = str(pinfo.get("scene", ""))
         facts.pictures["physics"] = _write_png(pictures / f"{env_id}.png", phys.render())
-        if phys.observation_space.keys() != sym.observation_space.keys() or (
+        if phys.observation_space != sym.observation_space or (
             phys.action_space != sym.action_space
         ):
-            raise AssertionError(f"{env_id}: physics and symbolic spaces differ")
-        step_policy = PlannerPolicy(phys.unwrapped)
-        *_, pinfo = phys.step(step_policy(pobs, pinfo))
-        facts.physics_info = pinfo
+            raise AssertionError(f"{env_id}: the spaces differ between groundings")
+        if fast:
+            *_, pinfo = phys.step(_policy(phys)(pobs, pinfo))
+            facts.physics_info = pinfo
         phys.close()
     sym.close()
     return facts
@@ -235,8 +271,9 @@ def _rst(text: str) -> list[str]:
 
 
 def _info_table(facts: EnvFacts) -> list[str]:
+    mode = " (symbolic)" if facts.grounded else ""
     rows = [
-        "| key | at `reset` | after a step (symbolic) | at the episode's end (symbolic) "
+        f"| key | at `reset` | after a step{mode} | at the episode's end{mode} "
         "| after a step (physics) |",
         "|---|---|---|---|---|",
     ]
@@ -290,7 +327,7 @@ def page(facts: EnvFacts) -> str:
                 "",
             ]
     counts = facts.objects_per_scene
-    objects = f"{counts[0]}–{counts[-1]}" if len(counts) > 1 else str(counts[0])
+    objects = f"{counts[0]}–{counts[-1]}" if len(counts) > 1 else "".join(map(str, counts))
     keys = ", ".join(f"`{k}`" for k in facts.observation_space)
     out += [
         "| | |",
@@ -298,9 +335,12 @@ def page(facts: EnvFacts) -> str:
         f'| make | `gym.make("{env_id}")` (after `import utamp_gym`) |',
         f"| entry point | `{facts.entry_point}` |",
         f"| definition | `{facts.source}` |",
-        f"| scenes | {facts.n_scenes} ({objects} objects each) |",
+    ]
+    if facts.n_scenes:
+        out.append(f"| scenes | {facts.n_scenes} ({objects} objects each) |")
+    out += [
         f"| action space | `{facts.action_space}` |",
-        f"| observation space | `Dict` with {keys} |",
+        f"| observation space | {keys} |",
         f"| max_episode_steps | {facts.max_episode_steps} |",
         f"| render modes | {', '.join(f'`{m}`' for m in facts.render_modes)} |",
         "",
@@ -308,32 +348,46 @@ def page(facts: EnvFacts) -> str:
     if s.get(""):
         out += ["## Description", "", *_rst(s[""])]
 
-    out += ["## Action space", ""]
     out += [
-        f'`gym.make("{env_id}").action_space` is `{facts.action_space}`. The size depends on '
-        'the `masks` option (the action ids of `masks="affordances"` are the same in all):',
+        "## Action space",
         "",
-        "| `masks` | action space |",
-        "|---|---|",
-        *(f'| `"{m}"` | `Discrete({n})` |' for m, n in facts.n_actions_by_masks.items()),
-        "",
-        "The first action ids (`env.unwrapped.action_strings`):",
-        "",
-        *(f"- `{i}`: `{a}`" for i, a in enumerate(facts.example_actions)),
+        f'`gym.make("{env_id}").action_space` is `{facts.action_space}`.',
         "",
     ]
+    if facts.n_actions_by_masks:
+        out += [
+            'Its size depends on the `masks` option (the action ids of `masks="affordances"` '
+            "are the same in all):",
+            "",
+            "| `masks` | action space |",
+            "|---|---|",
+            *(f'| `"{m}"` | `Discrete({n})` |' for m, n in facts.n_actions_by_masks.items()),
+            "",
+        ]
+    if facts.example_actions:
+        out += [
+            "The first action ids (`env.unwrapped.action_strings`):",
+            "",
+            *(f"- `{i}`: `{a}`" for i, a in enumerate(facts.example_actions)),
+            "",
+        ]
     if s.get("Action space"):
         out += _rst(s["Action space"])
-    applicable, total = facts.mask_at_reset
-    out += [
-        "## Action masks",
-        "",
-        f'`env.unwrapped.action_masks()` and `info["action_mask"]` are boolean arrays of '
-        f"length {total}; after `reset(seed=0)` {applicable} actions are applicable. "
-        "`MaskablePPO` (sb3-contrib) reads `action_masks()`. The `masks` option chooses what "
-        "the mask allows (see *Options*).",
-        "",
-    ]
+    if facts.mask_at_reset is not None:
+        applicable, total = facts.mask_at_reset
+        out += [
+            "## Action masks",
+            "",
+            f"`env.unwrapped.action_masks()` is a boolean array of length {total}; after "
+            f"`reset(seed=0)` {applicable} actions are applicable. `MaskablePPO` (sb3-contrib) "
+            "reads `action_masks()`."
+            + (
+                " The `masks` option chooses what the mask allows (see *Options*)."
+                if facts.n_actions_by_masks
+                else ""
+            ),
+            "",
+        ]
     out += ["## Observation space", "", "| key | space |", "|---|---|"]
     out += [f"| `{k}` | `{v}` |" for k, v in facts.observation_space.items()]
     out.append("")
@@ -342,8 +396,9 @@ def page(facts: EnvFacts) -> str:
     for title in ("Reward", "Termination"):
         if s.get(title):
             out += [f"## {title}", "", *_rst(s[title])]
+    who = "A planner-policy episode" if facts.example_actions else "An episode"
     out += [
-        "A planner-policy episode of symbolic grounding after `reset(seed=0)` "
+        f"{who}{' of symbolic grounding' if facts.grounded else ''} after `reset(seed=0)` "
         f"({len(facts.episode)} steps, return {facts.episode_return:g}):",
         "",
         *(f"{i + 1}. `{a}`" for i, a in enumerate(facts.episode)),
