@@ -11,9 +11,14 @@ the network.
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 import utamp_gym
+
+# autodoc imports dm_control and PyOpenGL, which log their start-up at INFO level
+for _name in ("absl", "OpenGL"):
+    logging.getLogger(_name).setLevel(logging.WARNING)
 
 HERE = Path(__file__).resolve().parent
 FACTS = HERE / "_generated" / "facts.json"
