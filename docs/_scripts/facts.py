@@ -7,6 +7,7 @@ so a change of the code changes the pages with it.
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 from collections.abc import Iterable
@@ -123,6 +124,45 @@ def crosscheck_tasks() -> int:
     )
 
 
+#: constants the concept pages quote: name -> (module, attribute, unit scale)
+CONSTANTS = {
+    "tilt_deg": ("utamp_gym.perception.abstraction", "TILT_DEG", 1),
+    "workspace_tol_cm": ("utamp_gym.perception.abstraction", "WORKSPACE_TOL", 100),
+    "gripper_opening_cm": ("utamp_gym.affordances.rules", "GRIPPER_OPENING", 100),
+    "rules_payload_kg": ("utamp_gym.affordances.rules", "PAYLOAD", 1),
+    "lift_fraction": ("utamp_gym.affordances.rules", "LIFT_FRACTION", 1),
+    "edge_lift_kg": ("utamp_gym.affordances.rules", "EDGE_LIFT_LIMIT", 1),
+    "rated_payload_kg": ("utamp_gym.sim.payload", "RATED_PAYLOAD_KG", 1),
+    "hold_s": ("utamp_gym.sim.payload", "HOLD_S", 1),
+    "carry_hold_s": ("utamp_gym.sim.skills", "CARRY_HOLD_S", 1),
+    "uncertainty_sigmas": ("utamp_gym.sim.skills", "UNCERTAINTY_SIGMAS", 1),
+    "contact_n": ("utamp_gym.sim.skills", "CONTACT_N", 1),
+    "place_attempts": ("utamp_gym.sim.skills", "PLACE_ATTEMPTS", 1),
+    "approach_stop_cm": ("utamp_gym.sim.skills", "APPROACH_STOP", 100),
+    "test_lift_cm": ("utamp_gym.sim.skills", "TEST_LIFT", 100),
+    "test_slip_mm": ("utamp_gym.sim.skills", "TEST_SLIP", 1000),
+    "test_tilt_deg": ("utamp_gym.sim.skills", "TEST_TILT_DEG", 1),
+    "grasp_attempts": ("utamp_gym.sim.skills", "GRASP_ATTEMPTS", 1),
+    "max_turn_deg": ("utamp_gym.sim.skills", "MAX_TURN_DEG", 1),
+}
+
+
+def constants() -> dict[str, Any]:
+    """`CONSTANTS` read from the code, plus a few ranges and catalogue values."""
+    from utamp_gym.affordances.rules import LOAD_CAPACITY
+    from utamp_gym.scene.catalogue import load_catalogue
+    from utamp_gym.sim.faults import BELIEF_RANGE, PUSH_RANGE
+
+    out: dict[str, Any] = {}
+    for key, (module, attr, scale) in CONSTANTS.items():
+        out[key] = f"{getattr(importlib.import_module(module), attr) * scale:g}"
+    out["load_capacity_kg"] = {k: f"{v:g}" for k, v in LOAD_CAPACITY.items()}
+    out["push_cm"] = "–".join(f"{v * 100:g}" for v in PUSH_RANGE)
+    out["belief_cm"] = "–".join(f"{v * 100:g}" for v in BELIEF_RANGE)
+    out["tray_kg"] = f"{load_catalogue().types['wooden-tray'].mass:g}"
+    return out
+
+
 def facts(envs: Iterable[EnvFacts]) -> dict[str, Any]:
     """The substitutions of every page (see the module docstring)."""
     from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
@@ -150,4 +190,5 @@ def facts(envs: Iterable[EnvFacts]) -> dict[str, Any]:
         "methods": ", ".join(f"`{m}`" for m in METHODS),
         "control_timestep_ms": f"{CONTROL_TIMESTEP * 1000:g}",
         "control_rate_hz": f"{1 / CONTROL_TIMESTEP:g}",
+        "const": constants(),
     }
