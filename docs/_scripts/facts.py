@@ -8,6 +8,7 @@ so a change of the code changes the pages with it.
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import math
 from collections.abc import Iterable
@@ -160,6 +161,12 @@ def constants() -> dict[str, Any]:
     out["push_cm"] = "–".join(f"{v * 100:g}" for v in PUSH_RANGE)
     out["belief_cm"] = "–".join(f"{v * 100:g}" for v in BELIEF_RANGE)
     out["tray_kg"] = f"{load_catalogue().types['wooden-tray'].mass:g}"
+    from utamp_gym import dm
+
+    defaults = {p.name: p.default for p in inspect.signature(dm.load).parameters.values()}
+    out["dm_time_limit_s"] = f"{defaults['time_limit']:g}"
+    out["dm_pos_noise_mm"] = f"{defaults['pos_noise'] * 1000:g}"
+    out["dm_yaw_noise_deg"] = f"{defaults['yaw_noise_deg']:g}"
     return out
 
 
