@@ -6,7 +6,8 @@ names of the functions that step the physics (`ArmDriver.transfer`, `move_line`,
 `close_gripper`, `open_gripper`, `payload.hold_and_measure`, `measure.settle_objects`,
 `faults.push` / `drop`) and of the skills that call them (`_grasp`, `pick`, `place`,
 `slide`, `_release_and_retreat`). `Meter` replaces `mujoco.mj_step` with a wrapper that
-counts steps (an ``nstep`` call counts ``nstep``) and the wall time inside them; with
+counts steps (an ``nstep`` call counts ``nstep``), the wall time inside them and the
+contacts after each call (counted for each of its steps); with
 ``phases=True`` it also walks the Python stack at every call and books the steps to the
 innermost phase function it finds (a few µs a call: use it in a separate pass from the
 timed one).
@@ -103,6 +104,7 @@ class Meter:
         self.phases = phases
         self.steps = 0
         self.step_wall_s = 0.0
+        self.contacts = 0  # sum over steps of the contacts after the call
         self.by_phase: collections.Counter[str] = collections.Counter()
         self._orig = mujoco.mj_step
 
@@ -116,6 +118,7 @@ class Meter:
             orig(model, data, nstep=nstep)
             self.step_wall_s += clock() - t0
             self.steps += nstep
+            self.contacts += data.ncon * nstep
 
         mujoco.mj_step = mj_step
         return self
