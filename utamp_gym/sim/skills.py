@@ -425,7 +425,7 @@ def place(st: SimState, act: MacroAction) -> None:
     for attempt in range(1, PLACE_ATTEMPTS + 1):  # a guarded descent
         arm.move_line(up.reversed(), *PLACE)
         push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]
-        if push <= max(CONTACT_N, -carried.force[2]) or attempt == PLACE_ATTEMPTS:
+        if not landed_early(push, -carried.force[2]) or attempt == PLACE_ATTEMPTS:
             break
         # it landed early (on a rim, say): back up, look again, aim anew
         arm.move_line(up, *PLACE)
@@ -440,6 +440,12 @@ def place(st: SimState, act: MacroAction) -> None:
     moved = disturbed(st, before)
     if moved:
         raise SkillFailure(f"placing {name} on {act.support} toppled the stack: {moved}")
+
+
+def landed_early(push: float, weight: float) -> bool:
+    """True if an upward push of `push` N on a held object weighing `weight` N (both measured
+    from the joint torques) at its place pose means it landed early (`CONTACT_N`)."""
+    return push > max(CONTACT_N, weight)
 
 
 def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
