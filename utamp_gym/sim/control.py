@@ -178,7 +178,7 @@ class ArmDriver:
         """
         self.set_gripper(0.0)
         force = self.model.actuator_forcerange[self.ids.gripper_actuator_id, 1]
-        t, every = 0.0, 5
+        t, every = 0.0, max(1, round(0.01 / self.dt))
         while t < max_s - 1e-9:
             self.step(every)
             t += every * self.dt
