@@ -251,6 +251,17 @@ def episodes(suites: Sequence[str], objects: set[int], stride: int, seeds: int) 
     return out
 
 
+def _rounded(x: Any) -> Any:
+    """`x` with every float to 4 significant digits (a smaller JSON file)."""
+    if isinstance(x, float):
+        return float(f"{x:.4g}")
+    if isinstance(x, dict):
+        return {k: _rounded(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_rounded(v) for v in x]
+    return x
+
+
 def git(*args: str) -> str:
     return subprocess.run(
         ["git", "-C", str(ROOT), *args], check=True, capture_output=True, text=True
@@ -372,7 +383,7 @@ def main() -> None:
         "episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in rows],
         "phase_episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in phase_rows],
     }
-    out.with_suffix(".json").write_text(json.dumps(report, indent=1) + "\n")
+    out.with_suffix(".json").write_text(json.dumps(_rounded(report)) + "\n")
     written = [out.with_suffix(".md"), out.with_suffix(".json")]
     if phase_rows:
         phases_md = out.parent / "physics_phases.md"
