@@ -21,8 +21,6 @@ import statistics
 import time
 from pathlib import Path
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
 from utamp_gym.suites import suite_scenes

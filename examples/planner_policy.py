@@ -12,11 +12,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import time
 from pathlib import Path
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 import gymnasium as gym
 import imageio

@@ -11,7 +11,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from procs import downward_children, process_alive
+from procs import downward_children, process_alive, user_env
 
 from utamp_gym.cli import main
 from utamp_gym.deadline import PHASES
@@ -114,6 +114,7 @@ def test_sigint_during_search_exits_130_and_kills_the_search() -> None:
     cmd += ["--search", "astar-lmcut", "--json"]
     proc = subprocess.Popen(
         cmd,
+        env=user_env(),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -141,7 +142,9 @@ def test_sigint_during_search_exits_130_and_kills_the_search() -> None:
 
 def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
     cmd = [sys.executable, "-X", "importtime", "-m", "utamp_gym.cli", "plan", "pick-place/017"]
-    run = subprocess.run([*cmd, "--json"], capture_output=True, text=True, check=True)
+    run = subprocess.run(
+        [*cmd, "--json"], env=user_env(), capture_output=True, text=True, check=True
+    )
     assert json.loads(run.stdout)["solved"]
     imported = {ln.split("|")[-1].strip() for ln in run.stderr.splitlines() if "|" in ln}
     assert "utamp_gym.planning.state_planner" in imported  # the check sees our imports
@@ -186,5 +189,7 @@ def test_only_the_utamp_process_freezes_its_objects_before_exit(capsys) -> None:
         "import gc, sys; sys.argv = ['utamp', 'scenes', 'list', '--suite', 'sliding']; "
         "from utamp_gym.cli import main; rc = main(); print(rc, gc.get_freeze_count() > 0)"
     )
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    run = subprocess.run(
+        [sys.executable, "-c", code], env=user_env(), capture_output=True, text=True, check=True
+    )
     assert run.stdout.splitlines()[-1] == "0 True"

@@ -10,7 +10,7 @@ targets and the gripper command at 50 Hz and whose reward follows tower progress
     from utamp_gym import dm
 
     env = dm.load(scene="pick-place/000", seed=0)
-    viewer.launch(env)                        # needs a display and MUJOCO_GL=glfw
+    viewer.launch(env)                        # needs a display
 
 `record_plan` records the servo commands the physics executor sends for a macro plan and
 `ReplayPolicy` replays them through this interface. Needs the ``dm`` extra

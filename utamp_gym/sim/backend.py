@@ -6,8 +6,8 @@ draws the initial pose noise from the given generator and lets everything settle
 perception needs; `disturb` injects a fault (`faults`). Everything random (initial pose
 noise, pose-estimation noise, IK restarts, OMPL seeds) is drawn from the generator given
 to `reset`, and faults from the one given to `disturb`, so the same seeds give the same
-rollout. Rendering is headless (set ``MUJOCO_GL=egl``) and cheap:
-shadows, reflections and skybox are off.
+rollout. Rendering is headless (`utamp_gym.sim.gl` picks a working OpenGL backend when
+``MUJOCO_GL`` is unset) and cheap: shadows, reflections and skybox are off.
 
 **Frames while an action runs.** A macro action simulates several seconds; to see them,
 `watch(callback, period)` has `callback()` called every `period` s of simulated time while
@@ -36,6 +36,7 @@ from utamp_gym.sim.control import ArmDriver, Timings
 from utamp_gym.sim.decode import parse_action
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
+from utamp_gym.sim.gl import new_renderer
 from utamp_gym.sim.measure import SimState, believed_qpos, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
 from utamp_gym.sim.skills import run_skill
@@ -173,7 +174,7 @@ class MujocoBackend:
         if renderer is None:
             vis = st.world.model.vis.global_
             vis.offwidth, vis.offheight = max(vis.offwidth, key[0]), max(vis.offheight, key[1])
-            renderer = self._renderers[key] = mujoco.Renderer(st.world.model, key[1], key[0])
+            renderer = self._renderers[key] = new_renderer(st.world.model, key[1], key[0])
         renderer.update_scene(st.data, camera=CAMERA)
         for flag in (
             mujoco.mjtRndFlag.mjRND_SHADOW,
