@@ -20,12 +20,9 @@ from utamp_gym.perception.abstraction import perceive
 from utamp_gym.perception.state import PhysicalState
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.model import Scene
+from utamp_gym.sim.backend import MujocoBackend
 from utamp_gym.suites import suite_scenes
 from utamp_gym.symbolic.problem import scene_facts
-
-pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo physics backend is not available")
-
-from utamp_gym.sim.backend import MujocoBackend
 
 physics = pytest.mark.physics
 GEOMETRIC = ("(oc ", "(force ", "(base ")

@@ -21,10 +21,10 @@ pytestmark = pytest.mark.physics
 
 
 pytest.importorskip("dm_control", reason="the dm extra (dm-control) is not installed")
-dm = pytest.importorskip("utamp_gym.dm")
-dm_env = pytest.importorskip("dm_env")
+import dm_env  # noqa: E402  (dm_control's dependency)
 from dm_env import test_utils  # noqa: E402
 
+from utamp_gym import dm  # noqa: E402  (with dm_control installed it must import)
 from utamp_gym.planning.methods import plan_scene  # noqa: E402
 from utamp_gym.robot.kinematics import HOME_Q  # noqa: E402
 from utamp_gym.suites import resolve_scene  # noqa: E402

@@ -1,4 +1,4 @@
-"""The kitchen envs in physics grounding (MuJoCo backend); skipped until the backend exists."""
+"""The kitchen envs in physics grounding (MuJoCo backend)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-
-pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo physics backend is not available")
 
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import env_ids, register_envs

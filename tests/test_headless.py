@@ -207,3 +207,39 @@ def test_check_env_with_defaults_passes_with_a_display(tmp_path: Path) -> None:
     with virtual_display() as display:
         lines = _check_env_twice(tmp_path, "{}", DISPLAY=display.name)
     assert lines == ["passed", "passed"]
+
+
+# ---------------------------------------------------------------- quiet exits
+QUIET = {
+    "run --closed-loop": ["run", "pick-place/080", "--closed-loop", "--json"],
+    "eval in this process": [
+        "eval", "--suite", "pick-place", "--scenes", "pick-place/080", "--methods",
+        "utamp2-gt", "--workers", "0", "--quiet", "--out", "eval0",
+    ],
+    "eval in a worker": [
+        "eval", "--suite", "pick-place", "--scenes", "pick-place/080", "--methods",
+        "utamp2-gt", "--workers", "1", "--quiet", "--out", "eval1",
+    ],
+    "train": [
+        "train", "--num-objects", "2", "--steps", "64", "--envs", "1", "--eval-every", "64",
+        "--eval-episodes", "2", "--no-progress", "--out", "train",
+    ],
+    "plan": ["plan", "pick-place/080", "--out", "plan"],
+    "scenes": ["scenes", "show", "kitchen-demo"],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("args", QUIET.values(), ids=QUIET.keys())
+def test_successful_commands_print_nothing_on_stderr(tmp_path: Path, args: list[str]) -> None:
+    """No nanobind leak report from the OMPL bindings (nor anything else) on stderr."""
+    run = subprocess.run(
+        [sys.executable, "-m", "utamp_gym.cli", *args],
+        cwd=tmp_path,
+        env=user_env(),
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stderr == ""
+    assert run.stdout

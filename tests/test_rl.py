@@ -237,8 +237,6 @@ def _eval_rows(out: Path) -> list[dict[str, str]]:
 def test_utamp_eval_runs_a_trained_agent_next_to_the_planner(
     cli_runs: Path, tmp_path: Path, grounding: str
 ) -> None:
-    if grounding == "physics":
-        pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo backend is not available")
     model = cli_runs / "seed_3" / "model.zip"
     limit = "5" if grounding == "symbolic" else "1"
     args = (

@@ -150,7 +150,8 @@ def test_a_robot_can_be_attached_before_compiling(demo):
 
 
 def test_the_panda_stands_on_the_table_without_disturbing_the_scene(demo):
-    panda = pytest.importorskip("utamp_gym.robot.panda_mjcf")
+    from utamp_gym.robot import panda_mjcf as panda
+
     spec, info = build_world_spec(demo, rng=np.random.default_rng(0))
     handles = panda.add_panda(spec)
     world = compile_world(spec, info)
