@@ -35,7 +35,7 @@ def perception_cost(scenes: list[str], seed: int = 0) -> list[float]:
 
     out: list[float] = []
     for name in scenes:
-        env = UTampKitchenEnv(suite=name.split("/")[0], scene=name)
+        env = UTampKitchenEnv(suite=name.split("/")[0], scene=name, record_timings=True)
         policy = PlannerPolicy(env)
         obs, info = env.reset(seed=seed)
         for _ in range(40):

@@ -40,6 +40,7 @@ def main() -> None:
             grounding="physics",
             scene=args.scene,
             backend_kwargs={"frame_sink": video.append_data},
+            record_timings=True,  # wall-clock phase times per step, for summary.json
         )
         policy = PlannerPolicy(env.unwrapped, method=args.method)
         obs, info = env.reset(seed=args.seed)

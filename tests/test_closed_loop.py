@@ -76,7 +76,7 @@ def _follow_gt_plan(name: str, seed: int = 0) -> None:
     """Execute the UTAMP-2-GT plan step by step in the physics env: every perceived state is
     the symbolic successor, nothing unexpected, the goal at the end."""
     suite = name.split("/")[0]
-    env = UTampKitchenEnv(suite=suite, scene=name, record_timings=False)
+    env = UTampKitchenEnv(suite=suite, scene=name)
     env.reset(seed=seed)
     plan = plan_scene(env.scene, "utamp2-gt").plan
     for step, action in enumerate(plan):
@@ -107,7 +107,7 @@ def test_every_gt_plan_is_perceived_step_by_step(suite: str) -> None:
 # ------------------------------------------------------------------ physical failures
 @pytest.fixture
 def demo_env():
-    env = UTampKitchenEnv(scene="kitchen-demo", suite=None, record_timings=False)
+    env = UTampKitchenEnv(scene="kitchen-demo", suite=None)
     yield env
     env.close()
 
@@ -170,7 +170,7 @@ def test_a_knocked_over_stack_is_perceived(demo_env) -> None:
 @physics
 def test_an_object_left_inside_the_pan_is_perceived() -> None:
     # U-TAMP-1 has no affordances: it may put the shaker on the (concave, open) pan
-    env = UTampKitchenEnv(scene="kitchen-demo", suite=None, domain="utamp1", record_timings=False)
+    env = UTampKitchenEnv(scene="kitchen-demo", suite=None, domain="utamp1")
     env.reset(seed=0)
     _step(env, PICK_SALT)
     info = _step(env, "(place-support salt salt-body on left right back on under pan back on)")
@@ -214,7 +214,7 @@ def test_the_planner_never_retries_a_failure_from_the_same_state() -> None:
 def test_disturbed_episodes_are_reproducible_and_recover() -> None:
     def rollout() -> list[tuple[object, ...]]:
         env = UTampKitchenEnv(
-            suite="pick-place", scene="pick-place/017", disturbance=0.5, record_timings=False
+            suite="pick-place", scene="pick-place/017", disturbance=0.5
         )
         policy = PlannerPolicy(env)
         obs, info = env.reset(seed=3)

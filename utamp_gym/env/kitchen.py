@@ -85,9 +85,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     or ``gym.make(..., max_episode_steps=N)``).
 
     **Info** – ``action`` (PDDL string or None after reset), ``action_mask``,
-    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times,
-    ``perceive_s`` and ``step_s``, unless ``record_timings=False``; symbolic: always empty, so
-    info trajectories are reproducible), ``macro_result`` (physics: the `MacroResult`;
+    ``failure_reason`` (None or str), ``timings`` (empty unless ``record_timings=True``, so
+    equal seeds give equal info; physics then: the macro's wall-clock phase times,
+    ``perceive_s`` and ``step_s``), ``macro_result`` (physics: the `MacroResult`;
     symbolic: None), ``unexpected_atoms``, ``anomalies``, ``fault`` (see the closed loop
     below), ``scene`` (name).
 
@@ -110,8 +110,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       (`utamp_gym.env.outcome`: the ground-truth U-TAMP-2 precondition; a failure names the
       false affordance);
     * physics only: ``backend`` ("module:Class" or a callable, built as
-      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (wall-clock times in
-      info), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
+      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
+      wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
       (m, standard deviation of the robot's object-position estimates; `utamp_gym.backend`).
 
     **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
@@ -162,7 +162,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         render_size: int | tuple[int, int] = (480, 480),
         backend: str | Callable[..., PhysicsBackend] = DEFAULT_BACKEND,
         backend_kwargs: Mapping[str, Any] | None = None,
-        record_timings: bool = True,
+        record_timings: bool = False,
         masks: str = "affordances",
         disturbance: float = 0.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
@@ -440,5 +440,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
+        """The backend rebuilt its simulation (`utamp_gym.sim.snapshot`); rendering watches it
+        again."""
         state["universe"] = ground_universe(state["universe"])
         self.__dict__.update(state)
+        self._rendering.attach()
