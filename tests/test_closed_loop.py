@@ -213,9 +213,7 @@ def test_the_planner_never_retries_a_failure_from_the_same_state() -> None:
 @physics
 def test_disturbed_episodes_are_reproducible_and_recover() -> None:
     def rollout() -> list[tuple[object, ...]]:
-        env = UTampKitchenEnv(
-            suite="pick-place", scene="pick-place/017", disturbance=0.5
-        )
+        env = UTampKitchenEnv(suite="pick-place", scene="pick-place/017", disturbance=0.5)
         policy = PlannerPolicy(env)
         obs, info = env.reset(seed=3)
         out = []

@@ -111,8 +111,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       false affordance);
     * physics only: ``backend`` ("module:Class" or a callable, built as
       ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
-      wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
-      (m, standard deviation of the robot's object-position estimates; `utamp_gym.backend`).
+      wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per
+      macro step, default 0) and ``pose_noise`` (m, standard deviation of the robot's
+      object-position estimates; `utamp_gym.backend`).
 
     **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
     and after every executed step (success or failure) it is *perceived* from the simulator
