@@ -17,7 +17,7 @@ from utamp_gym.cli import main
 from utamp_gym.deadline import PHASES
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene import scene_from_dict
-from utamp_gym.suites import resolve_scene
+from utamp_gym.suites import SUITES, packaged_scene_names, resolve_scene, suite_scenes
 
 
 def test_scenes_list_and_show(capsys) -> None:
@@ -27,6 +27,16 @@ def test_scenes_list_and_show(capsys) -> None:
     assert main(["scenes", "show", "pick-place/017"]) == 0
     scene = scene_from_dict(tomllib.loads(capsys.readouterr().out))
     assert scene.name == "pick-place/017"
+
+
+def test_scenes_list_names_every_packaged_scene_and_every_suite_scene(capsys) -> None:
+    assert main(["scenes", "list"]) == 0
+    names = capsys.readouterr().out.split()
+    expected = [*packaged_scene_names(), *(s.name for x in SUITES for s in suite_scenes(x))]
+    assert names == expected and "kitchen-demo" in names
+    for name in names[:2]:  # each listed name is one `utamp scenes show` accepts
+        assert main(["scenes", "show", name]) == 0
+        assert scene_from_dict(tomllib.loads(capsys.readouterr().out)).name == name
 
 
 def test_plan_json_and_out_dir(capsys, tmp_path: Path) -> None:

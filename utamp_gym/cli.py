@@ -29,9 +29,12 @@ if TYPE_CHECKING:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
+    from utamp_gym.suites import SUITES, packaged_scene_names, resolve_scene, suite_scenes
 
     if args.scenes_cmd == "list":
+        if not args.suite:  # the packaged scenes (kitchen-demo), then every suite's
+            for name in packaged_scene_names():
+                print(name)
         for suite in (args.suite,) if args.suite else SUITES:
             for scene in suite_scenes(suite):
                 print(scene.name)
@@ -466,8 +469,10 @@ def _add_scenes_parser(sub: Any) -> None:
 
     scenes = sub.add_parser("scenes", help=_help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
-    lst = ssub.add_parser("list", help="scene names, one per line")
-    lst.add_argument("--suite", choices=SUITES)
+    lst = ssub.add_parser(
+        "list", help="scene names, one per line: the packaged scenes, then every suite's"
+    )
+    lst.add_argument("--suite", choices=SUITES, help="only this suite's scenes")
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name")
     scenes.set_defaults(func=_cmd_scenes)

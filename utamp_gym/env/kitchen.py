@@ -89,7 +89,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     equal seeds give equal info; physics then: the macro's wall-clock phase times,
     ``perceive_s`` and ``step_s``), ``macro_result`` (physics: the `MacroResult`;
     symbolic: None), ``unexpected_atoms``, ``anomalies``, ``fault`` (see the closed loop
-    below), ``scene`` (name).
+    below), ``scene`` (name), ``is_success`` (bool: the goal holds now, as for the reward; on
+    every step and after reset, so it is there on the last step of every episode, where
+    stable-baselines3's evaluation and the RL Zoo read it).
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
@@ -273,9 +275,10 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._physics is not None:
             rng = np.random.default_rng(self.np_random.integers(2**63))
             self._observe(self._physics.reset(scene, rng))
-        self._task.initialize_episode(self._progress(self.options.reward_shaping)[1])
+        goal, height = self._progress(self.options.reward_shaping)
+        self._task.initialize_episode(height)
         self._rendering.reset()
-        return self._observation(), self._info(None, None, {}, None)
+        return self._observation(), self._info(goal, None, None, {}, None)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         a = action_id(action, self.universe.n_actions)
@@ -313,7 +316,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             goal=goal, failed=failure is not None, tower_height=height
         )
         terminated = terminated or self._state.dead_end() or bool(self._anomalies())
-        info = self._info(a, failure, timings, executed, unexpected)
+        info = self._info(goal, a, failure, timings, executed, unexpected)
         self._rendering.step()
         return self._observation(), reward, terminated, False, info
 
@@ -414,6 +417,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
 
     def _info(
         self,
+        goal: bool,
         a: int | None,
         failure: str | None,
         timings: dict[str, float],
@@ -431,6 +435,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             "anomalies": self._anomalies(),
             "fault": fault,
             "scene": self.scene.name,
+            "is_success": bool(goal),
         }
 
     # ------------------------------------------------------------------ pickling
