@@ -13,7 +13,7 @@ match the state), so a restored copy steps bit for bit as the original does.
 
 from __future__ import annotations
 
-import functools
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -60,9 +60,21 @@ def build_state(
     set_home(world.model, data, ids)
     arm = ArmDriver(world.model, data, ids, kin, rng)
     st = SimState(world, data, arm, scratch=mujoco.MjData(world.model), estimator=estimator)
-    belief: Callable[[np.ndarray], np.ndarray] = functools.partial(believed_qpos, st)
-    arm.belief = belief
+    arm.belief = _belief_of(st)
     return st
+
+
+def _belief_of(st: SimState) -> Callable[[np.ndarray], np.ndarray]:
+    """`believed_qpos` of `st`, holding it weakly: the arm belongs to `st`, and a strong
+    reference back would make a cycle that only the garbage collector frees, long after the
+    episode's model and data (hundreds of MB over a few hundred resets) could have gone."""
+    ref = weakref.ref(st)
+
+    def belief(qpos: np.ndarray) -> np.ndarray:
+        live = ref()
+        return qpos if live is None else believed_qpos(live, qpos)
+
+    return belief
 
 
 def freeze(st: SimState) -> SimSnapshot:
