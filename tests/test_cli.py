@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import argparse
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -14,7 +16,7 @@ import pytest
 import wide
 from procs import downward_children, process_alive, user_env
 
-from utamp_gym.cli import main
+from utamp_gym.cli import build_parser, main
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PlanningTimeout
 from utamp_gym.planning import fast_downward
@@ -221,3 +223,56 @@ def test_only_the_utamp_process_freezes_its_objects_before_exit(capsys) -> None:
         [sys.executable, "-c", code], env=user_env(), capture_output=True, text=True, check=True
     )
     assert run.stdout.splitlines()[-1] == "0 True"
+
+
+# ---------------------------------------------------------------- unwritable output paths
+OUTPUTS = {
+    "plan --out": ["plan", "kitchen-demo", "--out", "{path}"],
+    "run --video": ["run", "pick-place/080", "--video", "{path}"],
+    "eval --out": ["eval", "--suite", "pick-place", "--limit", "1", "--workers", "0", "--out",
+                   "{path}"],
+    "eval merge OUT": ["eval", "merge", "{path}", "{existing}"],
+    "train --out": ["train", "--steps", "64", "--no-progress", "--out", "{path}"],
+}  # fmt: skip
+
+
+def _read_only(tmp_path: Path) -> Path:
+    """A directory nobody can write into: a mode-555 folder, or for root (who ignores modes)
+    sysfs, where even root cannot make a folder."""
+    if os.geteuid() == 0:
+        return Path("/sys")
+    folder = tmp_path / "read-only"
+    folder.mkdir()
+    folder.chmod(0o555)
+    return folder
+
+
+@pytest.mark.parametrize("kind", ["under a file", "a file or folder", "read-only"])
+@pytest.mark.parametrize("command", OUTPUTS, ids=OUTPUTS.keys())
+def test_unwritable_output_paths_exit_2_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str, kind: str
+) -> None:
+    """Checked before any work: one line on stderr naming the path, exit code 2."""
+    afile = tmp_path / "notes.txt"
+    afile.write_text("not a folder\n")
+    video = command == "run --video"
+    path = {
+        "under a file": afile / ("run.mp4" if video else "out"),
+        "a file or folder": tmp_path if video else afile,  # a video needs a file name
+        "read-only": _read_only(tmp_path) / "utamp-out" / ("run.mp4" if video else "x"),
+    }[kind]
+    args = [a.format(path=path, existing=tmp_path) for a in OUTPUTS[command]]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("utamp: error: ") and str(path) in err, err
+    assert afile.read_text() == "not a folder\n"
+
+
+def test_every_output_option_of_every_subcommand_is_tested() -> None:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    found = set()
+    for name, subparser in sub.choices.items():
+        for action in subparser._actions:
+            found |= {f"{name} {o}" for o in action.option_strings if o in ("--out", "--video")}
+    assert found and found <= set(OUTPUTS), found - set(OUTPUTS)

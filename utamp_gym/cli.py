@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from utamp_gym.errors import UtampError
+from utamp_gym.outputs import output_dir, output_file
 
 if TYPE_CHECKING:
     from utamp_gym.planning.methods import PlanOutcome
@@ -52,6 +53,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     # planner's imports included), not from when planning begins.
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
+    out = None if args.out is None else output_dir(args.out, "--out")
     outcome = plan_scene(
         scene,
         args.method,
@@ -60,9 +62,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         noise=args.noise,
         deadline=deadline,
     )
-    if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         (out / "domain.pddl").write_text(outcome.domain)
         (out / "problem.pddl").write_text(outcome.problem)
         (out / "plan.txt").write_text("".join(f"{a}\n" for a in outcome.plan))
@@ -134,6 +134,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         scenes=args.scenes,
         shard=None if args.shard is None else parse_shard(args.shard),
     )
+    output_dir(args.out, "--out")
     executor = make_executor(args.executor, workers=args.workers, ray_address=args.ray_address)
     try:
         report = run_sweep(cfg, args.out, progress=not args.quiet, executor=executor)
@@ -159,6 +160,7 @@ def _cmd_eval_merge(args: argparse.Namespace) -> int:
     from utamp_gym.eval.merge import merge_outputs
     from utamp_gym.eval.summary import to_markdown
 
+    output_dir(args.merge_out, "OUT")
     summary = merge_outputs(args.merge_out, args.dirs)
     if not args.quiet:
         sys.stdout.write(to_markdown(summary))
@@ -261,6 +263,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if args.closed_loop:
         return _run_closed_loop(args)
+    if args.video:
+        output_file(args.video, "--video")
     result = run_episode(
         resolve_scene(args.scene),
         args.method,
