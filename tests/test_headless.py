@@ -18,8 +18,6 @@ import pytest
 from procs import user_env
 from xvfb import virtual_display
 
-from utamp_gym.sim import gl
-
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.physics
 
@@ -111,49 +109,6 @@ def test_rgb_array_env_renders_headless_and_logs_the_backend_once(
     assert len(logs) == 1, logs
     expected = r"LOG utamp_gym\.sim\.gl MuJoCo GL backend: (egl|osmesa) \(MUJOCO_GL was unset"
     assert re.match(expected, logs[0]), logs[0]
-
-
-def test_an_explicit_mujoco_gl_is_used_without_probing(tmp_path: Path) -> None:
-    code = """
-        import logging, sys
-        logging.basicConfig(stream=sys.stdout, level=logging.DEBUG, format="LOG %(message)s")
-        from utamp_gym.sim import gl
-
-        def no_probe(backend):
-            raise AssertionError("probed although MUJOCO_GL is set")
-
-        gl.probe = no_probe
-        import mujoco
-        r = gl.new_renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 8, 8)
-        print("FRAME", r.render().shape)
-    """
-    run = _python(code, tmp_path, MUJOCO_GL="egl")
-    assert run.returncode == 0, run.stderr
-    assert "FRAME (8, 8, 3)" in run.stdout
-    assert "LOG MuJoCo GL backend: egl (MUJOCO_GL is set)" in run.stdout
-
-
-def test_no_working_backend_names_the_debian_packages(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.delenv("MUJOCO_GL", raising=False)
-    monkeypatch.delenv("DISPLAY", raising=False)
-    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.setattr(gl, "probe", lambda backend: f"no {backend} here")
-    gl.ensure_gl.cache_clear()
-    try:
-        with pytest.raises(gl.NoGLBackendError) as err:
-            gl.ensure_gl()
-    finally:
-        gl.ensure_gl.cache_clear()
-    message = str(err.value)
-    assert "egl: no egl here; osmesa: no osmesa here" in message
-    assert "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri" in message
-    assert "apt-get install libosmesa6" in message
-
-
-def test_a_desktop_tries_glfw_first_a_server_egl_then_osmesa() -> None:
-    assert gl.candidates({}) == ("egl", "osmesa")
-    assert gl.candidates({"DISPLAY": ":0"}) == ("glfw", "egl", "osmesa")
-    assert gl.candidates({"WAYLAND_DISPLAY": "wayland-0"})[0] == "glfw"
 
 
 # ---------------------------------------------------------------- check_env
