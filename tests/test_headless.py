@@ -175,6 +175,11 @@ QUIET = {
         "eval", "--suite", "pick-place", "--scenes", "pick-place/080", "--methods",
         "utamp2-gt", "--workers", "1", "--quiet", "--out", "eval1",
     ],
+    "eval on Ray": [
+        "eval", "--suite", "pick-place", "--limit", "1", "--methods", "utamp2-gt",
+        "--grounding", "symbolic", "--executor", "ray", "--workers", "1", "--quiet",
+        "--out", "eval-ray",
+    ],
     "train": [
         "train", "--num-objects", "2", "--steps", "64", "--envs", "1", "--eval-every", "64",
         "--eval-episodes", "2", "--no-progress", "--out", "train",
