@@ -36,6 +36,7 @@ from utamp_gym.sim.decode import parse_action
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
 from utamp_gym.sim.gl import new_renderer
+from utamp_gym.sim.heap import release_free_memory
 from utamp_gym.sim.measure import SimState, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
 from utamp_gym.sim.skills import run_skill
@@ -88,6 +89,7 @@ class MujocoBackend:
     def reset(self, scene: Scene, rng: np.random.Generator) -> None:
         """Build the scene's world (+ Panda at home) with seeded pose noise and settle it."""
         self._close_renderers()
+        self._state = None  # the previous episode's memory is free before the next is built
         if self._kin is None:
             self._kin = PandaKinematics()
         spec, info = build_world_spec(
@@ -100,6 +102,7 @@ class MujocoBackend:
         settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
         self._state.arm.timings = Timings()
         self._rest()
+        release_free_memory()  # keeps a long run's resident size flat (`utamp_gym.sim.heap`)
 
     def execute(self, action: str) -> MacroResult:
         """Run one grounded PDDL macro action; a failure comes back with a reason."""
