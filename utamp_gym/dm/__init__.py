@@ -19,7 +19,12 @@ targets and the gripper command at 50 Hz and whose reward follows tower progress
 
 from __future__ import annotations
 
+from utamp_gym.sim.gl import ensure_gl
+
 try:
+    # dm_control fixes its OpenGL (backend and PyOpenGL platform) when it is imported: settle
+    # the backend first, so its cameras render on a headless machine (`utamp_gym.sim.gl`)
+    ensure_gl()
     from dm_control.rl import control
 except ImportError as exc:  # pragma: no cover - depends on the installed extras
     raise ModuleNotFoundError(

@@ -13,12 +13,13 @@ which needs a display), so on a headless server every frame failed until the use
 * unset, elsewhere (macOS, Windows): MuJoCo's default (CGL, WGL / GLFW need no setting).
 
 The choice is written to ``os.environ["MUJOCO_GL"]`` (child processes and dm_control, which
-reads it on import, agree without probing again). If ``mujoco`` (or dm_control's renderer) was
-imported before the choice, its context class is pointed at the chosen backend's
+reads it on import, agree without probing again). If ``mujoco`` was imported before the choice,
+its context class is pointed at the chosen backend's
 (``mujoco.rendering.classic.gl_context.GLContext`` in mujoco 3.17 and 4.0), since setting the
-variable after ``import mujoco`` changes nothing. The choice is logged in one debug line
-(logger ``utamp_gym.sim.gl``). The ``human`` viewer (`mujoco.viewer`) opens its own GLFW
-window and does not depend on this choice.
+variable after ``import mujoco`` changes nothing (`ensure_dm_control_gl` does the same for
+dm_control's renderer; `utamp_gym.dm` settles the backend before it imports dm_control). The
+choice is logged in one debug line (logger ``utamp_gym.sim.gl``). The ``human`` viewer
+(`mujoco.viewer`) opens its own GLFW window and does not depend on this choice.
 """
 
 from __future__ import annotations
@@ -139,16 +140,22 @@ def new_renderer(model: Any, height: int, width: int) -> Any:
 
 
 def _install(backend: str) -> None:
-    """Point already-imported MuJoCo (and dm_control) renderers at `backend`'s context."""
+    """Point an already-imported MuJoCo renderer at `backend`'s context."""
     if "mujoco" in sys.modules:
         _install_mujoco(backend)
+
+
+def ensure_dm_control_gl() -> str:
+    """`ensure_gl` for dm_control's renderer too (it read ``MUJOCO_GL`` when it was imported);
+    called before dm_control makes its first GL context."""
+    backend = ensure_gl()
     render = sys.modules.get("dm_control._render")
-    if render is not None and getattr(render, "BACKEND", None) != backend:
-        importer = {"glfw": "_import_glfw", "egl": "_import_egl", "osmesa": "_import_osmesa"}
-        if backend in importer:
-            render.Renderer = getattr(render, importer[backend])()
-            render.BACKEND = backend
-            render.USING_GPU = backend in ("egl", "glfw")
+    importer = {"glfw": "_import_glfw", "egl": "_import_egl", "osmesa": "_import_osmesa"}
+    if render is not None and backend in importer and getattr(render, "BACKEND", None) != backend:
+        render.Renderer = getattr(render, importer[backend])()
+        render.BACKEND = backend
+        render.USING_GPU = backend in ("egl", "glfw")
+    return backend
 
 
 def _install_mujoco(backend: str) -> None:
