@@ -4,7 +4,6 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= out
-export MUJOCO_GL ?= egl
 
 MJ4    := .venv-mujoco4
 

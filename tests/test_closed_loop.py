@@ -20,12 +20,9 @@ from utamp_gym.perception.abstraction import perceive
 from utamp_gym.perception.state import PhysicalState
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.model import Scene
+from utamp_gym.sim.backend import MujocoBackend
 from utamp_gym.suites import suite_scenes
 from utamp_gym.symbolic.problem import scene_facts
-
-pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo physics backend is not available")
-
-from utamp_gym.sim.backend import MujocoBackend
 
 physics = pytest.mark.physics
 GEOMETRIC = ("(oc ", "(force ", "(base ")
@@ -79,7 +76,7 @@ def _follow_gt_plan(name: str, seed: int = 0) -> None:
     """Execute the UTAMP-2-GT plan step by step in the physics env: every perceived state is
     the symbolic successor, nothing unexpected, the goal at the end."""
     suite = name.split("/")[0]
-    env = UTampKitchenEnv(suite=suite, scene=name, record_timings=False)
+    env = UTampKitchenEnv(suite=suite, scene=name)
     env.reset(seed=seed)
     plan = plan_scene(env.scene, "utamp2-gt").plan
     for step, action in enumerate(plan):
@@ -110,7 +107,7 @@ def test_every_gt_plan_is_perceived_step_by_step(suite: str) -> None:
 # ------------------------------------------------------------------ physical failures
 @pytest.fixture
 def demo_env():
-    env = UTampKitchenEnv(scene="kitchen-demo", suite=None, record_timings=False)
+    env = UTampKitchenEnv(scene="kitchen-demo", suite=None)
     yield env
     env.close()
 
@@ -173,7 +170,7 @@ def test_a_knocked_over_stack_is_perceived(demo_env) -> None:
 @physics
 def test_an_object_left_inside_the_pan_is_perceived() -> None:
     # U-TAMP-1 has no affordances: it may put the shaker on the (concave, open) pan
-    env = UTampKitchenEnv(scene="kitchen-demo", suite=None, domain="utamp1", record_timings=False)
+    env = UTampKitchenEnv(scene="kitchen-demo", suite=None, domain="utamp1")
     env.reset(seed=0)
     _step(env, PICK_SALT)
     info = _step(env, "(place-support salt salt-body on left right back on under pan back on)")
@@ -216,9 +213,7 @@ def test_the_planner_never_retries_a_failure_from_the_same_state() -> None:
 @physics
 def test_disturbed_episodes_are_reproducible_and_recover() -> None:
     def rollout() -> list[tuple[object, ...]]:
-        env = UTampKitchenEnv(
-            suite="pick-place", scene="pick-place/017", disturbance=0.5, record_timings=False
-        )
+        env = UTampKitchenEnv(suite="pick-place", scene="pick-place/017", disturbance=0.5)
         policy = PlannerPolicy(env)
         obs, info = env.reset(seed=3)
         out = []

@@ -187,8 +187,7 @@ def test_bad_masks_are_rejected_with_the_valid_values() -> None:
 @pytest.mark.physics
 def test_forbidden_actions_reach_the_simulator_in_physics() -> None:
     """Physics, not the outcome model, decides what the geometric mask allows."""
-    pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo backend is not available")
-    env = UTampKitchenEnv(suite="pick-place", masks="geometric", record_timings=False)
+    env = UTampKitchenEnv(suite="pick-place", masks="geometric")
     try:
         _, info = env.reset(seed=0, options={"scene": "pick-place/004"})  # tray | salt
         handle = "(pick-support tray tray-handle-front on front back "

@@ -12,6 +12,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from dm_env import StepType, test_utils
+from procs import user_env
 
 from utamp_gym.env.dm_adapter import DmEnvAdapter
 from utamp_gym.env.planner_policy import PlannerPolicy
@@ -148,6 +149,7 @@ class DmEnvContractTest(test_utils.EnvironmentTestMixin, unittest.TestCase):
 def test_random_masked_agent_example_runs() -> None:
     out = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "random_masked_agent.py"), "--episodes", "2"],
+        env=user_env(),
         capture_output=True,
         text=True,
         timeout=300,

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from utamp_gym.errors import UtampError
+from utamp_gym.outputs import output_dir, output_file
 
 if TYPE_CHECKING:
     from utamp_gym.planning.methods import PlanOutcome
@@ -29,9 +30,12 @@ if TYPE_CHECKING:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
+    from utamp_gym.suites import SUITES, packaged_scene_names, resolve_scene, suite_scenes
 
     if args.scenes_cmd == "list":
+        if not args.suite:  # the packaged scenes (kitchen-demo), then every suite's
+            for name in packaged_scene_names():
+                print(name)
         for suite in (args.suite,) if args.suite else SUITES:
             for scene in suite_scenes(suite):
                 print(scene.name)
@@ -49,6 +53,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     # planner's imports included), not from when planning begins.
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
+    out = None if args.out is None else output_dir(args.out, "--out")
     outcome = plan_scene(
         scene,
         args.method,
@@ -57,9 +62,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         noise=args.noise,
         deadline=deadline,
     )
-    if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         (out / "domain.pddl").write_text(outcome.domain)
         (out / "problem.pddl").write_text(outcome.problem)
         (out / "plan.txt").write_text("".join(f"{a}\n" for a in outcome.plan))
@@ -131,6 +134,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         scenes=args.scenes,
         shard=None if args.shard is None else parse_shard(args.shard),
     )
+    output_dir(args.out, "--out")
     executor = make_executor(args.executor, workers=args.workers, ray_address=args.ray_address)
     try:
         report = run_sweep(cfg, args.out, progress=not args.quiet, executor=executor)
@@ -156,6 +160,7 @@ def _cmd_eval_merge(args: argparse.Namespace) -> int:
     from utamp_gym.eval.merge import merge_outputs
     from utamp_gym.eval.summary import to_markdown
 
+    output_dir(args.merge_out, "OUT")
     summary = merge_outputs(args.merge_out, args.dirs)
     if not args.quiet:
         sys.stdout.write(to_markdown(summary))
@@ -263,6 +268,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if args.closed_loop:
         return _run_closed_loop(args)
+    if args.video:
+        output_file(args.video, "--video")
     result = run_episode(
         resolve_scene(args.scene),
         args.method,
@@ -320,7 +327,8 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(args.scene)
-    require_display("utamp view", "utamp run --video PATH (a headless video)")
+    video = "out/" + scene.name.replace("/", "-") + ".mp4"
+    require_display("utamp view", f"utamp run {args.scene} --video {video} (a video, no display)")
     if args.symbolic:
         from utamp_gym.env.viewer import show_schematic
 
@@ -470,8 +478,10 @@ def _add_scenes_parser(sub: Any) -> None:
 
     scenes = sub.add_parser("scenes", help=_help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
-    lst = ssub.add_parser("list", help="scene names, one per line")
-    lst.add_argument("--suite", choices=SUITES, help="only this suite (default: every suite)")
+    lst = ssub.add_parser(
+        "list", help="scene names, one per line: the packaged scenes, then every suite's"
+    )
+    lst.add_argument("--suite", choices=SUITES, help="only this suite's scenes")
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name", help=SCENE_HELP)
     scenes.set_defaults(func=_cmd_scenes)
@@ -608,10 +618,15 @@ def _before_exit() -> None:
     """Take every live object out of the garbage collector's sight (`gc.freeze`): Python's
     shutdown runs full collections over all of them, the imported modules' included, which
     took ~8 ms of a ~100 ms `utamp plan`; the process ends next, and nothing of it needs
-    collecting."""
+    collecting.
+
+    Not once OMPL is loaded (`utamp run`, `eval`, `train`, `view`: seconds long, so the
+    8 ms do not matter): its nanobind bindings print a 28-line leak report on stderr when
+    their objects are not collected at shutdown, and frozen objects never are."""
     import gc
 
-    gc.freeze()
+    if not any(name == "ompl" or name.startswith("ompl.") for name in sys.modules):
+        gc.freeze()
 
 
 def _run(argv: Sequence[str], started: float) -> int:

@@ -85,11 +85,13 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     or ``gym.make(..., max_episode_steps=N)``).
 
     **Info** – ``action`` (PDDL string or None after reset), ``action_mask``,
-    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times,
-    ``perceive_s`` and ``step_s``, unless ``record_timings=False``; symbolic: always empty, so
-    info trajectories are reproducible), ``macro_result`` (physics: the `MacroResult`;
+    ``failure_reason`` (None or str), ``timings`` (empty unless ``record_timings=True``, so
+    equal seeds give equal info; physics then: the macro's wall-clock phase times,
+    ``perceive_s`` and ``step_s``), ``macro_result`` (physics: the `MacroResult`;
     symbolic: None), ``unexpected_atoms``, ``anomalies``, ``fault`` (see the closed loop
-    below), ``scene`` (name).
+    below), ``scene`` (name), ``is_success`` (bool: the goal holds now, as for the reward; on
+    every step and after reset, so it is there on the last step of every episode, where
+    stable-baselines3's evaluation and the RL Zoo read it).
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
@@ -112,9 +114,10 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       (`utamp_gym.env.outcome`: the ground-truth U-TAMP-2 precondition; a failure names the
       false affordance);
     * physics only: ``backend`` ("module:Class" or a callable, built as
-      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (wall-clock times in
-      info), ``disturbance`` (fault probability per macro step, default 0) and ``pose_noise``
-      (m, standard deviation of the robot's object-position estimates; `utamp_gym.backend`).
+      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
+      wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per
+      macro step, default 0) and ``pose_noise`` (m, standard deviation of the robot's
+      object-position estimates; `utamp_gym.backend`).
 
     **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
     and after every executed step (success or failure) it is *perceived* from the simulator
@@ -164,7 +167,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         render_size: int | tuple[int, int] = (480, 480),
         backend: str | Callable[..., PhysicsBackend] = DEFAULT_BACKEND,
         backend_kwargs: Mapping[str, Any] | None = None,
-        record_timings: bool = True,
+        record_timings: bool = False,
         masks: str = "affordances",
         disturbance: float = 0.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
@@ -274,9 +277,10 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._physics is not None:
             rng = np.random.default_rng(self.np_random.integers(2**63))
             self._observe(self._physics.reset(scene, rng))
-        self._task.initialize_episode(self._progress(self.options.reward_shaping)[1])
+        goal, height = self._progress(self.options.reward_shaping)
+        self._task.initialize_episode(height)
         self._rendering.reset()
-        return self._observation(), self._info(None, None, {}, None)
+        return self._observation(), self._info(goal, None, None, {}, None)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         a = action_id(action, self.universe.n_actions)
@@ -314,7 +318,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             goal=goal, failed=failure is not None, tower_height=height
         )
         terminated = terminated or self._state.dead_end() or bool(self._anomalies())
-        info = self._info(a, failure, timings, executed, unexpected)
+        info = self._info(goal, a, failure, timings, executed, unexpected)
         self._rendering.step()
         return self._observation(), reward, terminated, False, info
 
@@ -415,6 +419,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
 
     def _info(
         self,
+        goal: bool,
         a: int | None,
         failure: str | None,
         timings: dict[str, float],
@@ -432,6 +437,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             "anomalies": self._anomalies(),
             "fault": fault,
             "scene": self.scene.name,
+            "is_success": bool(goal),
         }
 
     # ------------------------------------------------------------------ pickling
@@ -442,5 +448,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
+        """The backend rebuilt its simulation (`utamp_gym.sim.snapshot`); rendering watches it
+        again."""
         state["universe"] = ground_universe(state["universe"])
         self.__dict__.update(state)
+        self._rendering.attach()

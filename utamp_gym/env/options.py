@@ -81,7 +81,7 @@ class EnvOptions:
     render_size: tuple[int, int] = (480, 480)
     backend: str | Callable[..., Any] = DEFAULT_BACKEND
     backend_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    record_timings: bool = True
+    record_timings: bool = False
     masks: str = "affordances"
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE

@@ -18,6 +18,7 @@ import argparse
 from typing import Any
 
 from utamp_gym.errors import UtampError
+from utamp_gym.outputs import output_dir
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
 #: the parser imports no env code; a test keeps the two equal)
@@ -50,6 +51,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
         raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")
+    output_dir(args.out, "--out")  # before training, not after
     if args.seeds > 1:
         from utamp_gym.distributed import make_executor
 

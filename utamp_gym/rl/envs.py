@@ -34,8 +34,11 @@ def make_env(
     **kwargs: Any,
 ) -> gym.Env:
     """``gym.make(env_id, ...)`` reduced to `obs_keys`, optionally in an SB3 ``Monitor``."""
-    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.registry import register_envs
 
+    # explicitly: `import utamp_gym` registers nothing in a worker of the `utamp` process
+    # (its argv is the command's), e.g. SubprocVecEnv's for `utamp train --grounding physics`
+    register_envs()
     env = gym.make(env_id, grounding=grounding, num_objects=num_objects, **kwargs)
     if obs_keys is not None:
         env = FilterObservation(env, list(obs_keys))

@@ -153,10 +153,13 @@ def build_world_spec(
     yaw_noise_deg: float = 2.0,
     timestep: float = 0.002,
     sleep: bool = False,
+    poses: Mapping[str, Pose] | None = None,
 ) -> tuple[mujoco.MjSpec, WorldInfo]:
     """The world as an uncompiled `MjSpec` (attach the robot to it), and its `WorldInfo`.
 
-    `sleep` turns on MuJoCo's sleeping islands (module docstring)."""
+    `sleep` turns on MuJoCo's sleeping islands (module docstring). The objects start at
+    `poses` if given (e.g. a `WorldInfo`'s, to rebuild that world exactly), else at the
+    scene's declared poses with noise drawn from `rng`."""
     if timestep <= 0 or pos_noise < 0 or yaw_noise_deg < 0:
         raise SimulationError(
             f"need timestep > 0 and noise >= 0 (got {timestep}, {pos_noise}, {yaw_noise_deg})"
@@ -173,7 +176,8 @@ def build_world_spec(
         spec.option.sleep_tolerance = SLEEP_TOLERANCE
     spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
     _add_environment(spec, scene)
-    poses = initial_poses(scene, rng, pos_noise, yaw_noise_deg)
+    if poses is None:
+        poses = initial_poses(scene, rng, pos_noise, yaw_noise_deg)
     colours = object_colours(scene)
     geoms = {
         o.name: add_object_body(spec, scene, o.name, poses[o.name], colours[o.name])
