@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "torch==2.13.0"
-	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray]"
+	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray,data,zoo]"
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -18,10 +18,12 @@ from gymnasium import spaces
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_POSE_NOISE,
+    MacroResult,
     PhysicsBackend,
     backend_factory,
 )
 from utamp_gym.env.atoms import InitialAtoms, parse_atom
+from utamp_gym.env.info import step_info
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.outcome import OutcomeModel
 from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
@@ -84,12 +86,16 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     ``truncated`` comes from Gymnasium's ``TimeLimit`` (``max_episode_steps`` of the env file,
     or ``gym.make(..., max_episode_steps=N)``).
 
-    **Info** – ``action`` (PDDL string or None after reset), ``action_mask``,
-    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times,
-    ``perceive_s`` and ``step_s``, unless ``record_timings=False``; symbolic: always empty, so
-    info trajectories are reproducible), ``macro_result`` (physics: the `MacroResult`;
-    symbolic: None), ``unexpected_atoms``, ``anomalies``, ``fault`` (see the closed loop
-    below), ``scene`` (name).
+    **Info** – one fixed structure of numbers, bools and strings from `reset` to the last
+    step, so that dataset writers (Minari's ``DataCollector(env, record_infos=True)``) can
+    stack it (`utamp_gym.env.info` documents every key and its earlier form): ``action``
+    (PDDL string, ``""`` after reset), ``action_mask``, ``failure_reason`` (``""``: none),
+    ``timings`` (physics: the macro's phase times, ``perceive_s`` and ``step_s``, unless
+    ``record_timings=False``; symbolic: always empty, so info trajectories are
+    reproducible), ``macro_result`` (a dict: executed, success, reason, retries; the
+    `MacroResult` itself is `macro_result`), ``unexpected_atoms`` (one string; the list is
+    `unexpected_atoms`), ``anomalies`` (every object -> its anomaly or ``""``), ``fault``
+    (``""``: none; see the closed loop below), ``scene`` (name).
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
@@ -201,6 +207,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         self._scene: Scene | None = None
         self._held: str | None = None
         self._declared_static: frozenset[str] = frozenset()
+        self._last: tuple[MacroResult | None, tuple[str, ...]] = (None, ())
         self._backend: PhysicsBackend | None = None
         self._physics: PhysicalGrounding | None = None
         if opts.grounding == "physics":
@@ -333,6 +340,21 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             self._backend.close()  # kept: a closed env must not silently turn symbolic
 
     @property
+    def macro_result(self) -> MacroResult | None:
+        """The last step's `MacroResult` (None: no macro action reached the simulator)."""
+        return self._last[0]
+
+    @property
+    def unexpected_atoms(self) -> list[str]:
+        """The last step's unexpected atoms (``"+ATOM"`` / ``"-ATOM"``, sorted)."""
+        return list(self._last[1])
+
+    @property
+    def anomalies(self) -> dict[str, str]:
+        """The objects without a symbol now, with the reason (physics grounding)."""
+        return self._anomalies()
+
+    @property
     def perception(self) -> Perception | None:
         """The last perceived state (physics grounding; None in symbolic grounding)."""
         return None if self._physics is None else self._physics.perception
@@ -420,17 +442,21 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         unexpected: list[str] | None = None,
     ) -> dict[str, Any]:
         fault = None if executed is None or executed.fault is None else str(executed.fault)
-        return {
-            "action": None if a is None else self.universe.actions[a],
-            "action_mask": self._state.mask(),
-            "failure_reason": failure,
-            "timings": dict(timings),
-            "macro_result": None if executed is None else executed.macro,
-            "unexpected_atoms": list(unexpected or []),
-            "anomalies": self._anomalies(),
-            "fault": fault,
-            "scene": self.scene.name,
-        }
+        macro = None if executed is None else executed.macro
+        self._last = (macro, tuple(unexpected or ()))
+        recorded = self._physics is not None and self.options.record_timings
+        return step_info(
+            action=None if a is None else self.universe.actions[a],
+            mask=self._state.mask(),
+            failure=failure,
+            timings=timings if recorded else None,
+            macro=macro,
+            unexpected=self._last[1],
+            objects=self.scene.object_names,
+            anomalies=self._anomalies(),
+            fault=fault,
+            scene=self.scene.name,
+        )
 
     # ------------------------------------------------------------------ pickling
     def __getstate__(self) -> dict[str, Any]:

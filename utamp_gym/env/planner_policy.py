@@ -113,7 +113,7 @@ class PlannerPolicy:
 
     def __call__(self, obs: Mapping[str, np.ndarray], info: Mapping[str, Any] | None = None) -> int:
         universe = self.env.universe
-        if info is not None and info.get("action") is None:  # the first step of an episode
+        if info is not None and not info.get("action"):  # the first step of an episode
             self.reset()
         bits = sum(1 << int(j) for j in np.flatnonzero(obs["symbolic"]))
         state = (self.env.scene.name, bits, self.env.static_atoms)

@@ -34,7 +34,9 @@ def make_env(
     **kwargs: Any,
 ) -> gym.Env:
     """``gym.make(env_id, ...)`` reduced to `obs_keys`, optionally in an SB3 ``Monitor``."""
-    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()  # explicitly: a worker process may have skipped it on import
 
     env = gym.make(env_id, grounding=grounding, num_objects=num_objects, **kwargs)
     if obs_keys is not None:

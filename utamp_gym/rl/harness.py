@@ -55,7 +55,9 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
     if spaces:
         import gymnasium as gym
 
-        import utamp_gym  # noqa: F401  (registers the env ids)
+        from utamp_gym.env.registry import register_envs
+
+        register_envs()  # explicitly: a worker process may have skipped it on import
 
         try:
             env = gym.make(meta.env_id, grounding="symbolic", **meta.env_options)
@@ -105,7 +107,9 @@ def run_rl_episode(
     """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
     import gymnasium as gym
 
-    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()  # explicitly: a worker process may have skipped it on import
     from utamp_gym.env.task import GOAL_REWARD
 
     path = model_path(method)
@@ -146,8 +150,8 @@ def run_rl_episode(
             obs, reward, terminated, _, info = env.step(action)
             decide, execute = decide + t1 - t0, execute + time.perf_counter() - t1
             actions.append(str(info["action"]))
-            faults += info.get("fault") is not None
-            if info["failure_reason"] is not None:
+            faults += bool(info.get("fault"))
+            if info["failure_reason"]:
                 failed, last_failure = failed + 1, str(info["failure_reason"])
             if terminated:
                 success = float(reward) >= GOAL_REWARD
@@ -163,7 +167,7 @@ def run_rl_episode(
 
 def _terminal_reason(info: dict[str, Any], steps: int) -> str:
     """Why an episode ended without the goal: a perceived anomaly (physics) or a dead end."""
-    anomalies = info.get("anomalies") or {}
+    anomalies = {k: v for k, v in dict(info.get("anomalies") or {}).items() if v}
     if anomalies:
         shown = "; ".join(f"{k}: {v}" for k, v in sorted(anomalies.items()))
         return f"anomaly after {steps} steps: {shown}"
