@@ -9,11 +9,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-minari = pytest.importorskip("minari")
-pytest.importorskip("jax", reason="Minari's DataCollector needs minari[create] (jax)")
-
 from utamp_gym.env.info import TIMING_KEYS, split_atoms
 from utamp_gym.env.registry import env_ids, register_envs
+
+minari = pytest.importorskip("minari")
+pytest.importorskip("jax", reason="Minari's DataCollector needs minari[create] (jax)")
 
 register_envs()
 

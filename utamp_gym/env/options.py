@@ -27,6 +27,8 @@ RENDER_MODES = ("rgb_array", "rgb_array_list", "human")
 #: U-TAMP-1 object-centric (geometric) preconditions only, or every action of the scene
 MASKS = ("affordances", "geometric", "none")
 MIN_OBJECTS = 2
+#: the env's spaces: the suite's ground actions and atoms, or object slots (`env.objects`)
+INTERFACES = ("grounded", "objects")
 
 
 def _bool(name: str, value: Any) -> bool:
@@ -85,6 +87,7 @@ class EnvOptions:
     masks: str = "affordances"
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE
+    interface: str = "grounded"
 
     def __post_init__(self) -> None:
         if self.suite is not None:
@@ -105,6 +108,7 @@ class EnvOptions:
         _choice("affordance source", self.affordances, AFFORDANCE_SOURCES)
         _unit("noise", self.noise)
         _choice("masks", self.masks, MASKS)
+        _choice("interface", self.interface, INTERFACES)
         if self.masks != "affordances" and self.domain != "utamp2":
             raise ValueError(
                 f"masks={self.masks!r} needs domain='utamp2' (it drops U-TAMP-2's affordance "
