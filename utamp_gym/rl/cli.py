@@ -1,7 +1,8 @@
 """`utamp train`: the RL baselines on the command line (wired into `utamp_gym.cli`).
 
     utamp train --env UTampKitchen-v0 --algo maskable-ppo|ppo|dqn [--grounding symbolic|physics]
-        [--masks affordances|geometric|none] [--num-objects N] [--steps N] [--envs K]
+        [--masks affordances|geometric|none] [--interface grounded|objects] [--init-from ZIP]
+        [--num-objects N] [--steps N] [--envs K]
         [--seed S] [--seeds K [--executor local|ray] [--workers N] [--ray-address A]]
         --out DIR
 
@@ -46,6 +47,8 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "progress": not args.no_progress,
         "stop_at_target": args.stop_at_target,
         "masks": args.masks,
+        "interface": args.interface,
+        "init_from": args.init_from or "",
     }
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
@@ -106,6 +109,18 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
         choices=MASK_CHOICES,
         help="what the action mask shows: the U-TAMP-2 preconditions under ground-truth "
         "affordances (default), the geometric ones only, or every action of the scene",
+    )
+    p.add_argument(
+        "--interface",
+        default="grounded",
+        choices=("grounded", "objects"),
+        help="the env's spaces: the suite's ground actions (default), or object slots with "
+        "the slot-transformer policy (maskable-ppo only; the agent then acts on every suite)",
+    )
+    p.add_argument(
+        "--init-from",
+        metavar="MODEL",
+        help="start from this model zip's policy weights (e.g. from `utamp bc`: fine-tuning)",
     )
     p.add_argument(
         "--num-objects",

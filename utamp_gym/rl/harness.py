@@ -24,6 +24,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from utamp_gym.rl.envs import n_fluents
 from utamp_gym.rl.saved import ModelError, ModelMeta, check_model, check_spaces, read_meta
 
 if TYPE_CHECKING:
@@ -63,10 +64,21 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
             env = gym.make(meta.env_id, grounding="symbolic", **meta.env_options)
         except (gym.error.Error, ValueError) as exc:
             raise ModelError(f"{path}: cannot make its env {meta.env_id} ({exc})") from None
-        n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
-        check_spaces(meta, path, int(env.action_space.n), n_fluents)  # type: ignore[attr-defined]
+        check_spaces(meta, path, int(env.action_space.n), n_fluents(env))  # type: ignore[attr-defined]
         env.close()
     return meta
+
+
+def suite_options(scene: str) -> dict[str, Any]:
+    """Env options that put `scene`'s suite under an objects-interface agent (it acts on any
+    suite): the suite and, as pose rows, every object name of the suite's scenes."""
+    from utamp_gym.suites import SUITES, suite_scenes
+
+    suite = max((s for s in SUITES if scene.startswith(f"{s}/")), key=len, default=None)
+    if suite is None:
+        return {}
+    names = dict.fromkeys(n for s in suite_scenes(suite) for n in s.object_names)
+    return {"suite": suite, "objects": list(names)}
 
 
 def step_budget(n_objects: int) -> int:
@@ -116,6 +128,8 @@ def run_rl_episode(
     meta = check_rl_method(method, spaces=False)  # checked below on the env itself
     policy = _load(str(path.resolve()), path.stat().st_mtime_ns)
     options: dict[str, Any] = {**meta.env_options, "disturbance": disturbance}
+    if meta.env_options.get("interface") == "objects":
+        options.update(suite_options(scene))
     if grounding == "physics" and pose_noise is not None:
         options["pose_noise"] = pose_noise
     env = gym.make(
@@ -129,8 +143,7 @@ def run_rl_episode(
     try:
         kitchen = env.unwrapped
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
-        n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
-        check_spaces(meta, path, n_actions, n_fluents)
+        check_spaces(meta, path, n_actions, n_fluents(env))
         from utamp_gym.seeding import run_seed
         from utamp_gym.suites import resolve_scene
 
