@@ -1,4 +1,4 @@
-"""The `utamp` command line: scenes, plan, validate, run, view, eval, train.
+"""The `utamp` command line: scenes, plan, validate, run, view, eval, train, demos.
 
 Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
 see `solved` and `timed_out`), 1 an invalid plan (`validate`) or an `eval` sweep with crashed
@@ -568,6 +568,12 @@ def _add_train_parser(sub: Any) -> None:
     add_train_parser(sub)
 
 
+def _add_demos_parser(sub: Any) -> None:
+    from utamp_gym.data.cli import add_demos_parser
+
+    add_demos_parser(sub)
+
+
 SCENE_HELP = "suite scene (pick-place/017), packaged scene or scene-file path"
 EVAL_HELP = "evaluate planning methods on a suite (the paper's table); `eval merge` joins outputs"
 SUBCOMMANDS: tuple[tuple[str, Callable[[Any], None], str], ...] = (
@@ -582,6 +588,7 @@ SUBCOMMANDS: tuple[tuple[str, Callable[[Any], None], str], ...] = (
     ("validate", _add_validate_parser, "check a plan against a domain and problem"),
     ("eval", _add_eval_parser, EVAL_HELP),
     ("train", _add_train_parser, "train an RL baseline (MaskablePPO, PPO or DQN)"),
+    ("demos", _add_demos_parser, "record planner demonstrations as Minari datasets"),
 )
 """(name, what adds its parser, its line in `utamp --help`), in `utamp --help` order."""
 
