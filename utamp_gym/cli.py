@@ -587,7 +587,11 @@ SUBCOMMANDS: tuple[tuple[str, Callable[[Any], None], str], ...] = (
     ),
     ("validate", _add_validate_parser, "check a plan against a domain and problem"),
     ("eval", _add_eval_parser, EVAL_HELP),
-    ("train", _add_train_parser, "train an RL baseline (MaskablePPO, PPO or DQN)"),
+    (
+        "train",
+        _add_train_parser,
+        "train a baseline: MaskablePPO, PPO, DQN or behaviour cloning (bc)",
+    ),
     ("demos", _add_demos_parser, "record planner demonstrations as Minari datasets"),
 )
 """(name, what adds its parser, its line in `utamp --help`), in `utamp --help` order."""

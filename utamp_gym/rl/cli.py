@@ -49,7 +49,14 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "masks": args.masks,
         "interface": args.interface,
         "init_from": args.init_from or "",
+        "demos": args.demos or "",
     }
+    from utamp_gym.rl.train import TrainConfig
+
+    try:  # every option checked before anything is built or trained
+        TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
+    except ValueError as exc:
+        raise UtampError(str(exc)) from None
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
         raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")
@@ -90,18 +97,27 @@ def _cmd_train(args: argparse.Namespace) -> int:
 def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``train`` command to `subparsers` (from ``parser.add_subparsers()``)."""
     from utamp_gym.env.registry import env_ids
-    from utamp_gym.rl.policy import ALGOS
-    from utamp_gym.rl.train import GROUNDINGS
+    from utamp_gym.rl.train import GROUNDINGS, TRAIN_ALGOS
 
     p = subparsers.add_parser(
         "train",
-        help="train an RL baseline (MaskablePPO, PPO or DQN)",
+        help="train a baseline: MaskablePPO, PPO, DQN or behaviour cloning (bc)",
         description="Train an RL agent on a kitchen env; writes model.zip, checkpoints/, "
         "learning_curve.png and train.json to --out (with --seeds K > 1: one folder per "
         "seed plus aggregate.json and learning_curves.png).",
     )
     p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids())
-    p.add_argument("--algo", default="maskable-ppo", choices=ALGOS)
+    p.add_argument(
+        "--algo",
+        default="maskable-ppo",
+        choices=TRAIN_ALGOS,
+        help="an RL algorithm, or bc: behaviour cloning from --demos",
+    )
+    p.add_argument(
+        "--demos",
+        metavar="DIR",
+        help="with --algo bc: a `utamp demos` dataset folder (macro track, objects)",
+    )
     p.add_argument("--grounding", default="symbolic", choices=GROUNDINGS)
     p.add_argument(
         "--masks",

@@ -54,6 +54,8 @@ if TYPE_CHECKING:
     from utamp_gym.distributed import Executor
 
 GROUNDINGS = ("symbolic", "physics")
+#: what `train` trains: the RL algorithms, and behaviour cloning from demonstrations
+TRAIN_ALGOS = (*ALGOS, "bc")
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,7 @@ class TrainConfig:
     hyperparams: dict[str, Any] = field(default_factory=dict)
     interface: str = "grounded"
     init_from: str = ""
+    demos: str = ""
 
     def __post_init__(self) -> None:
         from utamp_gym.env.options import INTERFACES
@@ -93,15 +96,19 @@ class TrainConfig:
         if self.interface not in INTERFACES:
             raise ValueError(f"unknown interface {self.interface!r}; valid: grounded, objects")
         if self.interface == "objects":
-            if self.algo != "maskable-ppo":
+            if self.algo not in ("maskable-ppo", "bc"):
                 raise ValueError(
                     f"interface 'objects' trains maskable-ppo with the slot policy "
                     f"(utamp_gym.rl.slots), not {self.algo!r}"
                 )
             if tuple(self.obs_keys) == DEFAULT_OBS_KEYS:  # the objects interface's entries
                 object.__setattr__(self, "obs_keys", OBJECT_OBS_KEYS)
-        if self.algo not in ALGOS:
-            raise ValueError(f"unknown algo {self.algo!r}; valid: {', '.join(ALGOS)}")
+        if self.algo not in TRAIN_ALGOS:
+            raise ValueError(f"unknown algo {self.algo!r}; valid: {', '.join(TRAIN_ALGOS)}")
+        if (self.algo == "bc") != bool(self.demos):
+            raise ValueError("algo 'bc' (and only it) needs demos: a `utamp demos` dataset folder")
+        if self.algo == "bc" and self.interface != "objects":
+            raise ValueError("behaviour cloning trains the slot policy: use interface 'objects'")
         if self.grounding not in GROUNDINGS:
             raise ValueError(f"unknown grounding {self.grounding!r}; valid: symbolic, physics")
         from utamp_gym.env.options import MASKS
@@ -159,7 +166,7 @@ def model_meta(config: TrainConfig, env: Any) -> ModelMeta:
     return ModelMeta(
         env_id=config.env_id,
         suite=str(kitchen.options.suite),
-        algo=config.algo,
+        algo="maskable-ppo" if config.algo == "bc" else config.algo,  # the model's class
         obs_keys=tuple(config.obs_keys),
         n_actions=int(env.action_space.n),
         n_fluents=n_fluents(env),
@@ -219,6 +226,12 @@ def train(
     out = Path(out)
     (out / "checkpoints").mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
+    if algo == "bc":
+        from utamp_gym.rl.bc import train_bc
+
+        result, hyper = train_bc(config, out)
+        (out / "train.json").write_text(json.dumps(_report(config, hyper, result), indent=2) + "\n")
+        return result
 
     env_kw: dict[str, Any] = {
         "grounding": grounding,
