@@ -106,19 +106,24 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
         "learning_curve.png and train.json to --out (with --seeds K > 1: one folder per "
         "seed plus aggregate.json and learning_curves.png).",
     )
-    p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids())
+    p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids(), help="env id to train on")
     p.add_argument(
         "--algo",
         default="maskable-ppo",
         choices=TRAIN_ALGOS,
-        help="an RL algorithm, or bc: behaviour cloning from --demos",
+        help="RL algorithm, or bc: behaviour cloning from --demos",
     )
     p.add_argument(
         "--demos",
         metavar="DIR",
         help="with --algo bc: a `utamp demos` dataset folder (macro track, objects)",
     )
-    p.add_argument("--grounding", default="symbolic", choices=GROUNDINGS)
+    p.add_argument(
+        "--grounding",
+        default="symbolic",
+        choices=GROUNDINGS,
+        help="symbolic (fast; the outcome model decides) or physics (MuJoCo)",
+    )
     p.add_argument(
         "--masks",
         default="affordances",
