@@ -45,8 +45,8 @@ def splits() -> tuple[dict[str, str], str, dict[str, Any]]:
         names = ("train", "test-instances", "test-families", "test-count")
         return {n: f"procedural-v1/{n}" for n in names}, "UTampKitchenProcedural-v0", {}
     return (
-        {"train": "pick-place", "test-layout (sliding)": "sliding",
-         "test-objects (extra)": "extra"},
+        {"train": "pick-place", "test-layout": "sliding",
+         "test-objects": "extra"},
         "UTampKitchen-v0", {},
     )  # fmt: skip
 
@@ -98,7 +98,7 @@ def main() -> None:
     split_suites, env_id, env_opts = splits()
     train_suite = split_suites["train"]
     common = {"env_id": env_id, "masks": "geometric", "interface": "objects",
-              "eval_episodes": 60, "progress": False, **env_opts}  # fmt: skip
+              "eval_episodes": 30, "progress": False, **env_opts}  # fmt: skip
     if args.train_workers:
         common["executor"] = LocalExecutor(args.train_workers)
     runs: dict[str, dict[str, Any]] = {}
