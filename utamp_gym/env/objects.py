@@ -42,128 +42,54 @@ empty slot, a grasp no object has) fails like an unapplicable action: nothing ch
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
 from gymnasium import spaces
 
+from utamp_gym.env.object_space import (
+    _FLUENT_KEYS,
+    _G,
+    _GRASP_INDEX,
+    _K,
+    _M,
+    _PLACE0,
+    _R,
+    _S,
+    _SLIDE0,
+    BOUND,
+    GRASPS,
+    INTERFACES,
+    MAX_MEMBERS,
+    MAX_OBJECTS,
+    MAX_REGIONS,
+    MAX_SPACES,
+    N_ACTIONS,
+    N_ATTRIBUTES,
+    N_ENTITIES,
+    OPERATORS,
+    ObjectAction,
+    TypeSource,
+    declared_type,
+    decode,
+    encode,
+    encode_type,
+    member_order,
+    observation_space,
+)
 from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
-from utamp_gym.scene.catalogue import GEOMS, MEMBER_KINDS, ROBUSTNESS, SHAPES, ObjectType
-from utamp_gym.scene.geometry import PARTS, SIDES, is_adjacent, is_opposite
-from utamp_gym.scene.materials import MATERIALS
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.geometry import PARTS, SIDES
 from utamp_gym.scene.model import Scene
 
-INTERFACES = ("grounded", "objects")
-MAX_OBJECTS = 6  # K
-MAX_MEMBERS = 6  # M
-MAX_REGIONS = 8  # R: table slots
-MAX_SPACES = 2  # S: free spaces to slide into
-N_ENTITIES = MAX_OBJECTS + MAX_REGIONS + MAX_SPACES
-#: (palm, finger 1, finger 2): the palm on one side, the fingers on an opposite pair beside it
-GRASPS: tuple[tuple[str, str, str], ...] = tuple(
-    (p, f1, f2)
-    for p in SIDES
-    for f1 in SIDES
-    for f2 in SIDES
-    if is_adjacent(p, f1) and is_opposite(f1, f2)
-)
-OPERATORS = ("pick", "place", "slide")
-_GRASP_INDEX = {g: i for i, g in enumerate(GRASPS)}
-_K, _M, _G, _R, _S = MAX_OBJECTS, MAX_MEMBERS, len(GRASPS), MAX_REGIONS, MAX_SPACES
-_PLACE0 = _K * _M * _G
-_SLIDE0 = _PLACE0 + _K * (_K + _R)
-N_ACTIONS = _SLIDE0 + _K * _M * _G * _S
-_MATERIALS = (*MATERIALS, "other")
-#: per member: present, kind, geom, box min (3) and max (3)
-_MEMBER_WIDTH = 1 + len(MEMBER_KINDS) + len(GEOMS) + 6
-#: per side: shape, usable size (2), surface height, food surface
-_PART_WIDTH = len(SHAPES) + 4
-N_ATTRIBUTES = 1 + len(_MATERIALS) + len(ROBUSTNESS) + 1 + 6 + 6 * _PART_WIDTH + _M * _MEMBER_WIDTH
-TypeSource = Callable[[Scene, str], ObjectType]
-#: bound of the Box entries (metres, kilograms: masses go up to 1000 kg)
-BOUND = 1000.0
-
-
-class ObjectAction(NamedTuple):
-    """One index of the action space; fields an operator does not choose are None."""
-
-    operator: str  # pick | place | slide
-    obj: int  # object slot
-    member: int | None = None  # member index (pick, slide)
-    grasp: int | None = None  # index into GRASPS (pick, slide)
-    support: int | None = None  # place: an object slot < K, or K + region index
-    space: int | None = None  # slide: space index
-
-
-def encode(action: ObjectAction) -> int:
-    """The `Discrete` index of an `ObjectAction`; `ValueError` for a field out of range."""
-    op, i, m, g, j, s = action
-    ranges = {"pick": (_M, _G, None, None), "place": (None, None, _K + _R, None),
-              "slide": (_M, _G, None, _S)}  # fmt: skip
-    if op not in ranges or not 0 <= i < _K:
-        raise ValueError(f"not an object action: {action!r}")
-    for value, n in zip((m, g, j, s), ranges[op], strict=True):
-        if (n is None) != (value is None) or (n is not None and not 0 <= value < n):  # type: ignore[operator]
-            raise ValueError(f"field out of range in {action!r}")
-    if op == "pick":
-        return (i * _M + m) * _G + g  # type: ignore[operator]
-    if op == "place":
-        return _PLACE0 + i * (_K + _R) + j  # type: ignore[operator]
-    return _SLIDE0 + ((i * _M + m) * _G + g) * _S + s  # type: ignore[operator]
-
-
-def decode(index: int) -> ObjectAction:
-    """The `ObjectAction` of a `Discrete` index (the inverse of `encode`)."""
-    if not 0 <= index < N_ACTIONS:
-        raise ValueError(f"action {index} is out of range [0, {N_ACTIONS})")
-    if index < _PLACE0:
-        (i, m), g = divmod(index // _G, _M), index % _G
-        return ObjectAction("pick", i, m, g)
-    if index < _SLIDE0:
-        i, j = divmod(index - _PLACE0, _K + _R)
-        return ObjectAction("place", i, support=j)
-    rest, s = divmod(index - _SLIDE0, _S)
-    (i, m), g = divmod(rest // _G, _M), rest % _G
-    return ObjectAction("slide", i, m, g, space=s)
-
-
-def declared_type(scene: Scene, name: str) -> ObjectType:
-    """The default attribute source: the object's catalogue type as the scene declares it."""
-    return scene.type_of(name)
-
-
-def member_order(t: ObjectType) -> tuple[str, ...]:
-    """Member names in slot order: the body first, then the type's declared order."""
-    return (t.body.name, *(m for m in t.members if m != t.body.name))
-
-
-def encode_type(t: ObjectType) -> np.ndarray:
-    """Fixed-size float32 attributes of a type (`N_ATTRIBUTES`): mass (kg), material,
-    robustness, movable, bounding-box size and centre, per side its shape, usable size,
-    surface height and food flag, per member its kind, geometry and box (object frame, m)."""
-    out: list[float] = [t.mass]
-    out += [float(t.material == m) for m in _MATERIALS[:-1]]
-    out.append(float(t.material not in MATERIALS))
-    out += [float(t.robustness == r) for r in ROBUSTNESS]
-    out.append(float(t.movable))
-    box = t.bbox
-    out += [float(v) for v in box.size] + [float(v) for v in box.center]
-    for side in SIDES:
-        attrs = t.parts[side]
-        out += [float(attrs.shape == s) for s in SHAPES]
-        out += [*map(float, t.surface_size(side)), float(t.surface_height(side))]
-        out.append(float(attrs.food_surface))
-    names = member_order(t)
-    for k in range(_M):
-        if k >= len(names):
-            out += [0.0] * _MEMBER_WIDTH
-            continue
-        m = t.members[names[k]]
-        out += [1.0, *(float(m.kind == kind) for kind in MEMBER_KINDS)]
-        out += [float(m.geom == g) for g in GEOMS] + [*m.box.min, *m.box.max]
-    return np.asarray(out, np.float32)
+__all__ = [
+    "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SPACES",
+    "N_ACTIONS", "N_ATTRIBUTES", "N_ENTITIES", "OPERATORS", "ObjectAction", "ObjectInterface",
+    "TypeSource", "declared_type", "decode", "encode", "encode_type", "member_order",
+    "observation_space",
+]  # fmt: skip
 
 
 class _Tables(NamedTuple):
@@ -205,22 +131,126 @@ def _tables(key: UniverseKey) -> _Tables:
     )  # fmt: skip
 
 
-def observation_space() -> spaces.Dict:
-    """The (fixed) observation space of the objects interface."""
-    k, e = MAX_OBJECTS, N_ENTITIES
-    box = lambda *shape: spaces.Box(-BOUND, BOUND, shape, np.float32)  # noqa: E731
-    return spaces.Dict({
-        "present": spaces.MultiBinary(k), "attributes": box(k, N_ATTRIBUTES),
-        "poses": box(k, 7), "up": spaces.MultiBinary((k, len(SIDES))),
-        "regions": box(MAX_REGIONS, 5), "spaces": box(MAX_SPACES, 5),
-        "held": spaces.MultiBinary(k), "contact": spaces.MultiBinary((e, e, len(PARTS))),
-        "free": spaces.MultiBinary((e, len(PARTS))), "in_workspace": spaces.MultiBinary(e),
-        "member_in_workspace": spaces.MultiBinary((k, MAX_MEMBERS)),
-        "grasp": spaces.MultiBinary((k, MAX_MEMBERS, len(GRASPS))),
-    })  # fmt: skip
+class _SceneMap(NamedTuple):
+    """A scene's actions and atoms in terms of its objects' local indices (scene order), so
+    that a reset only has to place the objects in their slots (`place`, vectorised)."""
 
+    types: dict[str, ObjectType]
+    attributes: np.ndarray  # (n objects, N_ATTRIBUTES): `encode_type` in scene order
+    op: np.ndarray  # per universe action: operator
+    obj: np.ndarray  # local index of the moved object (-1: not in the scene)
+    member: np.ndarray  # member index (-1: none)
+    grasp: np.ndarray  # grasp index (-1: not one of GRASPS)
+    support_obj: np.ndarray  # place: local index of the supporting object, else -1
+    support_fixed: np.ndarray  # place: K + region index of a table region, else -1
+    space: np.ndarray  # slide: space index, else -1
+    kind: np.ndarray  # per fluent atom: which observation entry (-1: none), see `place`
+    a_obj: np.ndarray  # its first entity: local object index, or -1
+    a_fixed: np.ndarray  # ... or a fixed entity (region, space), or -1
+    b_obj: np.ndarray  # its second entity (or the grasping object)
+    b_fixed: np.ndarray
+    extra: np.ndarray  # part index, member index or grasp index, by kind
+    extra2: np.ndarray  # grasp atoms: the grasp index
+    offsets: Mapping[str, int]
 
-_FLUENT_KEYS = ("held", "contact", "free", "in_workspace", "member_in_workspace", "grasp")
+    @staticmethod
+    def of(t: _Tables, scene: Scene, source: TypeSource, offsets: Mapping[str, int]) -> _SceneMap:
+        names = scene.object_names
+        types = {n: source(scene, n) for n in names}
+        for n, typ in types.items():
+            if len(typ.members) > _M:
+                raise ValueError(
+                    f"object '{n}' of scene '{scene.name}' has {len(typ.members)} members; the "
+                    f"objects interface has room for {_M} (utamp_gym.env.objects.MAX_MEMBERS)"
+                )
+        n_sym = len(t.symbols)
+        sid = {s: i for i, s in enumerate(t.symbols)}
+        loc, fixed = np.full(n_sym, -1), np.full(n_sym, -1)
+        member, owner = np.full(n_sym, -1), np.full(n_sym, -1)
+        for i, n in enumerate(names):
+            if n in sid:
+                loc[sid[n]] = i
+            for k, m in enumerate(member_order(types[n])):
+                if f"{n}-{m}" in sid:
+                    member[sid[f"{n}-{m}"]], owner[sid[f"{n}-{m}"]] = k, i
+        for r, region in enumerate(scene.slots):
+            if region.name in sid:
+                fixed[sid[region.name]] = _K + r
+        for s, space in enumerate(scene.spaces):
+            if space.name in sid:
+                fixed[sid[space.name]] = _K + _R + s
+        midx = np.array([
+            member_order(types[t.symbols[o]]).index(m) if loc[o] >= 0
+            and m in types[t.symbols[o]].members else -1
+            for o, m in zip(t.obj, t.member, strict=True)
+        ])  # fmt: skip
+        space = np.where(fixed[t.space] >= _K + _R, fixed[t.space] - _K - _R, -1)
+        part = {p: i for i, p in enumerate(PARTS)}
+        n_atoms = len(t.atoms)
+        kind, a_obj, a_fixed = np.full(n_atoms, -1), np.full(n_atoms, -1), np.full(n_atoms, -1)
+        b_obj, b_fixed = np.full(n_atoms, -1), np.full(n_atoms, -1)
+        extra, extra2 = np.zeros(n_atoms, int), np.zeros(n_atoms, int)
+        for j, (pred, *args) in enumerate(t.atoms):
+            if pred == "isgraspfrom":
+                g = _GRASP_INDEX.get(tuple(args[2:]))
+                o, m = sid[args[0]], sid[args[1]]
+                if loc[o] >= 0 and member[m] >= 0 and g is not None:
+                    kind[j], a_obj[j], extra[j], extra2[j] = 5, loc[o], member[m], g
+                continue
+            p, a, b = args
+            ia, ib = sid[a], sid[b]
+            if a == "hand":
+                kind[j], b_obj[j] = 0, loc[ib]
+            elif a == "workspace" and (loc[ib] >= 0 or fixed[ib] >= 0):
+                kind[j], b_obj[j], b_fixed[j] = 1, loc[ib], fixed[ib]
+            elif a == "workspace" and member[ib] >= 0:
+                kind[j], a_obj[j], extra[j] = 2, owner[ib], member[ib]
+            elif b == "air":
+                kind[j], a_obj[j], a_fixed[j], extra[j] = 3, loc[ia], fixed[ia], part[p]
+            else:
+                kind[j], a_obj[j], a_fixed[j], extra[j] = 4, loc[ia], fixed[ia], part[p]
+                b_obj[j], b_fixed[j] = loc[ib], fixed[ib]
+        attributes = np.array([encode_type(types[n]) for n in names], np.float32)
+        return _SceneMap(
+            types, attributes, t.op, loc[t.obj], midx, t.grasp, loc[t.support],
+            fixed[t.support], space, kind, a_obj, a_fixed, b_obj, b_fixed, extra, extra2,
+            offsets,
+        )  # fmt: skip
+
+    def place(self, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(per universe action its index, per fluent atom its flat observation position; -1
+        for none) with local object i in slot ``slots[i]``."""
+        at = np.append(np.asarray(slots), -1)  # at[-1] = -1: "not in the scene" stays -1
+        slot, m, g = at[self.obj], self.member, self.grasp
+        support = np.where(self.support_obj >= 0, at[self.support_obj], self.support_fixed)
+        pick = (slot * _M + m) * _G + g
+        place = _PLACE0 + slot * (_K + _R) + support
+        slide = _SLIDE0 + ((slot * _M + m) * _G + g) * _S + self.space
+        member_ok = (m >= 0) & (m < _M)
+        valid = (
+            (slot >= 0)
+            & (g >= 0)
+            & np.choose(self.op, [member_ok, support >= 0, member_ok & (self.space >= 0)])
+        )
+        index = np.where(valid, np.choose(self.op, [pick, place, slide]), -1)
+        off, e, n_p = self.offsets, N_ENTITIES, len(PARTS)
+        ea = np.where(self.a_obj >= 0, at[self.a_obj], self.a_fixed)
+        eb = np.where(self.b_obj >= 0, at[self.b_obj], self.b_fixed)
+        x, kind = self.extra, self.kind
+        pos = np.select(
+            [kind == 0, kind == 1, kind == 2, kind == 3, kind == 4, kind == 5],
+            [off["held"] + eb, off["in_workspace"] + eb,
+             off["member_in_workspace"] + ea * _M + x, off["free"] + ea * n_p + x,
+             off["contact"] + (ea * e + eb) * n_p + x,
+             off["grasp"] + (ea * _M + x) * _G + self.extra2],
+            -1,
+        )  # fmt: skip
+        ok = np.select(
+            [kind == 0, kind == 1, kind == 2, kind == 3, kind == 4, kind == 5],
+            [eb >= 0, eb >= 0, ea >= 0, ea >= 0, (ea >= 0) & (eb >= 0), ea >= 0],
+            False,
+        )
+        return index, np.where(ok, pos, -1)
 
 
 class ObjectInterface:
@@ -237,6 +267,7 @@ class ObjectInterface:
         self._size = sum(sizes)
         self.slots: dict[str, int] = {}  # object name -> slot, this episode
         self._static: dict[str, np.ndarray] = {}
+        self._maps: dict[str, _SceneMap] = {}  # per scene: what does not depend on the slots
 
     def __getstate__(self) -> dict[str, object]:
         state = self.__dict__.copy()
@@ -262,98 +293,21 @@ class ObjectInterface:
                 )
         order = rng.permutation(_K)[: len(names)]
         self.scene, self.slots = scene, {n: int(s) for n, s in zip(names, order, strict=True)}
-        t = _tables(self.universe.key)
-        entity = np.full(len(t.symbols), -1)  # symbol id -> entity index
-        member = np.full(len(t.symbols), -1)  # member symbol id -> member index
-        owner = np.full(len(t.symbols), -1)  # member symbol id -> its object's slot
-        sid = {s: i for i, s in enumerate(t.symbols)}
-        types = {n: self.types(scene, n) for n in names}
-        for n, typ in types.items():
-            if len(typ.members) > _M:
-                raise ValueError(
-                    f"object '{n}' of scene '{scene.name}' has {len(typ.members)} members; the "
-                    f"objects interface has room for {_M} (utamp_gym.env.objects.MAX_MEMBERS)"
-                )
-        for n, slot in self.slots.items():
-            if n in sid:
-                entity[sid[n]] = slot
-            for k, m in enumerate(member_order(types[n])):
-                if f"{n}-{m}" in sid:
-                    member[sid[f"{n}-{m}"]], owner[sid[f"{n}-{m}"]] = k, slot
-        for r, region in enumerate(scene.slots):
-            if region.name in sid:
-                entity[sid[region.name]] = _K + r
-        for s, space in enumerate(scene.spaces):
-            if space.name in sid:
-                entity[sid[space.name]] = _K + _R + s
-        self._index = self._action_index(t, types, entity)
+        cached = self._maps.get(scene.name) if self.types is declared_type else None
+        if cached is None:
+            cached = _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
+            if self.types is declared_type:  # declared types are fixed per scene
+                self._maps[scene.name] = cached
+        self._index, self._atom_pos = cached.place(order)
         order_ = np.argsort(self._index, kind="stable")
         self._sorted = order_[self._index[order_] >= 0]
         self._starts = np.searchsorted(self._index[self._sorted], np.arange(N_ACTIONS + 1))
-        self._atom_pos = self._atom_positions(t, entity, member, owner)
-        self._static_obs(scene, types)
+        self._static_obs(scene, cached.attributes, order)
 
-    def _action_index(
-        self, t: _Tables, types: Mapping[str, ObjectType], entity: np.ndarray
-    ) -> np.ndarray:
-        """Per universe action, its index in this episode (-1: not in this scene)."""
-        slot = entity[t.obj]
-        ok = (slot >= 0) & (slot < _K) & (t.grasp >= 0)
-        midx = np.array([
-            member_order(types[t.symbols[o]]).index(m)
-            if o_ok and m in types[t.symbols[o]].members else -1
-            for o, m, o_ok in zip(t.obj, t.member, ok, strict=True)
-        ])  # fmt: skip
-        support, space = entity[t.support], entity[t.space] - _K - _R
-        pick = (slot * _M + midx) * _G + t.grasp
-        place = _PLACE0 + slot * (_K + _R) + support
-        slide = _SLIDE0 + ((slot * _M + midx) * _G + t.grasp) * _S + space
-        index = np.choose(t.op, [pick, place, slide])
-        valid = ok & np.choose(
-            t.op, [(midx >= 0) & (midx < _M), (support >= 0) & (support < _K + _R),
-                   (midx >= 0) & (midx < _M) & (space >= 0)]
-        )  # fmt: skip
-        return np.where(valid, index, -1)
-
-    def _atom_positions(
-        self, t: _Tables, entity: np.ndarray, member: np.ndarray, owner: np.ndarray
-    ) -> np.ndarray:
-        """Per fluent atom, its flat position in the fluent observation (-1: none)."""
-        sid = {s: i for i, s in enumerate(t.symbols)}
-        part = {p: i for i, p in enumerate(PARTS)}
-        off, e = self._offsets, N_ENTITIES
-        out = np.full(len(t.atoms), -1)
-        for j, (pred, *args) in enumerate(t.atoms):
-            if pred == "isgraspfrom":
-                o, m, g = (
-                    entity[sid[args[0]]],
-                    member[sid[args[1]]],
-                    _GRASP_INDEX.get(tuple(args[2:])),
-                )
-                if o >= 0 and m >= 0 and g is not None:
-                    out[j] = off["grasp"] + (o * _M + m) * _G + g
-                continue
-            p, a, b = args
-            ea, eb = entity[sid[a]], entity[sid[b]]
-            if a == "hand":
-                if eb >= 0:
-                    out[j] = off["held"] + eb
-            elif a == "workspace":
-                if eb >= 0:
-                    out[j] = off["in_workspace"] + eb
-                elif member[sid[b]] >= 0:
-                    out[j] = off["member_in_workspace"] + owner[sid[b]] * _M + member[sid[b]]
-            elif ea >= 0 and b == "air":
-                out[j] = off["free"] + ea * len(PARTS) + part[p]
-            elif ea >= 0 and eb >= 0:
-                out[j] = off["contact"] + (ea * e + eb) * len(PARTS) + part[p]
-        return out
-
-    def _static_obs(self, scene: Scene, types: Mapping[str, ObjectType]) -> None:
+    def _static_obs(self, scene: Scene, attributes: np.ndarray, slots: np.ndarray) -> None:
         attrs = np.zeros((_K, N_ATTRIBUTES), np.float32)
         present = np.zeros(_K, np.int8)
-        for n, slot in self.slots.items():
-            attrs[slot], present[slot] = encode_type(types[n]), 1
+        attrs[slots], present[slots] = attributes, 1
         regions = np.zeros((_R, 5), np.float32)
         for r, region in enumerate(scene.slots):
             (x0, y0, _), (x1, y1, _) = region.region

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, MAX_POSE_NOISE
+from utamp_gym.env.object_space import INTERFACES
 from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
@@ -27,8 +28,6 @@ RENDER_MODES = ("rgb_array", "rgb_array_list", "human")
 #: U-TAMP-1 object-centric (geometric) preconditions only, or every action of the scene
 MASKS = ("affordances", "geometric", "none")
 MIN_OBJECTS = 2
-#: the env's spaces: the suite's ground actions and atoms, or object slots (`env.objects`)
-INTERFACES = ("grounded", "objects")
 
 
 def _bool(name: str, value: Any) -> bool:
