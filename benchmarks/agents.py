@@ -39,9 +39,9 @@ PLANNERS = ("utamp2-rules", "utamp2-gt")
 
 def splits() -> tuple[dict[str, str], str, dict[str, Any]]:
     """(split name -> suite, training env id, its options), procedural if available."""
-    from utamp_gym.suites import SUITES
+    from utamp_gym import suites
 
-    if "procedural-v1/train" in SUITES:
+    if "procedural-v1/train" in getattr(suites, "ALL_SUITES", suites.SUITES):
         names = ("train", "test-instances", "test-families", "test-count")
         return {n: f"procedural-v1/{n}" for n in names}, "UTampKitchenProcedural-v0", {}
     return (

@@ -58,6 +58,27 @@ def test_data_collector_records_infos_of_every_env_id(
         assert len(set(infos["scene"])) == 1
 
 
+def test_data_collector_records_the_objects_interface(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from minari import DataCollector
+
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path))
+    env = DataCollector(
+        gym.make("UTampKitchenSlide-v0", grounding="symbolic", interface="objects",
+                 masks="geometric", max_episode_steps=8),
+        record_infos=True,
+    )  # fmt: skip
+    _collect(env, episodes=2, seed=3)
+    env.create_dataset(dataset_id="utamp/slide-objects-v0", algorithm_name="random")
+    space = env.observation_space
+    env.close()
+    for ep in minari.load_dataset("utamp/slide-objects-v0").iterate_episodes():
+        assert ep.observations["contact"].shape[1:] == space["contact"].shape
+        assert all(space.contains({k: v[t] for k, v in ep.observations.items()})
+                   for t in range(len(ep.actions) + 1))  # fmt: skip
+
+
 @pytest.mark.physics
 def test_data_collector_records_physics_infos_with_timings(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch

@@ -36,18 +36,26 @@ class DemoResult:
 def suite_env(suite: str) -> tuple[str, dict[str, Any]]:
     """The registered env id of a suite, and the options that select it (a suite without an
     id of its own runs in ``UTampKitchen-v0`` with its suite and object rows)."""
+    from utamp_gym import suites
     from utamp_gym.env.registry import env_definitions
     from utamp_gym.rl.harness import suite_options
-    from utamp_gym.suites import SUITES, suite_scenes
 
-    if suite not in SUITES:
+    every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
+    if suite not in every:
         from utamp_gym.errors import UnknownNameError
 
-        raise UnknownNameError("suite", suite, SUITES)
+        raise UnknownNameError("suite", suite, every)
     for d in env_definitions():
         if d.kwargs.get("suite") == suite:
             return d.id, {}
-    return "UTampKitchen-v0", suite_options(suite_scenes(suite)[0].name)
+        split = d.kwargs.get("split")
+        if split is not None and suite.endswith(f"/{split}"):  # a procedural split's env
+            return d.id, {"split": suite.rsplit("/", 1)[1]}
+    if "/" in suite:  # another split of a procedural env
+        for d in env_definitions():
+            if "split" in d.kwargs:
+                return d.id, {"split": suite.rsplit("/", 1)[1]}
+    return "UTampKitchen-v0", suite_options(suites.suite_scenes(suite)[0].name)
 
 
 def dataset_id(suite: str, track: str, method: str) -> str:

@@ -72,13 +72,19 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
 def suite_options(scene: str) -> dict[str, Any]:
     """Env options that put `scene`'s suite under an objects-interface agent (it acts on any
     suite): the suite and, as pose rows, every object name of the suite's scenes."""
-    from utamp_gym.suites import SUITES, suite_scenes
+    from utamp_gym import suites
 
-    suite = max((s for s in SUITES if scene.startswith(f"{s}/")), key=len, default=None)
+    every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
+    suite = max((s for s in every if scene.startswith(f"{s}/")), key=len, default=None)
     if suite is None:
         return {}
-    names = dict.fromkeys(n for s in suite_scenes(suite) for n in s.object_names)
-    return {"suite": suite, "objects": list(names)}
+    names = list(dict.fromkeys(n for s in suites.suite_scenes(suite) for n in s.object_names))
+    procedural = getattr(suites, "PROCEDURAL_SUITES", None)
+    if procedural is None:
+        return {"suite": suite, "objects": names}
+    if suite in procedural:  # a procedural env takes its split, not a suite
+        return {"suite": None, "split": suite.rsplit("/", 1)[1], "objects": names}
+    return {"suite": suite, "split": None, "objects": names}
 
 
 def step_budget(n_objects: int) -> int:
