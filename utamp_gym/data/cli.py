@@ -77,7 +77,12 @@ def add_demos_parser(sub: Any) -> None:
     p.add_argument("--suite", choices=SUITES, help="required: the scenes to record")
     p.add_argument("--episodes", type=int, default=10, help="episodes (reset seeds S..S+N-1)")
     p.add_argument("--out", help="required: the folder the dataset is written under")
-    p.add_argument("--track", choices=("macro", "low-level"), default="macro")
+    p.add_argument(
+        "--track",
+        choices=("macro", "low-level"),
+        default="macro",
+        help="macro actions in the Gym env, or joint commands through utamp_gym.dm",
+    )
     p.add_argument("--method", choices=METHODS, default="utamp2-gt", help="the planner")
     p.add_argument("--seed", type=int, default=0, help="the first reset seed")
     p.add_argument(
@@ -111,8 +116,19 @@ def add_demos_parser(sub: Any) -> None:
         default="local",
         help="local worker processes (--workers N; default in this process) or Ray",
     )
-    p.add_argument("--workers", type=int, default=None)
-    p.add_argument("--ray-address", default=None)
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="local worker processes (default 0: in this process), or the CPUs of a "
+        "Ray instance started here",
+    )
+    p.add_argument(
+        "--ray-address",
+        default=None,
+        help="with --executor ray: the cluster to join (default: RAY_ADDRESS, else "
+        "a local Ray instance)",
+    )
     p.set_defaults(func=_cmd_demos, demos_parser=p, demos_cmd=None)
     dsub = p.add_subparsers(dest="demos_cmd", metavar="export-lerobot")
     ex = dsub.add_parser(
