@@ -88,7 +88,13 @@ def main() -> None:
     p.add_argument("--train-workers", type=int, default=0, help="seeds trained in parallel")
     p.add_argument("--out", default="runs/agents")
     p.add_argument("--docs", default="docs/results")
+    p.add_argument(
+        "--rewrite", action="store_true", help="only rewrite the docs from the measured agents.json"
+    )
     args = p.parse_args()
+    if args.rewrite:
+        write(json.loads((Path(args.docs) / "agents.json").read_text()), Path(args.docs))
+        return
 
     from utamp_gym.data.record import dataset_id, record_demos
     from utamp_gym.distributed import LocalExecutor
@@ -180,7 +186,20 @@ def write(table: dict[str, Any], docs: Path) -> None:
     docs.mkdir(parents=True, exist_ok=True)
     splits_ = list(table["splits"])
     train = splits_[0]
+    interim = not str(table["splits"][train]).startswith("procedural-")
     lines = [
+        *(
+            [
+                "**Interim splits**: this checkout has no procedural splits (#22), so the paper's "
+                "suites stand in: train on `pick-place`; `sliding` has the same objects in another "
+                "layout (the tray must first be slid into reach); `extra` has objects of new "
+                "families (their affordances from the rules). Re-run `benchmarks/agents.py` where "
+                "`procedural-v1` exists for the real splits.",
+                "",
+            ]
+            if interim
+            else []
+        ),
         f"Training split: `{table['splits'][train]}` ({table['env_id']}, objects interface, "
         "geometric masks, symbolic grounding); every split evaluated on all its scenes, seed 0, "
         "symbolic grounding, deterministic masked policy, 10 steps per object. Learned rows: "
@@ -227,6 +246,7 @@ def write(table: dict[str, Any], docs: Path) -> None:
     ]
     (docs / "agents.md").write_text("\n".join(lines) + "\n")
     (docs / "agents.json").write_text(json.dumps(table, indent=2, default=str) + "\n")
+    # the learning curves: success on the training split; BC's x axis counts samples seen
     plot_learning_curves(
         curves,
         docs / "agents_learning_curves.png",
