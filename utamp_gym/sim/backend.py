@@ -1,6 +1,7 @@
 """`MujocoBackend`: the physics backend of the Gym env (see `utamp_gym.backend`).
 
-`reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose,
+`reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose
+(with sleeping islands on: objects at rest cost nothing until touched, `sim.world`),
 draws the initial pose noise from the given generator and lets everything settle;
 `execute` runs one U-TAMP-2 macro action through `skills`; `physical_state` reports what
 perception needs; `disturb` injects a fault (`faults`). Everything random (initial pose
@@ -90,7 +91,11 @@ class MujocoBackend:
         if self._kin is None:
             self._kin = PandaKinematics()
         spec, info = build_world_spec(
-            scene, rng=rng, pos_noise=self.pos_noise, yaw_noise_deg=self.yaw_noise_deg
+            scene,
+            rng=rng,
+            pos_noise=self.pos_noise,
+            yaw_noise_deg=self.yaw_noise_deg,
+            sleep=True,
         )
         handles = add_panda(spec)
         world = compile_world(spec, info)
