@@ -55,10 +55,7 @@ def main() -> None:
                     "timings": info.get("timings", {}),
                 }
             )
-            print(
-                f"{len(steps):2d} {info['action']}  "
-                f"{'ok' if info['failure_reason'] is None else info['failure_reason']}"
-            )
+            print(f"{len(steps):2d} {info['action']}  {info['failure_reason'] or 'ok'}")
         tower = env.unwrapped.backend.stacked_on_tray()
         env.close()
     summary = {

@@ -45,7 +45,7 @@ def test_physics_observations_come_from_the_backend() -> None:
     assert obs["robot"].shape == (9,) and obs["image"].shape == (64, 80, 3)
     action = int(np.flatnonzero(info["action_mask"])[0])
     _, _, _, _, info = env.step(action)
-    assert info["macro_result"] is not None and "step_s" in info["timings"]
+    assert info["macro_result"]["executed"] and "step_s" in info["timings"]
     env.close()
 
 

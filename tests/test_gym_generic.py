@@ -213,7 +213,7 @@ def test_pickled_and_deep_copied_physics_envs_step_as_the_original(env_id: str) 
     policy = PlannerPolicy(env.unwrapped)
     for _ in range(2):
         obs, _, _, _, info = env.step(policy(obs, info))
-        assert info["macro_result"] is not None  # the simulator ran
+        assert info["macro_result"]["executed"]  # the simulator ran
     copies = [pickle.loads(pickle.dumps(env)), copy.deepcopy(env)]
     compared = 0
     for _ in range(3):

@@ -66,7 +66,7 @@ def test_saved_model_acts_on_masked_env_without_invalid_actions(maskable_run: Pa
             action = policy(obs, info)
             assert info["action_mask"][action]
             obs, _, terminated, truncated, info = env.step(action)
-            assert info["failure_reason"] is None
+            assert info["failure_reason"] == ""
             done = terminated or truncated
     env.close()
 

@@ -1,8 +1,10 @@
-"""The `utamp` command line: scenes, plan, validate, run, view, eval, train.
+"""The `utamp` command line: scenes, plan, validate, run, view, eval, train, demos.
 
 Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
-see `solved` and `timed_out`), 1 an invalid plan (`validate`), 2 bad input (unknown scene,
-malformed file, bad option value, ...), 130 interrupted (Ctrl-C).
+see `solved` and `timed_out`), 1 an invalid plan (`validate`) or an `eval` sweep with crashed
+runs (named on stderr; their rows are in results.csv and run again on resume), 2 bad input
+(unknown scene, malformed file, bad option value, a failed training seed, ...), 130
+interrupted (Ctrl-C).
 
 Each subcommand imports what it needs when it runs; `utamp plan` imports neither Gymnasium
 nor the physics stack (the RL parser and the env registration load only for the
@@ -153,7 +155,25 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         f"{report.wall_time_s:.1f} s; wrote results.csv, summary.md, summary.json and figures "
         f"in {args.out}"
     )
-    return 0
+    return _report_crashes(report.crashed, len(report.rows))
+
+
+def _report_crashes(crashed: Sequence[Any], total: int) -> int:
+    """Exit code 1 and a note on stderr when runs crashed (0 otherwise): a crash is not an
+    outcome of the method, so a sweep with crashes is incomplete."""
+    if not crashed:
+        return 0
+    reasons: dict[str, int] = {}
+    for row in crashed:
+        reasons[row.failure_reason] = reasons.get(row.failure_reason, 0) + 1
+    top = sorted(reasons.items(), key=lambda kv: -kv[1])[:3]
+    shown = "; ".join(f"{n}x {reason}" for reason, n in top)
+    print(
+        f"utamp eval: {len(crashed)} of {total} run(s) crashed ({shown}); their rows say "
+        "crashed=true, and they run again when the same command resumes",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def _cmd_eval_merge(args: argparse.Namespace) -> int:
@@ -568,6 +588,12 @@ def _add_train_parser(sub: Any) -> None:
     add_train_parser(sub)
 
 
+def _add_demos_parser(sub: Any) -> None:
+    from utamp_gym.data.cli import add_demos_parser
+
+    add_demos_parser(sub)
+
+
 SCENE_HELP = "suite scene (pick-place/017), packaged scene or scene-file path"
 METHOD_HELP = "where the affordances come from: ground truth, rules, noisy rules, none (UTAMP-1)"
 EVAL_HELP = "evaluate planning methods on a suite (the paper's table); `eval merge` joins outputs"
@@ -582,7 +608,12 @@ SUBCOMMANDS: tuple[tuple[str, Callable[[Any], None], str], ...] = (
     ),
     ("validate", _add_validate_parser, "check a plan against a domain and problem"),
     ("eval", _add_eval_parser, EVAL_HELP),
-    ("train", _add_train_parser, "train an RL baseline (MaskablePPO, PPO or DQN)"),
+    (
+        "train",
+        _add_train_parser,
+        "train a baseline: MaskablePPO, PPO, DQN or behaviour cloning (bc)",
+    ),
+    ("demos", _add_demos_parser, "record planner demonstrations as Minari datasets"),
 )
 """(name, what adds its parser, its line in `utamp --help`), in `utamp --help` order."""
 
