@@ -233,6 +233,9 @@ OUTPUTS = {
                    "{path}"],
     "eval merge OUT": ["eval", "merge", "{path}", "{existing}"],
     "train --out": ["train", "--steps", "64", "--no-progress", "--out", "{path}"],
+    "demos --out": ["demos", "--suite", "pick-place", "--episodes", "1", "--out", "{path}"],
+    "demos export-lerobot --out": ["demos", "export-lerobot", "--root", "{existing}",
+                                   "--dataset", "utamp/x-v0", "--out", "{path}"],
 }  # fmt: skip
 
 

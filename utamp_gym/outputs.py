@@ -35,6 +35,17 @@ def output_file(path: str | Path, option: str) -> Path:
     return p
 
 
+def new_output_dir(path: str | Path, option: str) -> Path:
+    """`path` as a directory that a library creates itself (LeRobot refuses an existing
+    one): it must not exist yet, and its parent is created if missing and probed."""
+    p = Path(path)
+    what = f"{option} {path}"
+    if p.exists():
+        raise OutputPathError(f"{what}: already exists; give a new folder")
+    _writable_dir(p.parent, p, what)
+    return p
+
+
 def _writable_dir(p: Path, named: Path, what: str) -> Path:
     """`p` made and probed with a temporary file; `named` is the path the user gave."""
     blocker = next((a for a in (p, *p.parents) if a.exists() and not a.is_dir()), None)

@@ -23,8 +23,12 @@ from utamp_gym.errors import UtampError
 
 
 def _cmd_demos(args: argparse.Namespace) -> int:
+    from utamp_gym.outputs import new_output_dir, output_dir
+
     if args.demos_cmd == "export-lerobot":
         from utamp_gym.data.lerobot import export_lerobot
+
+        new_output_dir(args.out, "--out")  # before the conversion starts
 
         frames = export_lerobot(args.root, args.dataset, args.out, repo_id=args.repo_id)
         print(f"wrote {frames} frames of {args.dataset} as a LeRobot dataset in {args.out}")
@@ -32,6 +36,7 @@ def _cmd_demos(args: argparse.Namespace) -> int:
     missing = [f for f, v in (("--suite", args.suite), ("--out", args.out)) if not v]
     if missing:
         args.demos_parser.error(f"the following arguments are required: {', '.join(missing)}")
+    output_dir(args.out, "--out")  # before any episode is recorded
     from utamp_gym.data.record import record_demos
     from utamp_gym.distributed import make_executor
 
