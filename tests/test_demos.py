@@ -141,7 +141,8 @@ def test_export_lerobot_hands_every_step_to_lerobot(
     for name in ("lerobot", "lerobot.datasets"):
         monkeypatch.setitem(sys.modules, name, types.ModuleType(name))
     monkeypatch.setitem(sys.modules, "lerobot.datasets.lerobot_dataset", module)
-    args = f"demos export-lerobot --root {macro_root} --dataset {MACRO_ID} --out {tmp_path}"
+    out = tmp_path / "lerobot"
+    args = f"demos export-lerobot --root {macro_root} --dataset {MACRO_ID} --out {out}"
     assert main(shlex.split(args)) == 0
     made = _FakeLeRobotDataset.made[-1]
     data = load_dataset(macro_root, MACRO_ID)
@@ -156,7 +157,8 @@ def test_export_lerobot_without_lerobot_names_the_package(
 ) -> None:
     if "lerobot" in sys.modules or _has_lerobot():
         pytest.skip("lerobot is installed here")
-    args = f"demos export-lerobot --root {macro_root} --dataset {MACRO_ID} --out {tmp_path}"
+    out = tmp_path / "lerobot"
+    args = f"demos export-lerobot --root {macro_root} --dataset {MACRO_ID} --out {out}"
     assert main(shlex.split(args)) == 2
     assert "needs the lerobot package" in capsys.readouterr().err
 
