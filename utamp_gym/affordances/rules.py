@@ -14,11 +14,15 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
 * the gripper approaches from above (palm on a part that can face up) and comes down
   onto the member's palm face: no sibling member (the body included) stands over it
   (a bottle's neck over its body, a bowl's floor under its rim when upside-down); its
-  fingers close across a member no wider than the 8 cm opening and are not blocked by
-  a sibling member;
+  fingers close across a member that fits the 8 cm opening with room to spare (an edge
+  is pinched) and find room beside it: no sibling member in the way, and no material of
+  the object under a finger above its target (`utamp_gym.affordances.hand`: a slab's edge
+  lying flat, a bowl's curved wall beside a rim strip, a jar's shoulder beside its lid);
 * an object can be lifted by a member if it is well below the Panda's 3 kg payload
-  (edge grasps carry much less); an edge grasp is only useful when it can lift the
-  object or when the object cannot be lifted at all (then it is slid);
+  (edge grasps carry much less) and the pads hold the moment of its weight about the
+  grasp (a heavy board far out on its handle, an upside-down pot by a lug); an edge grasp
+  is only useful when it can lift the object or when the object cannot be lifted at all
+  (then it is slid);
 * an object that cannot be lifted but rests flat on a fixed surface can be slid.
 """
 
@@ -29,10 +33,11 @@ from collections.abc import Iterable
 import numpy as np
 
 from utamp_gym.affordances.facts import Fact
+from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
+from utamp_gym.affordances.hand import fingers_fit, holds, width_fits
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
 
-GRIPPER_OPENING = 0.08  # m, Franka Hand
 MIN_GRASP_WIDTH = 0.005  # m
 PAYLOAD = 3.0  # kg, Franka Panda
 LIFT_FRACTION = 0.5  # "significantly lighter than the payload"
@@ -139,9 +144,11 @@ def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
                 continue  # that part never faces up, or the hand cannot reach the member
             for f1, f2 in FINGER_PAIRS:
                 width = float(m.box.size[axis_of(f1)])
-                if not MIN_GRASP_WIDTH <= width <= GRIPPER_OPENING:
+                if width < MIN_GRASP_WIDTH or not width_fits(width, m):
                     continue
                 if _blocked(t, mname, f1) or _blocked(t, mname, f2):
+                    continue
+                if not fingers_fit(t, mname, palm, f1):
                     continue
                 out.append((mname, palm, f1, f2))
     return out
@@ -165,6 +172,8 @@ def object_facts(t: ObjectType) -> set[Fact]:
     for member, palm, f1, f2 in grasps:
         if t.members[member].kind == "edge" and not liftable_via(t, member) and any_liftable:
             continue  # an edge grasp that cannot carry the object is never useful
+        if liftable_via(t, member) and not holds(t, member, palm):
+            continue  # light enough, but it would turn out of the pads when lifted
         facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
         if liftable_via(t, member):
             facts.add(("canLift", t.name, member))

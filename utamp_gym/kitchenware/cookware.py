@@ -144,7 +144,7 @@ STOCK_POT = Family(
         Param("diameter", 140, 210, "mm", "diameter", "stock-pot", real=(140, 300)),
         Param("height", 90, 150, "mm", "height", "stock-pot", real=(90, 250)),
         Param("wall", 0.8, 2.5, "mm", "wall thickness", "stock-pot"),
-        Param("lug_reach", 20, 35, "mm", "how far a lug stands out", "stock-pot"),
+        Param("lug_reach", 22, 40, "mm", "how far a lug stands out", "stock-pot"),
         Param("lug_width", 30, 50, "mm", "lug width (across the fingers)", "stock-pot"),
         Param("lug_thickness", 10, 18, "mm", "lug thickness", "stock-pot"),
         Param("lug_drop", 5, 25, "mm", "lug top below the rim", "stock-pot"),

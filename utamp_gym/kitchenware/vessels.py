@@ -135,23 +135,29 @@ def _bowl(i: Instance) -> Built:
         "parts": {"on": {"shape": "open", **centred(2 * r - 2 * wall)},
                   "under": {"shape": "flat"}, **sides("round")},
     }  # fmt: skip
-    return Built(table, cup(r, h, wall, i["floor"]))
+    # a real bowl is rounded: about 3/4 of the material of the upright-walled cylinder
+    return Built(table, 0.75 * cup(r, h, wall, i["floor"]))
 
 
 BOWL = Family(
     name="bowl",
-    summary="soup, cereal and mixing bowls (ceramic, plastic, steel)",
+    summary="soup, cereal and mixing bowls (ceramic, melamine, steel)",
     doc="An open round vessel too wide to wrap the hand around, pinched at its rim: the "
     "rim's front and back are edge members, as thick as the wall.",
-    materials=(("ceramic", 0.55), ("plastic", 0.25), ("steel", 0.20)),
+    materials=(("ceramic", 0.5), ("plastic", 0.3), ("steel", 0.2)),
     params=(
-        Param("diameter", 120, 200, "mm", "outer diameter", "dinnerware", real=(120, 300)),
-        Param("height", 45, 95, "mm", "height", "dinnerware", real=(45, 140)),
-        Param("wall", 4, 8, "mm", "wall thickness", "dinnerware", materials=("ceramic",)),
-        Param("wall", 2, 3.5, "mm", "wall thickness", "mixing-bowl", materials=("plastic",)),
+        Param("diameter", 110, 180, "mm", "outer diameter", "dinnerware", real=(110, 300)),
+        Param("height", 45, 85, "mm", "height", "dinnerware", real=(45, 140)),
+        Param("wall", 5, 8, "mm", "wall thickness (stoneware)", "dinnerware",
+              materials=("ceramic",)),
+        Param("wall", 4, 6, "mm", "wall thickness (melamine)", "mixing-bowl",
+              materials=("plastic",)),
         Param("wall", 1.0, 1.5, "mm", "wall thickness (rolled rim)", "mixing-bowl",
               materials=("steel",)),
-        Param("floor", 4, 9, "mm", "floor thickness (mass only)", "dinnerware"),
+        Param("floor", 4, 7, "mm", "floor thickness (mass only)", "dinnerware",
+              materials=("ceramic", "plastic")),
+        Param("floor", 1.0, 1.5, "mm", "floor thickness (mass only)", "mixing-bowl",
+              materials=("steel",)),
         Param("rim_depth", 20, 35, "mm", "height of the rim band declared as edges", "robot"),
     ),
     build=_bowl,
@@ -162,7 +168,7 @@ BOWL = Family(
 # ------------------------------------------------------------------ jar
 def _jar(i: Instance) -> Built:
     r, hb, wall = m(i["diameter"] / 2), i["body_height"], i["wall"]
-    rl = m(r - i["shoulder"])
+    rl = m(r - i["shoulder"])  # a wider lid (shoulder < 0) overhangs the body
     top = hb + i["lid_height"]
     table = {
         "description": f"{i.material} jar with a screw lid, filled {i['fill']:.0%}",
@@ -189,8 +195,9 @@ JAR = Family(
         Param("body_height", 60, 150, "mm", "height to the lid", "jar", real=(60, 240)),
         Param("wall", 2.5, 4, "mm", "wall thickness", "jar", materials=("glass",)),
         Param("wall", 1, 2, "mm", "wall thickness", "container", materials=("plastic",)),
-        Param("shoulder", 2, 10, "mm", "how far the lid is set in from the body", "jar"),
-        Param("lid_height", 10, 20, "mm", "lid height", "jar"),
+        Param("shoulder", -3, 8, "mm", "how far the lid is set in from the body (< 0: wider)",
+              "jar"),
+        Param("lid_height", 12, 25, "mm", "lid height", "jar"),
         Param("fill", 0.4, 1.0, "fraction", "filled fraction", "jar"),
         Param("contents_density", 600, 1350, "kg/m3", "contents density", "jar"),
     ),

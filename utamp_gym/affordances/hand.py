@@ -1,0 +1,305 @@
+"""The room an object leaves for the Panda's fingers, and what a grasp can hold: geometry only.
+
+The rule parser grants a grasp only where the hand can carry it out. Everything here is
+computed from a type's attributes (member boxes, part shapes, sizes and heights, mass) and
+from facts about the robot: the Franka Hand's fingers and the way a grasp is decoded
+(`utamp_gym.sim.decode`: the TCP at the member's middle, `GRASP_DEPTH` below its palm face,
+fingertips `TIP_BELOW_TCP` below the TCP and at least `TIP_CLEARANCE` above the object's
+bottom). Nothing here knows an object, a type or a family by name.
+
+**The object's material** (`solids`): the body member is a box or an upright cylinder; an
+open or concave top leaves a cavity inside its usable surface down to a floor taken
+`CAVITY_FLOOR` thick (the rules cannot see a floor); a flat top below the body's top or
+smaller than its face leaves a well above its surface height; every other member is solid
+(edges inside the body are the body's own walls).
+
+**Finger room** (`finger_room`): each finger descends beside its side of the member, opened
+`OPEN_CLEARANCE` beyond it (less if the hand's 8 cm do not allow it), then closes. It is a pad
+(the lowest `PAD_HEIGHT`, `PAD_THICKNESS` across, `PAD_WIDTH` wide) under a thicker upper
+finger. The finger stops where it first meets material beside the member; the shortfall is
+how far above its target that is. A member with its own geometry (a handle, a neck, a lid, a
+body) needs no shortfall at all: the motion planner allows fingers to touch only the grasped
+member. An edge that is the body's own wall (a tray's rim, a bowl's rim, a plate's rim) may
+let a finger land up to `STOP_TOLERANCE` early on the body (the approach guard stops the hand
+1 cm short at most), as long as the pad still overlaps the edge by `MIN_PAD_OVERLAP`: a
+handleless board lying flat has no room beside its edges, the fingers would meet the board
+or the table.
+
+**What a grasp holds** (`holds`): the object's weight hangs at a lever from the grasp point
+(the member's middle to the body's centre, horizontally); its moment turns the object between
+the pads unless the pads' friction holds it, up to `TORQUE_LIMIT`, and only `TORQUE_LIMIT_ABOVE`
+when the object's centre lies above the grasp (an upside-down pot held by a lug near its
+rim tips over in the grasp).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from utamp_gym.scene.catalogue import Member, ObjectType
+from utamp_gym.scene.geometry import Box, axis_of
+from utamp_gym.scene.handles import BAR, loop_axis
+
+# ------------------------------------------------------------------ the Franka Hand
+GRIPPER_OPENING = 0.08  # m, fully open
+WRAP_CLEARANCE = 0.003  # m a side: the open fingers must clear what they close on
+PAD_WIDTH = 0.0176  # m, across the finger (the rubber tip)
+PAD_THICKNESS = 0.0152  # m, along the closing direction
+PAD_HEIGHT = 0.0184  # m
+LOWER_FINGER = 0.033  # m above the tip: the pad and the slim part of the finger
+UPPER_FINGER = (0.021, 0.026, 0.022)  # m: height, thickness, width of the finger above
+NOISE_MARGIN = 0.002  # m, the robot's pose estimate is this uncertain (one sigma)
+HAND_ABOVE_TCP = 0.031  # m: the hand's underside above the TCP
+HAND_HALF_THICKNESS = 0.0172  # m: half the hand's thickness across the fingers' plane, low down
+MIN_PINCH = 0.0065  # m: a pinched wall the 70 N squeeze leaves wider than the 4 mm the hand
+#: reads as "holding something"
+# ------------------------------------------------------------------ how a grasp is decoded
+GRASP_DEPTH = 0.025  # m below the member's palm face (at most half the member)
+TIP_BELOW_TCP = 0.0095  # m
+TIP_CLEARANCE = 0.003  # m above the object's bottom
+OPEN_CLEARANCE = 0.008  # m a side beyond the member when the fingers come down
+# ------------------------------------------------------------------ tolerances
+STOP_TOLERANCE = 0.002  # m a finger may land early on the body it pinches
+MIN_PAD_OVERLAP = 0.005  # m of pad on the pinched edge
+TOUCH = 0.0005  # m: closer than this is touching, not colliding
+CONTACT = 0.002  # m beside the face where the pad ends up touching (a curved wall bulges in)
+CAVITY_FLOOR = 0.01  # m, the floor assumed under an open or concave top
+# ------------------------------------------------------------------ what a grasp holds
+G = 9.81
+TORQUE_LIMIT = 1.8  # N m about the grasp, hanging (the object's centre below or level)
+TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
+ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
+
+
+class Solid(NamedTuple):
+    """A box or upright cylinder of material (object frame), with an optional hole in its
+    footprint: ``(cx, cy, hx, hy)``, a rectangle (or a circle of radius hx if round)."""
+
+    lo: tuple[float, float, float]
+    hi: tuple[float, float, float]
+    round: bool = False
+    hole: tuple[float, float, float, float] | None = None
+
+    def covers(self, x: float, y: float) -> bool:
+        if not _inside(x, y, self.lo, self.hi, self.round):
+            return False
+        if self.hole is None:
+            return True
+        cx, cy, hx, hy = self.hole
+        if self.round:
+            return math.hypot(x - cx, y - cy) >= hx
+        return not (abs(x - cx) < hx and abs(y - cy) < hy)
+
+
+def _inside(x: float, y: float, lo: tuple, hi: tuple, round_: bool) -> bool:
+    if round_:
+        cx, cy = (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2
+        return math.hypot(x - cx, y - cy) <= min(hi[0] - lo[0], hi[1] - lo[1]) / 2
+    return lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]
+
+
+def _flip(b: tuple[tuple[float, float, float], tuple[float, float, float]]) -> tuple:
+    """A half turn about x: y -> -y, z -> -z."""
+    lo, hi = b
+    return (lo[0], -hi[1], -hi[2]), (hi[0], -lo[1], -lo[2])
+
+
+def realised_by_body(t: ObjectType, m: Member) -> bool:
+    """An edge inside the body's box is the body's own wall or rim."""
+    return m.kind == "edge" and t.body.box.contains(m.box, tol=1e-6)
+
+
+def solids(t: ObjectType, flipped: bool = False) -> list[tuple[str, Solid]]:
+    """(member, solid) material of the object (see the module docstring); `flipped`: the
+    object turned upside down (a half turn about x)."""
+    body = t.body
+    lo, hi = body.box.min, body.box.max
+    round_ = body.geom == "cylinder"
+    face = (hi[0] - lo[0], hi[1] - lo[1])
+    top = t.parts["on"]
+    forms_top = hi[2] >= t.bbox.max[2] - 1e-9
+    out: list[tuple[str, Solid]] = []
+    size = top.size if top.size is not None else face
+    cx, cy = top.center if top.center is not None else ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
+    smaller = size[0] < face[0] - 1e-9 or size[1] < face[1] - 1e-9
+    hole = (cx, cy, size[0] / 2, size[1] / 2)
+    if forms_top and top.shape in ("open", "concave") and smaller:
+        floor = min(lo[2] + CAVITY_FLOOR, hi[2])
+        out.append((body.name, Solid(lo, (hi[0], hi[1], floor), round_)))
+        out.append((body.name, Solid(lo, hi, round_, hole)))
+    elif (
+        forms_top
+        and top.shape == "flat"
+        and (smaller or (top.height is not None and top.height < hi[2] - 1e-9))
+    ):
+        surface = top.height if top.height is not None else hi[2]
+        out.append((body.name, Solid(lo, (hi[0], hi[1], surface), round_)))
+        if smaller:
+            out.append((body.name, Solid(lo, hi, round_, hole)))
+    else:
+        out.append((body.name, Solid(lo, hi, round_)))
+    for m in t.members.values():
+        if m.kind != "body" and not realised_by_body(t, m):
+            out.append((m.name, Solid(m.box.min, m.box.max, m.geom == "cylinder")))
+    if not flipped:
+        return out
+    flip = []
+    for name, s in out:
+        slo, shi = _flip((s.lo, s.hi))
+        hole = None if s.hole is None else (s.hole[0], -s.hole[1], s.hole[2], s.hole[3])
+        flip.append((name, Solid(slo, shi, s.round, hole)))
+    return flip
+
+
+def _member_box(t: ObjectType, member: str, flipped: bool) -> Box:
+    b = t.members[member].box
+    return Box(*_flip((b.min, b.max))) if flipped else b
+
+
+class FingerRoom(NamedTuple):
+    """How far above its target each finger would stop (m), and the pad's overlap with the
+    member when it stops there."""
+
+    shortfall: tuple[float, float]
+    on_body: tuple[bool, bool]  # the stop is on the grasped edge's own body
+    overlap: tuple[float, float]
+
+
+def grip_centre(t: ObjectType, member: str, lat: int, flipped: bool) -> float:
+    """Where along the lateral axis `lat` the fingers close: the member's middle, or a loop
+    handle's outer bar (`utamp_gym.scene.handles`), as the decoder places them."""
+    box = _member_box(t, member, flipped)
+    loop = loop_axis(t, t.members[member])
+    if loop is None or loop[0] != lat:
+        return (box.min[lat] + box.max[lat]) / 2
+    sign = -loop[1] if flipped and lat == 1 else loop[1]
+    outer = box.max[lat] if sign > 0 else box.min[lat]
+    return outer - sign * BAR / 2
+
+
+def tip_height(t: ObjectType, member: str, palm: str) -> float:
+    """Where the decoder puts the fingertips (frame of the object turned palm-part up)."""
+    box = _member_box(t, member, palm == "under")
+    bottom = min(_member_box(t, m, palm == "under").min[2] for m in t.members)
+    top = box.max[2]
+    tcp = top - min(GRASP_DEPTH, (box.max[2] - box.min[2]) / 2)
+    tcp = max(tcp, bottom + TIP_CLEARANCE + TIP_BELOW_TCP)
+    return tcp - TIP_BELOW_TCP
+
+
+def finger_room(t: ObjectType, member: str, palm: str, finger: str) -> FingerRoom:
+    """Where the fingers closing along `finger`'s axis on `member` (palm on `palm`) stop."""
+    flipped = palm == "under"
+    box = _member_box(t, member, flipped)
+    ax = axis_of(finger)
+    lat = 1 - ax
+    width = box.max[ax] - box.min[ax]
+    opening = min(OPEN_CLEARANCE, max(GRIPPER_OPENING - width, 0.0) / 2)
+    tip = tip_height(t, member, palm)
+    centre = grip_centre(t, member, lat, flipped)
+    m = t.members[member]
+    own = t.body.name if realised_by_body(t, m) else member
+    material = [(n, s) for n, s in solids(t, flipped) if n != member]
+    segments = (  # (height above the tip, from, to along the closing axis, half width)
+        (0.0, CONTACT, opening + PAD_THICKNESS + NOISE_MARGIN, PAD_WIDTH / 2 + NOISE_MARGIN),
+        (LOWER_FINGER, opening, opening + UPPER_FINGER[1] + NOISE_MARGIN,
+         UPPER_FINGER[2] / 2 + NOISE_MARGIN),
+    )  # fmt: skip
+    shortfall, on_body, overlap = [], [], []
+    for sign in (-1, 1):
+        face = box.max[ax] if sign > 0 else box.min[ax]
+        stop, stop_body = tip, True
+        for above, near, far, half in segments:
+            for i in range(5):
+                d = near + (far - near) * i / 4
+                for j in range(5):
+                    p = [0.0, 0.0]
+                    p[ax] = face + sign * d
+                    p[lat] = centre - half + 2 * half * j / 4
+                    for name, s in material:
+                        if s.hi[2] - above > stop + 1e-12 and s.covers(p[0], p[1]):
+                            stop, stop_body = s.hi[2] - above, name == own
+        short = max(0.0, stop - tip)
+        shortfall.append(short)
+        on_body.append(stop_body)
+        pad_lo = tip + short
+        overlap.append(min(pad_lo + PAD_HEIGHT, box.max[2]) - max(pad_lo, box.min[2]))
+    return FingerRoom(
+        (shortfall[0], shortfall[1]), (on_body[0], on_body[1]), (overlap[0], overlap[1])
+    )
+
+
+def hand_room(t: ObjectType, member: str, palm: str, finger: str) -> bool:
+    """The hand above the fingers comes down without landing on the object: no material
+    (but the grasped member) rises above the hand's underside within its thickness across
+    the fingers' plane (an upside-down pot whose lug stands out too little)."""
+    flipped = palm == "under"
+    box = _member_box(t, member, flipped)
+    ax = axis_of(finger)
+    lat = 1 - ax
+    tcp = tip_height(t, member, palm) + TIP_BELOW_TCP
+    bottom = tcp + HAND_ABOVE_TCP + STOP_TOLERANCE
+    reach = (box.max[ax] - box.min[ax]) / 2 + OPEN_CLEARANCE + UPPER_FINGER[1]
+    cl, ca = grip_centre(t, member, lat, flipped), (box.min[ax] + box.max[ax]) / 2
+    material = [s for n, s in solids(t, flipped) if n != member and s.hi[2] > bottom]
+    for i in range(9):
+        for j in range(5):
+            p = [0.0, 0.0]
+            p[ax] = ca - reach + 2 * reach * i / 8
+            p[lat] = cl - HAND_HALF_THICKNESS + 2 * HAND_HALF_THICKNESS * j / 4
+            if any(s.covers(p[0], p[1]) for s in material):
+                return False
+    return True
+
+
+def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
+    """Both fingers reach their places beside the member, the hand comes down above them,
+    and a pinched edge is thick enough to be felt (see the module docstring)."""
+    edge_member = t.members[member].kind == "edge"
+    if edge_member and t.members[member].box.size[axis_of(finger)] < MIN_PINCH:
+        return False
+    if not hand_room(t, member, palm, finger):
+        return False
+    room = finger_room(t, member, palm, finger)
+    edge = realised_by_body(t, t.members[member])
+    for short, body, overlap in zip(room.shortfall, room.on_body, room.overlap, strict=True):
+        if short <= TOUCH:
+            continue
+        if not (edge and body and short <= STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
+            return False
+    return True
+
+
+def width_fits(width: float, member: Member) -> bool:
+    """The open hand clears a member it wraps (a body, a handle); an edge is pinched."""
+    return width <= GRIPPER_OPENING - (0.0 if member.kind == "edge" else 2 * WRAP_CLEARANCE)
+
+
+def holds(t: ObjectType, member: str, palm: str) -> bool:
+    """The pads hold the moment of the object's weight about the grasp (module docstring)."""
+    flipped = palm == "under"
+    grip = _member_box(t, member, flipped)
+    body = _member_box(t, t.body.name, flipped)
+    gx, gy = grip.center_xy
+    bx, by = body.center_xy
+    lever = math.hypot(gx - bx, gy - by)
+    grasp_z = grip.max[2] - min(GRASP_DEPTH, (grip.max[2] - grip.min[2]) / 2)
+    above = (body.min[2] + body.max[2]) / 2 > grasp_z + ABOVE
+    return t.mass * G * lever <= (TORQUE_LIMIT_ABOVE if above else TORQUE_LIMIT)
+
+
+__all__ = [
+    "GRIPPER_OPENING",
+    "FingerRoom",
+    "Solid",
+    "finger_room",
+    "fingers_fit",
+    "grip_centre",
+    "hand_room",
+    "holds",
+    "realised_by_body",
+    "solids",
+    "tip_height",
+    "width_fits",
+]
