@@ -8,9 +8,11 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
   on it) and the object can rest with that part facing up; fixed furniture supports
   on its top only;
 * small objects do not support larger ones: on a flat surface the footprint of the
-  supported object must fit the surface (on a round one, the circle); a concave
-  surface (a pan) only supports objects that span its opening; the supporter's
-  robustness bounds the load;
+  supported object must fit the surface (on a round one, the circle), with a margin
+  inside a rim (a tray's floor, a plate's well); a concave surface (a pan) only
+  supports objects whose standing surface spans its opening with a margin (a pan's
+  narrower floor would sink into another pan); the supporter's robustness bounds the
+  load;
 * the gripper approaches from above (palm on a part that can face up) and comes down
   onto the member's palm face: no sibling member (the body included) stands over it
   (a bottle's neck over its body, a bowl's floor under its rim when upside-down); its
@@ -44,6 +46,10 @@ LIFT_FRACTION = 0.5  # "significantly lighter than the payload"
 EDGE_LIFT_LIMIT = 0.5  # kg an edge (pinch) grasp can carry
 BLOCKING_GAP = 0.005  # m: a sibling member this close blocks a finger
 LOAD_CAPACITY = {"fragile": 0.5, "sturdy": 3.0, "solid": 100.0}  # kg
+#: m a side: what is set into a recessed surface clears its rim by this (the robot's pose
+#: estimates are a few millimetres off); what spans a concave opening overlaps its rim so
+PLACE_MARGIN = 0.004
+SPAN_MARGIN = 0.008
 FINGER_PAIRS = (("left", "right"), ("front", "back"))
 PALM_PARTS = ("on", "under")
 
@@ -82,12 +88,20 @@ def _fits_flat(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     surface a footprint must fit the circle: a round one by its diameter, any other by
     its diagonal."""
     footprint = np.asarray(t1.bbox.face_size(p1))
+    margin = 2 * PLACE_MARGIN if _recessed(t2, p2) else 0.0
     disc = _disc(t2, p2)
     if disc is None:
-        return bool(np.all(footprint <= np.asarray(t2.surface_size(p2)) + 1e-9))
+        return bool(np.all(footprint + margin <= np.asarray(t2.surface_size(p2)) + 1e-9))
     own = _disc(t1, p1)
     round_ = own is not None and np.allclose(t1.body.box.size[:2], t1.bbox.size[:2])
-    return (own if round_ and own is not None else float(np.hypot(*footprint))) <= disc + 1e-9
+    size = own if round_ and own is not None else float(np.hypot(*footprint))
+    return size + margin <= disc + 1e-9
+
+
+def _recessed(t: ObjectType, part: str) -> bool:
+    """A surface below the object's top (a tray's floor inside its rims, a plate's well):
+    what is set on it must clear the rim."""
+    return part == "on" and t.surface_height("on") < t.bbox.max[2] - 1e-6
 
 
 def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
@@ -96,9 +110,9 @@ def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
         return False
     if t2.parts[p2].shape == "flat":
         fits = _fits_flat(t2, p2, t1, p1)
-    else:  # a concave surface: the object spans its opening
-        footprint = np.asarray(t1.bbox.face_size(p1))
-        fits = bool(np.all(footprint >= np.asarray(t2.surface_size(p2)) - 1e-9))
+    else:  # a concave surface: the surface the object stands on spans its opening
+        footprint = np.asarray(t1.surface_size(p1))
+        fits = bool(np.all(footprint >= np.asarray(t2.surface_size(p2)) + 2 * SPAN_MARGIN - 1e-9))
     return fits and t1.mass <= LOAD_CAPACITY[t2.robustness]
 
 

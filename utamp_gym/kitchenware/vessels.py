@@ -152,7 +152,7 @@ BOWL = Family(
               materials=("ceramic",)),
         Param("wall", 4, 6, "mm", "wall thickness (melamine)", "mixing-bowl",
               materials=("plastic",)),
-        Param("wall", 1.0, 1.5, "mm", "wall thickness (rolled rim)", "mixing-bowl",
+        Param("wall", 1.1, 1.5, "mm", "wall thickness (rolled rim)", "mixing-bowl",
               materials=("steel",)),
         Param("floor", 4, 7, "mm", "floor thickness (mass only)", "dinnerware",
               materials=("ceramic", "plastic")),
