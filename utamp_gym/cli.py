@@ -29,12 +29,16 @@ if TYPE_CHECKING:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
+    from utamp_gym.suites import SUITES, all_scene_names, resolve_scene, scene_summary
 
     if args.scenes_cmd == "list":
         for suite in (args.suite,) if args.suite else SUITES:
-            for scene in suite_scenes(suite):
-                print(scene.name)
+            if args.json:  # one JSON object per line and scene
+                for record in scene_summary(suite):
+                    print(json.dumps(record))
+            else:
+                for name in all_scene_names(suite):
+                    print(name)
         return 0
     sys.stdout.write(scene_to_toml(resolve_scene(args.name)))
     return 0
@@ -467,6 +471,11 @@ def _add_scenes_parser(sub: Any) -> None:
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
     lst = ssub.add_parser("list", help="scene names, one per line")
     lst.add_argument("--suite", choices=SUITES)
+    lst.add_argument(
+        "--json",
+        action="store_true",
+        help="one JSON object per scene and line: name, n_objects, families, achievable",
+    )
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name")
     scenes.set_defaults(func=_cmd_scenes)

@@ -1,13 +1,14 @@
 """Parameter tables of kitchenware families and the seeded, rounded draw of one instance.
 
-A family declares each parameter once (`Param`): its range in the unit people measure it in
-(millimetres, grams, kg/m^3, a fraction), the range real products span where the sampled one
-is narrower (what the Panda's table and hand hold), what it is and where the numbers come
-from (a key of `sources.SOURCES`). `draw` samples an instance of a family: a pure function of
-(family, version, seed) on any machine and Python run. The generator's randomness is one
-PCG64 stream seeded from a SHA-256 of ``family/version/seed`` (no hash randomisation, no
-global state), parameters are drawn in their declared order, and lengths are rounded to
-0.1 mm and masses to 1 g before anything is built, so text output is stable.
+A family declares each parameter once (`Param`, or once per material): its range in the
+unit people measure it in (millimetres, kg/m^3, a fraction), the range real products span
+where the sampled one is narrower (what the Panda's table and hand hold), what it is and
+where the numbers come from (a key of `sources.SOURCES`). `draw` samples an instance of a
+family: a pure function of (family, version, seed) on any machine and Python run. The
+generator's randomness is one PCG64 stream seeded from a SHA-256 of ``family/version/seed``
+(no hash randomisation, no global state): one uniform number for the material, one for its
+density and one per declared parameter, in order (each scaled to its range); lengths are
+rounded to 0.1 mm and masses to 1 g before anything is built, so text output is stable.
 """
 
 from __future__ import annotations
@@ -97,15 +98,20 @@ def rounded(value: float, unit: str) -> float:
 def draw(family: Family, version: str, seed: int) -> Instance:
     """Sample one instance of `family` (see the module docstring)."""
     rng = rng_for("utamp-kitchenware", family.name, version, seed)
-    names = [m for m, _ in family.materials]
-    weights = np.asarray([w for _, w in family.materials], dtype=float)
-    mat = names[int(rng.choice(len(names), p=weights / weights.sum()))]
+    u = rng.random(2 + len(family.params)).tolist()  # material, density, one per parameter
+    total = sum(w for _, w in family.materials)
+    mat, edge = family.materials[-1][0], 0.0
+    for name, weight in family.materials:
+        edge += weight / total
+        if u[0] < edge:
+            mat = name
+            break
     lo, hi = material(mat).density_range
-    density = float(round(rng.uniform(lo, hi)))
+    density = float(round(lo + (hi - lo) * u[1]))
     values: dict[str, float] = {}
-    for p in family.params:
+    for p, x in zip(family.params, u[2:], strict=True):
         if p.applies(mat):
-            values[p.name] = rounded(float(rng.uniform(p.lo, p.hi)), p.unit)
+            values[p.name] = rounded(p.lo + (p.hi - p.lo) * x, p.unit)
     return Instance(family.name, version, seed, mat, density, values)
 
 

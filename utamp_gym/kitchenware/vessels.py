@@ -262,7 +262,7 @@ def _box(i: Instance) -> Built:
 
 
 BOX = Family(
-    name="box",
+    name="food-box",
     summary="folding-carton boxes of tea, crackers or pasta",
     doc="A closed cardboard box, grasped across its width from above.",
     materials=(("cardboard", 1.0),),
