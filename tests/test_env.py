@@ -46,7 +46,7 @@ def masked_rollout(env: gym.Env, seed: int, steps: int) -> list[tuple[Any, ...]]
 
 
 def test_registry_has_one_file_per_id() -> None:
-    assert set(ENV_IDS) == {"UTampKitchen-v0", "UTampKitchenSlide-v0"}
+    assert set(ENV_IDS) == {"UTampKitchen-v0", "UTampKitchenSlide-v0", "UTampKitchenProcedural-v0"}
     for d in env_definitions():
         assert d.source.stem == d.id and d.max_episode_steps > 0
     assert register_envs() == ENV_IDS  # idempotent

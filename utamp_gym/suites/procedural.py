@@ -5,7 +5,8 @@ an instance of a kitchenware family, `utamp_gym.kitchenware`), their orientation
 stacks and table layout are drawn from one generator seeded by a SHA-256 of the split and the
 seed. The goal is the paper's: everything in one tower on the scene's base (``goal_base =
 "base"``). A split is a fixed list of scene seeds kept in ``assets/procedural/procedural-v1.toml``
-with the SHA-256 of its scene files (`split_digest`); scene ``procedural-v1/<split>/NNNN`` is
+with the SHA-256 of its scene files (`split_digest`, and of every 20th scene for quick
+checks); scene ``procedural-v1/<split>/NNNN`` is
 the NNNN-th seed of the list. The lists were chosen by `select_seeds` (run
 ``python -m utamp_gym.suites.procedural select``): the first seeds whose goal the rules call
 achievable, plus a share (`UNACHIEVABLE_SHARE`) of seeds whose goal they call unachievable,
@@ -422,13 +423,22 @@ def split_names(split: str) -> list[str]:
     return [f"{SUITE}/{split}/{i:04d}" for i in range(len(split_seeds(split)))]
 
 
-def split_digest(split: str) -> str:
-    """SHA-256 over the split's scene files (TOML, in order, each followed by a NUL)."""
+def split_digest(split: str, step: int = 1) -> str:
+    """SHA-256 over the split's scene files (TOML, in order, each followed by a NUL); with
+    `step` > 1 over every step-th scene only (the quick check kept as ``sample_sha256``)."""
     h = hashlib.sha256()
-    for i in range(len(split_seeds(split))):
+    for i in range(0, len(split_seeds(split)), step):
         h.update(scene_to_toml(split_scene(split, i).scene).encode())
         h.update(b"\0")
     return h.hexdigest()
+
+
+SAMPLE_STEP = 20  # `sample_sha256` covers scenes 0, 20, 40, ...
+
+
+def sample_hash(split: str) -> str:
+    """The SHA-256 of every `SAMPLE_STEP`-th scene file of a split, kept with its seeds."""
+    return str(_seed_table()[_check_split(split)]["sample_sha256"])
 
 
 def parse_name(name: str) -> tuple[str, int] | None:
@@ -488,13 +498,23 @@ def _write_seed_file() -> None:
             "unachievable": chosen["unachievable"],
         }
         print(split, {k: v for k, v in chosen.items() if k != "seeds"}, file=sys.stderr)
-    path = asset_path(*SEEDS_FILE)
-    path.write_text(_HEADER + tomli_w.dumps(out))
+    asset_path(*SEEDS_FILE[:-1]).joinpath(SEEDS_FILE[-1]).write_text(_HEADER + tomli_w.dumps(out))
+    _write_digests()
+
+
+def _write_digests() -> None:
+    import tomli_w
+
     _seed_table.cache_clear()
     split_scene.cache_clear()
+    out = dict(_seed_table())
     for split in SPLITS:
-        out[split]["sha256"] = split_digest(split)
-    path.write_text(_HEADER + tomli_w.dumps(out))
+        out[split] = {
+            **out[split],
+            "sha256": split_digest(split),
+            "sample_sha256": split_digest(split, SAMPLE_STEP),
+        }
+    asset_path(*SEEDS_FILE).write_text(_HEADER + tomli_w.dumps(out))
     _seed_table.cache_clear()
 
 
@@ -511,11 +531,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args == ["select"]:
         _write_seed_file()
         return 0
+    if args == ["digest"]:
+        _write_digests()
+        return 0
     if args == ["check"]:
         bad = [s for s in SPLITS if split_digest(s) != split_hash(s)]
         print("ok" if not bad else f"differ: {', '.join(bad)}")
         return 1 if bad else 0
-    print("usage: python -m utamp_gym.suites.procedural select|check", file=sys.stderr)
+    print("usage: python -m utamp_gym.suites.procedural select|digest|check", file=sys.stderr)
     return 2
 
 
