@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from outcome_model import _physics_class, consistent  # noqa: E402
+from outcome_model import _physics_class, consistent
 
-from utamp_gym.suites import procedural  # noqa: E402
+from utamp_gym.suites import procedural
 
 
 @dataclass(frozen=True)

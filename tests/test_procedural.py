@@ -24,7 +24,7 @@ SPLITS = pv.SPLITS
 
 def test_splits_are_versioned_suites_of_the_required_sizes() -> None:
     assert set(PROCEDURAL_SUITES) <= set(SUITES)
-    assert PROCEDURAL_SUITES == tuple(f"procedural-v1/{s}" for s in SPLITS)
+    assert tuple(f"procedural-v1/{s}" for s in SPLITS) == PROCEDURAL_SUITES
     table = pv._seed_table()
     for split in SPLITS:
         seeds = pv.split_seeds(split)
