@@ -107,9 +107,7 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                         action=env.action_strings[i],
                         kind=kind,
                         family=families.get(obj, "?"),
-                        support_family=families.get(target, "")
-                        if kind == "place-support"
-                        else "",
+                        support_family=families.get(target, "") if kind == "place-support" else "",
                         allowed=reason is None,
                         rules_reason=reason or "",
                         physics=bool(macro.success),

@@ -99,9 +99,10 @@ def test_scenes_list_json(capsys: pytest.CaptureFixture[str]) -> None:
         assert set(r) == {"name", "n_objects", "families", "achievable"}
         assert len(r["families"]) == r["n_objects"] and isinstance(r["achievable"], bool)
         assert set(r["families"]) & set(pv.HELD_OUT)  # a family never seen in train
-    assert sum(not r["achievable"] for r in records) == pv._seed_table()["test-families"][
-        "unachievable"
-    ]
+    assert (
+        sum(not r["achievable"] for r in records)
+        == pv._seed_table()["test-families"]["unachievable"]
+    )
     assert main(["scenes", "list", "--suite", "procedural-v1/train"]) == 0
     assert capsys.readouterr().out.splitlines() == all_scene_names("procedural-v1/train")
 

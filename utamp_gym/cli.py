@@ -29,10 +29,10 @@ if TYPE_CHECKING:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import SUITES, all_scene_names, resolve_scene, scene_summary
+    from utamp_gym.suites import ALL_SUITES, all_scene_names, resolve_scene, scene_summary
 
     if args.scenes_cmd == "list":
-        for suite in (args.suite,) if args.suite else SUITES:
+        for suite in (args.suite,) if args.suite else ALL_SUITES:
             if args.json:  # one JSON object per line and scene
                 for record in scene_summary(suite):
                     print(json.dumps(record))
@@ -179,7 +179,7 @@ def _add_eval_parser(sub: Any) -> None:
     """
     from utamp_gym.distributed import EXECUTORS
     from utamp_gym.planning.methods import DEFAULT_NOISE
-    from utamp_gym.suites import SUITES
+    from utamp_gym.suites import ALL_SUITES as SUITES
 
     ev = sub.add_parser(
         "eval",
@@ -470,7 +470,7 @@ def _help_line(command: str) -> str:
 
 
 def _add_scenes_parser(sub: Any) -> None:
-    from utamp_gym.suites import SUITES
+    from utamp_gym.suites import ALL_SUITES as SUITES
 
     scenes = sub.add_parser("scenes", help=_help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)

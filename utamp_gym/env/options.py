@@ -17,7 +17,13 @@ from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
-from utamp_gym.suites import PROCEDURAL, PROCEDURAL_SUITES, SUITES, resolve_scene, suite_scenes
+from utamp_gym.suites import (
+    ALL_SUITES,
+    PROCEDURAL,
+    PROCEDURAL_SUITES,
+    resolve_scene,
+    suite_scenes,
+)
 from utamp_gym.symbolic.problem import DOMAINS
 
 GROUNDINGS = ("physics", "symbolic")
@@ -100,7 +106,7 @@ class EnvOptions:
             object.__setattr__(self, "split", short)
             object.__setattr__(self, "suite", suite)
         if self.suite is not None:
-            _choice("suite", self.suite, SUITES)
+            _choice("suite", self.suite, ALL_SUITES)
         if self.suite is None and self.scene is None:
             raise ValueError("an env needs a suite or a scene")
         names = self.objects

@@ -25,7 +25,10 @@ PROCEDURAL = "procedural-v1"
 PROCEDURAL_SUITES = tuple(
     f"{PROCEDURAL}/{s}" for s in ("train", "test-instances", "test-families", "test-count")
 )
-SUITES = (*_enumerated.SUITES, *PROCEDURAL_SUITES)
+#: the enumerated suites (`suite_stats` describes them)
+SUITES = _enumerated.SUITES
+#: every suite a sweep, an env or ``utamp scenes list`` accepts: the enumerated and the splits
+ALL_SUITES = (*SUITES, *PROCEDURAL_SUITES)
 
 
 def _split(suite: str) -> str:
@@ -33,8 +36,8 @@ def _split(suite: str) -> str:
 
 
 def _check_suite(suite: str) -> None:
-    if suite not in SUITES:
-        raise UnknownNameError("suite", suite, SUITES)
+    if suite not in ALL_SUITES:
+        raise UnknownNameError("suite", suite, ALL_SUITES)
 
 
 def suite_scenes(suite: str) -> tuple[Scene, ...]:
@@ -59,7 +62,7 @@ def universe_scenes(suite: str) -> tuple[Scene, ...]:
 
 def all_scene_names(suite: str | None = None) -> list[str]:
     """Names of the scenes of one suite (default: all suites), without building them."""
-    suites = SUITES if suite is None else (suite,)
+    suites = ALL_SUITES if suite is None else (suite,)
     for name in suites:
         _check_suite(name)
     out: list[str] = []
@@ -153,7 +156,7 @@ def resolve_scene(ref: str) -> Scene:
 def suite_of(ref: str) -> str:
     """The suite a suite scene's name belongs to (``procedural-v1/train/0042`` ->
     ``procedural-v1/train``), else ``""``."""
-    for s in SUITES:
+    for s in ALL_SUITES:
         if ref.startswith(f"{s}/"):
             return s
     return ""
@@ -164,6 +167,7 @@ def _valid_names() -> list[str]:
 
 
 __all__ = [
+    "ALL_SUITES",
     "PROCEDURAL_SUITES",
     "SUITES",
     "all_scene_names",
