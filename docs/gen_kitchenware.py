@@ -8,7 +8,7 @@ For each family (`utamp_gym.kitchenware.FAMILIES`) it renders a grid of sampled 
 also writes ``docs/results/kitchenware_families.md``: per family its materials and each
 parameter's sampled range (and the wider range real products span, where the table or the
 hand narrowed it) with its source, all read from the code's parameter tables, and the
-sources themselves.
+sources themselves; and ``docs/results/procedural_splits.md``, the splits' composition.
 """
 
 from __future__ import annotations
@@ -100,6 +100,44 @@ def table() -> str:
     return "\n".join(out) + "\n"
 
 
+def splits_table() -> str:
+    """Per split: scenes, the achievable share, scenes per object count, objects per family."""
+    from collections import Counter
+
+    from utamp_gym.suites import PROCEDURAL_SUITES, scene_summary
+
+    rows = {suite: scene_summary(suite) for suite in PROCEDURAL_SUITES}
+    sizes = sorted({r["n_objects"] for recs in rows.values() for r in recs})
+    families = sorted({f for recs in rows.values() for r in recs for f in r["families"]})
+    out = [
+        "<!-- written by docs/gen_kitchenware.py from utamp_gym.suites.procedural -->",
+        "",
+        "| split | scenes | goal unachievable (rules) | "
+        + " | ".join(f"n={n}" for n in sizes)
+        + " |",
+        "|---|---|---|" + "---|" * len(sizes),
+    ]
+    for suite, recs in rows.items():
+        bad = sum(not r["achievable"] for r in recs)
+        by_n = Counter(r["n_objects"] for r in recs)
+        out.append(
+            f"| `{suite}` | {len(recs)} | {bad} ({bad / len(recs):.0%}) | "
+            + " | ".join(str(by_n.get(n, 0)) for n in sizes)
+            + " |"
+        )
+    out += [
+        "",
+        "Objects per family (the base included):",
+        "",
+        "| family | " + " | ".join(s.split("/")[1] for s in rows) + " |",
+        "|---|" + "---|" * len(rows),
+    ]
+    for fam in families:
+        counts = [sum(r["families"].count(fam) for r in recs) for recs in rows.values()]
+        out.append(f"| {fam} | " + " | ".join(str(c) if c else "–" for c in counts) + " |")
+    return "\n".join(out) + "\n"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=8)
@@ -113,6 +151,7 @@ def main() -> None:
         iio.imwrite(out / "images" / "kitchenware" / f"{name}.png", picture)
         print(f"{name}: {args.instances} instances", flush=True)
     (out / "results" / "kitchenware_families.md").write_text(table())
+    (out / "results" / "procedural_splits.md").write_text(splits_table())
 
 
 if __name__ == "__main__":
