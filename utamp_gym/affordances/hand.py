@@ -8,8 +8,9 @@ fingertips `TIP_BELOW_TCP` below the TCP and at least `TIP_CLEARANCE` above the 
 bottom). Nothing here knows an object, a type or a family by name.
 
 **The object's material** (`solids`): the body member is a box or an upright cylinder; an
-open or concave top leaves a cavity inside its usable surface down to a floor taken
-`CAVITY_FLOOR` thick (the rules cannot see a floor); a flat top below the body's top or
+open or concave top leaves a cavity inside its usable surface down to its floor
+(`utamp_gym.scene.shapes`: the floor the simulator builds, under a flared wall as wide as
+the `under` part); a flat top below the body's top or
 smaller than its face leaves a well above its surface height; every other member is solid
 (edges inside the body are the body's own walls).
 
@@ -25,6 +26,9 @@ let a finger land up to `STOP_TOLERANCE` early on the body (the approach guard s
 handleless board lying flat has no room beside its edges, the fingers would meet the board
 or the table.
 
+**What stands** (`stands_on`): the mass is spread evenly over the material, as the
+simulator spreads it, and its centre must lie over the standing surface.
+
 **What a grasp holds** (`holds`): the object's weight hangs at a lever from the grasp point
 (the member's middle to the body's centre, horizontally); its moment turns the object between
 the pads unless the pads' friction holds it, up to `TORQUE_LIMIT`, and only `TORQUE_LIMIT_ABOVE`
@@ -39,7 +43,7 @@ from typing import NamedTuple
 
 from utamp_gym.scene.catalogue import Member, ObjectType
 from utamp_gym.scene.geometry import Box, axis_of
-from utamp_gym.scene.handles import BAR, loop_axis
+from utamp_gym.scene.shapes import BAR, floor_thickness, loop_axis
 
 # ------------------------------------------------------------------ the Franka Hand
 GRIPPER_OPENING = 0.08  # m, fully open
@@ -52,7 +56,7 @@ UPPER_FINGER = (0.021, 0.026, 0.022)  # m: height, thickness, width of the finge
 NOISE_MARGIN = 0.002  # m, the robot's pose estimate is this uncertain (one sigma)
 HAND_ABOVE_TCP = 0.031  # m: the hand's underside above the TCP
 HAND_HALF_THICKNESS = 0.0172  # m: half the hand's thickness across the fingers' plane, low down
-MIN_PINCH = 0.0065  # m: a pinched wall the 70 N squeeze leaves wider than the 4 mm the hand
+MIN_PINCH = 0.007  # m: a pinched wall the 70 N squeeze leaves wider than the 4 mm the hand
 #: reads as "holding something"
 # ------------------------------------------------------------------ how a grasp is decoded
 GRASP_DEPTH = 0.025  # m below the member's palm face (at most half the member)
@@ -64,12 +68,12 @@ STOP_TOLERANCE = 0.002  # m a finger may land early on the body it pinches
 MIN_PAD_OVERLAP = 0.005  # m of pad on the pinched edge
 TOUCH = 0.0005  # m: closer than this is touching, not colliding
 CONTACT = 0.002  # m beside the face where the pad ends up touching (a curved wall bulges in)
-CAVITY_FLOOR = 0.01  # m, the floor assumed under an open or concave top
 # ------------------------------------------------------------------ what a grasp holds
 G = 9.81
 TORQUE_LIMIT = 1.8  # N m about the grasp, hanging (the object's centre below or level)
 TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
 ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
+STAND_MARGIN = 0.01  # m: the centre of mass stays this far inside the standing surface
 
 
 class Solid(NamedTuple):
@@ -125,8 +129,19 @@ def solids(t: ObjectType, flipped: bool = False) -> list[tuple[str, Solid]]:
     smaller = size[0] < face[0] - 1e-9 or size[1] < face[1] - 1e-9
     hole = (cx, cy, size[0] / 2, size[1] / 2)
     if forms_top and top.shape in ("open", "concave") and smaller:
-        floor = min(lo[2] + CAVITY_FLOOR, hi[2])
-        out.append((body.name, Solid(lo, (hi[0], hi[1], floor), round_)))
+        floor = lo[2] + floor_thickness(top.shape == "concave", hi[2] - lo[2])
+        base = t.parts["under"].size if lo[2] <= t.bbox.min[2] + 1e-9 else None
+        if round_ and base is not None and min(base) < min(face) - 1e-9:  # a flared wall
+            r = min(base) / 2
+            mid = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
+            out.append(
+                (
+                    body.name,
+                    Solid((mid[0] - r, mid[1] - r, lo[2]), (mid[0] + r, mid[1] + r, floor), True),
+                )
+            )
+        else:
+            out.append((body.name, Solid(lo, (hi[0], hi[1], floor), round_)))
         out.append((body.name, Solid(lo, hi, round_, hole)))
     elif (
         forms_top
@@ -152,6 +167,39 @@ def solids(t: ObjectType, flipped: bool = False) -> list[tuple[str, Solid]]:
     return flip
 
 
+def _area(s: Solid) -> tuple[float, float, float]:
+    """(area, x moment, y moment) of a solid's footprint, its hole taken out."""
+    w, d = s.hi[0] - s.lo[0], s.hi[1] - s.lo[1]
+    cx, cy = (s.lo[0] + s.hi[0]) / 2, (s.lo[1] + s.hi[1]) / 2
+    area = math.pi * min(w, d) ** 2 / 4 if s.round else w * d
+    mx, my = area * cx, area * cy
+    if s.hole is not None:
+        hx, hy = s.hole[2], s.hole[3]
+        hole = math.pi * hx * hx if s.round else 4 * hx * hy
+        area, mx, my = area - hole, mx - hole * s.hole[0], my - hole * s.hole[1]
+    return area, mx, my
+
+
+def centre_of_mass(t: ObjectType) -> tuple[float, float]:
+    """xy of the object's centre of mass with its mass spread evenly over its material
+    (`solids`), as the simulator spreads it over the primitives it builds."""
+    total = mx = my = 0.0
+    for _, s in solids(t):
+        area, ax, ay = _area(s)
+        h = s.hi[2] - s.lo[2]
+        total, mx, my = total + area * h, mx + ax * h, my + ay * h
+    return (mx / total, my / total) if total > 0 else t.bbox.center_xy
+
+
+def stands_on(t: ObjectType, part: str) -> bool:
+    """The object's centre of mass lies over its standing surface `part` (``under`` or
+    ``on``), `STAND_MARGIN` inside its edge: a pan whose handle outweighs its shallow body
+    tips over onto it."""
+    x, y = centre_of_mass(t)
+    (w, d), (cx, cy) = t.surface_size(part), t.surface_center(part)
+    return abs(x - cx) <= w / 2 - STAND_MARGIN and abs(y - cy) <= d / 2 - STAND_MARGIN
+
+
 def _member_box(t: ObjectType, member: str, flipped: bool) -> Box:
     b = t.members[member].box
     return Box(*_flip((b.min, b.max))) if flipped else b
@@ -168,7 +216,7 @@ class FingerRoom(NamedTuple):
 
 def grip_centre(t: ObjectType, member: str, lat: int, flipped: bool) -> float:
     """Where along the lateral axis `lat` the fingers close: the member's middle, or a loop
-    handle's outer bar (`utamp_gym.scene.handles`), as the decoder places them."""
+    handle's outer bar (`utamp_gym.scene.shapes`), as the decoder places them."""
     box = _member_box(t, member, flipped)
     loop = loop_axis(t, t.members[member])
     if loop is None or loop[0] != lat:
@@ -257,7 +305,7 @@ def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     """Both fingers reach their places beside the member, the hand comes down above them,
     and a pinched edge is thick enough to be felt (see the module docstring)."""
     edge_member = t.members[member].kind == "edge"
-    if edge_member and t.members[member].box.size[axis_of(finger)] < MIN_PINCH:
+    if edge_member and t.members[member].box.size[axis_of(finger)] < MIN_PINCH - 1e-9:
         return False
     if not hand_room(t, member, palm, finger):
         return False
@@ -293,6 +341,7 @@ __all__ = [
     "GRIPPER_OPENING",
     "FingerRoom",
     "Solid",
+    "centre_of_mass",
     "finger_room",
     "fingers_fit",
     "grip_centre",
@@ -300,6 +349,7 @@ __all__ = [
     "holds",
     "realised_by_body",
     "solids",
+    "stands_on",
     "tip_height",
     "width_fits",
 ]

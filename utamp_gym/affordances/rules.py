@@ -3,7 +3,8 @@
 The rules are the paper's assumptions made explicit (Sections IV and VI):
 
 * a part an object can rest on must be flat (or an open rim) and not a food surface
-  (food surfaces are never put face-down);
+  (food surfaces are never put face-down), and the object's centre of mass must lie over
+  it (a pan whose heavy handle outweighs its shallow body tips onto the handle);
 * a part supports others only if it is flat (or a concave dish spanned by the object
   on it) and the object can rest with that part facing up; fixed furniture supports
   on its top only;
@@ -36,7 +37,7 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
-from utamp_gym.affordances.hand import fingers_fit, holds, width_fits
+from utamp_gym.affordances.hand import fingers_fit, holds, stands_on, width_fits
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
 
@@ -60,7 +61,7 @@ def can_rest_on(t: ObjectType, part: str) -> bool:
 
 
 def is_supportable(t: ObjectType, part: str) -> bool:
-    return t.movable and can_rest_on(t, part)
+    return t.movable and can_rest_on(t, part) and stands_on(t, part)
 
 
 def is_supportive(t: ObjectType, part: str) -> bool:

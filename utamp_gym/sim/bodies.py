@@ -35,15 +35,19 @@ import numpy as np
 
 from utamp_gym.errors import SimulationError
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
-from utamp_gym.scene.handles import BAR, LOOP_OPENING, touch_axis
 from utamp_gym.scene.materials import DEFAULT, MATERIALS, hex_rgba, material
 from utamp_gym.scene.model import Pose, Scene
+from utamp_gym.scene.shapes import (
+    BAR,
+    FLOOR,
+    LOOP_OPENING,
+    RIM_WALL,
+    WALL,
+    floor_thickness,
+    touch_axis,
+)
 from utamp_gym.sim.prims import Prim, box, box_walls, cap, ring, slab
 
-WALL = 0.004  # m, default wall thickness of hollow (open-top) bodies
-FLOOR = 0.008  # m, floor thickness of hollow bodies
-RIM_WALL = 0.003  # m, default flared rim thickness of concave bodies
-CONCAVE_FLOOR = 0.005  # m, floor thickness of concave bodies
 PLATE_RIM = 0.003  # m, rim above the plate when the part declares no surface height
 FOOT = 0.008  # m, height of a foot (an `under` part smaller than the body's face)
 CAP_FRACTION = 0.4  # a round head is at most this fraction of the body height
@@ -103,7 +107,7 @@ def _hollow(t: ObjectType, top: PartAttrs, bottom: PartAttrs) -> list[Prim]:
     xy, half = (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2
     concave = top.shape == "concave"
     default_wall = RIM_WALL if concave else WALL
-    z = lo[2] + min(CONCAVE_FLOOR if concave else FLOOR, (hi[2] - lo[2]) / 4)
+    z = lo[2] + floor_thickness(concave, hi[2] - lo[2])
     offset, usable = _inner(t, top, half, default_wall, round_)
     floor = half if bottom.size is None else np.minimum(np.asarray(bottom.size) / 2, half)
     if round_:

@@ -1,9 +1,12 @@
-"""How a handle member's box is realised: one reading shared by the simulator and the rules.
+"""How attributes are realised as shapes: one reading shared by the simulator and the rules.
 
-A handle beside the body (touching it along a horizontal axis) that leaves a finger-sized
-opening is a loop of bars, gripped at its outer bar (`sim.bodies` builds it so, `sim.decode`
-puts the fingers there and `affordances.hand` reasons about the same place); a handle apart
-from the body is a bar on posts; anything else is solid.
+`sim.bodies` builds bodies by these conventions and `affordances.hand` reasons about the same
+material: a hollow body (an open or concave top) has a floor `FLOOR` thick (`CONCAVE_FLOOR`
+under a concave top; at most a quarter of its height) under walls as thick as the rim its
+top's `size` leaves (`WALL`, `RIM_WALL` by default); a handle beside the body (touching it
+along a horizontal axis) that leaves a finger-sized opening is a loop of `BAR`-thick bars,
+gripped at its outer bar (`sim.decode` puts the fingers there); a handle apart from the body
+is a bar on posts; anything else is solid.
 """
 
 from __future__ import annotations
@@ -11,8 +14,17 @@ from __future__ import annotations
 from utamp_gym.scene.catalogue import Member, ObjectType
 from utamp_gym.scene.geometry import Box
 
+WALL = 0.004  # m, default wall thickness of hollow (open-top) bodies
+FLOOR = 0.008  # m, floor thickness of hollow bodies
+RIM_WALL = 0.003  # m, default flared rim thickness of concave bodies
+CONCAVE_FLOOR = 0.005  # m, floor thickness of concave bodies
 BAR = 0.008  # m, bar thickness of a loop handle
 LOOP_OPENING = (0.015, 0.03)  # m, smallest (outward, vertical) opening of a loop handle
+
+
+def floor_thickness(concave: bool, height: float) -> float:
+    """The floor of a hollow body of `height` (an open top's, or a concave top's)."""
+    return min(CONCAVE_FLOOR if concave else FLOOR, height / 4)
 
 
 def touch_axis(a: Box, b: Box, tol: float = 1e-6) -> tuple[int, int] | None:
@@ -46,4 +58,14 @@ def loop_axis(t: ObjectType, m: Member) -> tuple[int, int] | None:
     return None
 
 
-__all__ = ["BAR", "LOOP_OPENING", "loop_axis", "touch_axis"]
+__all__ = [
+    "BAR",
+    "CONCAVE_FLOOR",
+    "FLOOR",
+    "LOOP_OPENING",
+    "RIM_WALL",
+    "WALL",
+    "floor_thickness",
+    "loop_axis",
+    "touch_axis",
+]
