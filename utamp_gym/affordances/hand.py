@@ -86,21 +86,27 @@ class Solid(NamedTuple):
     hole: tuple[float, float, float, float] | None = None
 
     def covers(self, x: float, y: float) -> bool:
-        if not _inside(x, y, self.lo, self.hi, self.round):
+        return self.overlaps((x, x), (y, y))
+
+    def overlaps(self, xs: tuple[float, float], ys: tuple[float, float]) -> bool:
+        """True if the footprint meets the rectangle `xs` x `ys` (closed; exact)."""
+        cx, cy = (self.lo[0] + self.hi[0]) / 2, (self.lo[1] + self.hi[1]) / 2
+        if self.round:
+            r = min(self.hi[0] - self.lo[0], self.hi[1] - self.lo[1]) / 2
+            dx = max(xs[0] - cx, 0.0, cx - xs[1])
+            dy = max(ys[0] - cy, 0.0, cy - ys[1])
+            if dx * dx + dy * dy > r * r:
+                return False
+        elif xs[0] > self.hi[0] or xs[1] < self.lo[0] or ys[0] > self.hi[1] or ys[1] < self.lo[1]:
             return False
         if self.hole is None:
             return True
-        cx, cy, hx, hy = self.hole
+        hx0, hy0, hr, hh = self.hole  # the rectangle lies wholly in the hole: no material
         if self.round:
-            return math.hypot(x - cx, y - cy) >= hx
-        return not (abs(x - cx) < hx and abs(y - cy) < hy)
-
-
-def _inside(x: float, y: float, lo: tuple, hi: tuple, round_: bool) -> bool:
-    if round_:
-        cx, cy = (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2
-        return math.hypot(x - cx, y - cy) <= min(hi[0] - lo[0], hi[1] - lo[1]) / 2
-    return lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]
+            far = max(abs(x - hx0) for x in xs) ** 2 + max(abs(y - hy0) for y in ys) ** 2
+            return far >= hr * hr
+        inside = all(abs(x - hx0) < hr for x in xs) and all(abs(y - hy0) < hh for y in ys)
+        return not inside
 
 
 def _flip(b: tuple[tuple[float, float, float], tuple[float, float, float]]) -> tuple:
@@ -259,15 +265,13 @@ def finger_room(t: ObjectType, member: str, palm: str, finger: str) -> FingerRoo
         face = box.max[ax] if sign > 0 else box.min[ax]
         stop, stop_body = tip, True
         for above, near, far, half in segments:
-            for i in range(5):
-                d = near + (far - near) * i / 4
-                for j in range(5):
-                    p = [0.0, 0.0]
-                    p[ax] = face + sign * d
-                    p[lat] = centre - half + 2 * half * j / 4
-                    for name, s in material:
-                        if s.hi[2] - above > stop + 1e-12 and s.covers(p[0], p[1]):
-                            stop, stop_body = s.hi[2] - above, name == own
+            closing = sorted((face + sign * near, face + sign * far))
+            rect = [(0.0, 0.0), (0.0, 0.0)]
+            rect[ax] = (closing[0], closing[1])
+            rect[lat] = (centre - half, centre + half)
+            for name, s in material:
+                if s.hi[2] - above > stop + 1e-12 and s.overlaps(rect[0], rect[1]):
+                    stop, stop_body = s.hi[2] - above, name == own
         short = max(0.0, stop - tip)
         shortfall.append(short)
         on_body.append(stop_body)
@@ -291,14 +295,10 @@ def hand_room(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     reach = (box.max[ax] - box.min[ax]) / 2 + OPEN_CLEARANCE + UPPER_FINGER[1]
     cl, ca = grip_centre(t, member, lat, flipped), (box.min[ax] + box.max[ax]) / 2
     material = [s for n, s in solids(t, flipped) if n != member and s.hi[2] > bottom]
-    for i in range(9):
-        for j in range(5):
-            p = [0.0, 0.0]
-            p[ax] = ca - reach + 2 * reach * i / 8
-            p[lat] = cl - HAND_HALF_THICKNESS + 2 * HAND_HALF_THICKNESS * j / 4
-            if any(s.covers(p[0], p[1]) for s in material):
-                return False
-    return True
+    rect = [(0.0, 0.0), (0.0, 0.0)]
+    rect[ax] = (ca - reach, ca + reach)
+    rect[lat] = (cl - HAND_HALF_THICKNESS, cl + HAND_HALF_THICKNESS)
+    return not any(s.overlaps(rect[0], rect[1]) for s in material)
 
 
 def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
