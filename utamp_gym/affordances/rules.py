@@ -31,9 +31,8 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
-
-import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
@@ -80,22 +79,31 @@ def _disc(t: ObjectType, part: str) -> float | None:
     if t.body.geom != "cylinder" or not forms:
         return None
     size = t.parts[part].size
-    return float(min(*body.size[:2], *(size if size is not None else ())))
+    extent = (body.max[0] - body.min[0], body.max[1] - body.min[1])
+    return float(min(*extent, *(size if size is not None else ())))
+
+
+def _close(a: float, b: float) -> bool:
+    return abs(a - b) <= 1e-8 + 1e-5 * abs(b)  # numpy's isclose
 
 
 def _fits_flat(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Does t1's footprint (resting on p1) fit the flat surface p2 of t2? Objects keep
     their yaw (all x-aligned), so a rectangle is compared axis by axis; on a round
     surface a footprint must fit the circle: a round one by its diameter, any other by
-    its diagonal."""
-    footprint = np.asarray(t1.bbox.face_size(p1))
+    its diagonal. (Plain floats: the scene generator asks this many thousand times.)"""
+    footprint = t1.bbox.face_size(p1)
     margin = 2 * PLACE_MARGIN if _recessed(t2, p2) else 0.0
     disc = _disc(t2, p2)
     if disc is None:
-        return bool(np.all(footprint + margin <= np.asarray(t2.surface_size(p2)) + 1e-9))
+        surface = t2.surface_size(p2)
+        return all(f + margin <= s + 1e-9 for f, s in zip(footprint, surface, strict=True))
     own = _disc(t1, p1)
-    round_ = own is not None and np.allclose(t1.body.box.size[:2], t1.bbox.size[:2])
-    size = own if round_ and own is not None else float(np.hypot(*footprint))
+    body, bbox = t1.body.box, t1.bbox
+    round_ = own is not None and all(
+        _close(body.max[i] - body.min[i], bbox.max[i] - bbox.min[i]) for i in (0, 1)
+    )
+    size = own if round_ and own is not None else math.hypot(*footprint)
     return size + margin <= disc + 1e-9
 
 
@@ -107,14 +115,16 @@ def _recessed(t: ObjectType, part: str) -> bool:
 
 def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Can part p2 of t2 stably support t1 resting on its part p1?"""
-    if t1.name == t2.name or not (is_supportive(t2, p2) and is_supportable(t1, p1)):
+    if t1.name == t2.name or t1.mass > LOAD_CAPACITY[t2.robustness]:
+        return False
+    if not (is_supportive(t2, p2) and t1.movable and can_rest_on(t1, p1)):
         return False
     if t2.parts[p2].shape == "flat":
         fits = _fits_flat(t2, p2, t1, p1)
     else:  # a concave surface: the surface the object stands on spans its opening
-        footprint = np.asarray(t1.surface_size(p1))
-        fits = bool(np.all(footprint >= np.asarray(t2.surface_size(p2)) + 2 * SPAN_MARGIN - 1e-9))
-    return fits and t1.mass <= LOAD_CAPACITY[t2.robustness]
+        span = zip(t1.surface_size(p1), t2.surface_size(p2), strict=True)
+        fits = all(f >= s + 2 * SPAN_MARGIN - 1e-9 for f, s in span)
+    return fits and stands_on(t1, p1)  # t1 is supportable on p1 (the costliest test last)
 
 
 def _blocked(t: ObjectType, member: str, side: str) -> bool:

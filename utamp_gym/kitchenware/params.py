@@ -5,8 +5,8 @@ unit people measure it in (millimetres, kg/m^3, a fraction), the range real prod
 where the sampled one is narrower (what the Panda's table and hand hold), what it is and
 where the numbers come from (a key of `sources.SOURCES`). `draw` samples an instance of a
 family: a pure function of (family, version, seed) on any machine and Python run. The
-generator's randomness is one PCG64 stream seeded from a SHA-256 of ``family/version/seed``
-(no hash randomisation, no global state): one uniform number for the material, one for its
+generator's randomness is a SHAKE-256 digest of ``family/version/seed`` (no hash
+randomisation, no global state), read as uniform numbers: one for the material, one for its
 density and one per declared parameter, in order (each scaled to its range); lengths are
 rounded to 0.1 mm and masses to 1 g before anything is built, so text output is stable.
 """
@@ -82,6 +82,16 @@ class Family(NamedTuple):
     sources: tuple[str, ...]  # keys of SOURCES cited by the family as a whole
 
 
+def uniforms(n: int, *key: object) -> list[float]:
+    """`n` numbers uniform in [0, 1), a pure function of the '/'-joined key: 53-bit slices
+    of its SHAKE-256 digest (no state, the same on every machine; cheaper than seeding a
+    generator for the few numbers an instance needs)."""
+    digest = hashlib.shake_256("/".join(str(k) for k in key).encode()).digest(8 * n)
+    return [
+        (int.from_bytes(digest[8 * i : 8 * i + 8], "little") >> 11) * 2.0**-53 for i in range(n)
+    ]
+
+
 def rng_for(*key: object) -> np.random.Generator:
     """A PCG64 generator seeded from the SHA-256 of the '/'-joined key (machine- and
     run-independent)."""
@@ -97,8 +107,8 @@ def rounded(value: float, unit: str) -> float:
 
 def draw(family: Family, version: str, seed: int) -> Instance:
     """Sample one instance of `family` (see the module docstring)."""
-    rng = rng_for("utamp-kitchenware", family.name, version, seed)
-    u = rng.random(2 + len(family.params)).tolist()  # material, density, one per parameter
+    # one number for the material, one for its density, one per parameter
+    u = uniforms(2 + len(family.params), "utamp-kitchenware", family.name, version, seed)
     total = sum(w for _, w in family.materials)
     mat, edge = family.materials[-1][0], 0.0
     for name, weight in family.materials:
@@ -189,4 +199,5 @@ __all__ = [
     "rng_for",
     "rounded",
     "tube",
+    "uniforms",
 ]

@@ -43,6 +43,7 @@ from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.rules import (
     derive_affordances,
     is_supportable,
+    is_supportive,
     object_facts,
     p2p_supportive,
 )
@@ -81,7 +82,9 @@ JITTER = 0.03  # m, the base's shift from slot1's position (each axis)
 REACH = 0.74  # m from the robot's base (horizontal) to any member's centre
 MAX_TOTAL_HEIGHT = 0.42  # m, all objects stacked
 ATTEMPTS = 40  # draws of instances, stacks and layouts before giving up
-TOWER_ATTEMPTS = 200  # draws of family and instance for one level of a goal tower
+TOWERS = 20  # goal towers tried per seed
+LEVEL_ATTEMPTS = 40  # draws of family and instance for one level of a goal tower
+MIN_CARRY = 0.07  # m, the narrowest surface a goal tower goes on from (a mug fits)
 FREE_SHARE = 0.25  # seeds whose objects are drawn without building a goal tower
 UNACHIEVABLE_SHARE = 0.1
 SIZES = {"train": 25 * 9, "test-instances": 12 * 9, "test-families": 12 * 9, "test-count": 12 * 9}
@@ -187,10 +190,12 @@ def _draw_objects(
 ) -> tuple[Any, list[str], list[str], list[ObjectType], frozenset[Fact], dict[str, str]]:
     """(rng, names, families, types, facts, orientation per name) of a seed's objects.
 
-    Most seeds (1 - `FREE_SHARE`) build a goal tower from its top down: each object, of a
-    uniformly drawn family, is redrawn (at most `ATTEMPTS` draws of family and instance)
-    until it can be picked up in some orientation (the base: stand upright) and carry the
-    one above it, within the height budget; so its goal is achievable. The other seeds
+    Most seeds (1 - `FREE_SHARE`) build a goal tower from the base up: each object, of a
+    uniformly drawn family, is redrawn (at most `LEVEL_ATTEMPTS` draws of family and
+    instance) until it can be picked up in some orientation (the base: stand upright),
+    stand on the one below and, unless it is the top, carry more (`MIN_CARRY`), within the height
+    budget; a tower that gets stuck is started again (`TOWERS` times). Its goal is
+    achievable. The other seeds
     draw every object freely (these goals are often unachievable: a bowl too heavy to
     pinch, two bottles)."""
     spec = SPECS[split]
@@ -211,36 +216,8 @@ def _draw_objects(
         families = [family_for(k) for k in range(n)]
         types = [generate(f, VERSION, int(rng.integers(lo, hi)), validate=False) for f in families]
         orient = ["upright"] * n
-    else:  # the goal tower from its top down: each object carries the one above it
-        families, types, orient = [], [], []
-        budget = MAX_TOTAL_HEIGHT
-        for k in range(n - 1, -1, -1):
-            for _ in range(TOWER_ATTEMPTS):
-                fam = family_for(k)
-                instance = int(rng.integers(lo, hi))
-                t = generate(fam, VERSION, instance, validate=False)
-                if _height(t) > budget:
-                    continue
-                options = [  # cheap tests first: it stands, it carries the one above
-                    o
-                    for o in (("upright",) if k == 0 else ("upright", "inverted"))
-                    if is_supportable(t, STANDING_PART[o])
-                    and (not types or _carries(t, o, types[0], orient[0]))
-                ]
-                if k > 0 and options:
-                    unary = _unary_facts(fam, instance)
-                    options = [
-                        o for o in options if _liftable_from_above(unary, t.name, UP_PART[o])
-                    ]
-                if options:
-                    ori = str(options[int(rng.integers(len(options)))])
-                    break
-            else:
-                raise NoLayout("no instance fits the tower")
-            families.insert(0, fam)
-            types.insert(0, t)
-            orient.insert(0, ori)
-            budget -= _height(t)
+    else:
+        families, types, orient = _goal_tower(rng, n, family_for, (lo, hi))
     facts = _facts(types)
     names = list(OBJECT_NAMES[:n])
     if free:  # orientations it can rest in (picked up in, where possible)
@@ -318,6 +295,54 @@ def _place(
         if base or math.hypot(x, y) + far <= REACH + 0.05:
             return round(x, 4) + 0.0, round(y, 4) + 0.0
     return None
+
+
+def _carries_more(t: ObjectType, orientation: str) -> bool:
+    """Its up-facing surface supports and is at least `MIN_CARRY` wide: a tower can go on."""
+    up = UP_PART[orientation]
+    return is_supportive(t, up) and min(t.surface_size(up)) >= MIN_CARRY
+
+
+def _goal_tower(
+    rng: Any, n: int, family_for: Any, pool: tuple[int, int]
+) -> tuple[list[str], list[ObjectType], list[str]]:
+    """A goal tower bottom-up (see `_draw_objects`): `TOWERS` tries of `LEVEL_ATTEMPTS` draws
+    a level."""
+    for _ in range(TOWERS):
+        families: list[str] = []
+        types: list[ObjectType] = []
+        orient: list[str] = []
+        budget = MAX_TOTAL_HEIGHT
+        for k in range(n):
+            for _ in range(LEVEL_ATTEMPTS):
+                fam = family_for(k)
+                instance = int(rng.integers(*pool))
+                t = generate(fam, VERSION, instance, validate=False)
+                if _height(t) > budget:
+                    continue
+                options = [  # cheap tests first: it stands on the one below and carries more
+                    o
+                    for o in (("upright",) if k == 0 else ("upright", "inverted"))
+                    if is_supportable(t, STANDING_PART[o])
+                    and (k == 0 or _carries(types[-1], orient[-1], t, o))
+                    and (k == n - 1 or _carries_more(t, o))
+                ]
+                if k > 0 and options:
+                    unary = _unary_facts(fam, instance)
+                    options = [
+                        o for o in options if _liftable_from_above(unary, t.name, UP_PART[o])
+                    ]
+                if options:
+                    families.append(fam)
+                    types.append(t)
+                    orient.append(str(options[int(rng.integers(len(options)))]))
+                    budget -= _height(t)
+                    break
+            else:
+                break  # this tower is stuck: start another
+        if len(types) == n:
+            return families, types, orient
+    raise NoLayout("no instance fits the tower")
 
 
 def _scene_dict(split: str, index: int, seed: int) -> tuple[dict[str, Any], list[str], bool]:
