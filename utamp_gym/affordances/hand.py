@@ -39,9 +39,10 @@ rim tips over in the grasp).
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import NamedTuple
 
-from utamp_gym.scene.catalogue import Member, ObjectType
+from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box, axis_of
 from utamp_gym.scene.shapes import BAR, floor_thickness, loop_axis
 
@@ -120,15 +121,23 @@ def realised_by_body(t: ObjectType, m: Member) -> bool:
     return m.kind == "edge" and t.body.box.contains(m.box, tol=1e-6)
 
 
-def solids(t: ObjectType, flipped: bool = False) -> list[tuple[str, Solid]]:
+def solids(t: ObjectType, flipped: bool = False) -> tuple[tuple[str, Solid], ...]:
     """(member, solid) material of the object (see the module docstring); `flipped`: the
-    object turned upside down (a half turn about x)."""
-    body = t.body
+    object turned upside down (a half turn about x). Cached by what decides it: the
+    members and the top and bottom parts."""
+    return _solids(tuple(t.members.values()), t.parts["on"], t.parts["under"], flipped)
+
+
+@lru_cache(maxsize=16_384)
+def _solids(
+    members: tuple[Member, ...], top: PartAttrs, under: PartAttrs, flipped: bool
+) -> tuple[tuple[str, Solid], ...]:
+    body = next(m for m in members if m.kind == "body")
+    bottom = min(m.box.min[2] for m in members)
     lo, hi = body.box.min, body.box.max
     round_ = body.geom == "cylinder"
     face = (hi[0] - lo[0], hi[1] - lo[1])
-    top = t.parts["on"]
-    forms_top = hi[2] >= t.bbox.max[2] - 1e-9
+    forms_top = hi[2] >= max(m.box.max[2] for m in members) - 1e-9
     out: list[tuple[str, Solid]] = []
     size = top.size if top.size is not None else face
     cx, cy = top.center if top.center is not None else ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
@@ -136,7 +145,7 @@ def solids(t: ObjectType, flipped: bool = False) -> list[tuple[str, Solid]]:
     hole = (cx, cy, size[0] / 2, size[1] / 2)
     if forms_top and top.shape in ("open", "concave") and smaller:
         floor = lo[2] + floor_thickness(top.shape == "concave", hi[2] - lo[2])
-        base = t.parts["under"].size if lo[2] <= t.bbox.min[2] + 1e-9 else None
+        base = under.size if lo[2] <= bottom + 1e-9 else None
         if round_ and base is not None and min(base) < min(face) - 1e-9:  # a flared wall
             r = min(base) / 2
             mid = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
@@ -160,17 +169,17 @@ def solids(t: ObjectType, flipped: bool = False) -> list[tuple[str, Solid]]:
             out.append((body.name, Solid(lo, hi, round_, hole)))
     else:
         out.append((body.name, Solid(lo, hi, round_)))
-    for m in t.members.values():
-        if m.kind != "body" and not realised_by_body(t, m):
+    for m in members:
+        if m.kind != "body" and not (m.kind == "edge" and body.box.contains(m.box, tol=1e-6)):
             out.append((m.name, Solid(m.box.min, m.box.max, m.geom == "cylinder")))
     if not flipped:
-        return out
+        return tuple(out)
     flip = []
     for name, s in out:
         slo, shi = _flip((s.lo, s.hi))
         hole = None if s.hole is None else (s.hole[0], -s.hole[1], s.hole[2], s.hole[3])
         flip.append((name, Solid(slo, shi, s.round, hole)))
-    return flip
+    return tuple(flip)
 
 
 def _area(s: Solid) -> tuple[float, float, float]:
@@ -189,12 +198,20 @@ def _area(s: Solid) -> tuple[float, float, float]:
 def centre_of_mass(t: ObjectType) -> tuple[float, float]:
     """xy of the object's centre of mass with its mass spread evenly over its material
     (`solids`), as the simulator spreads it over the primitives it builds."""
+    return _centre_of_mass(solids(t))
+
+
+@lru_cache(maxsize=16_384)
+def _centre_of_mass(material: tuple[tuple[str, Solid], ...]) -> tuple[float, float]:
     total = mx = my = 0.0
-    for _, s in solids(t):
+    for _, s in material:
         area, ax, ay = _area(s)
         h = s.hi[2] - s.lo[2]
         total, mx, my = total + area * h, mx + ax * h, my + ay * h
-    return (mx / total, my / total) if total > 0 else t.bbox.center_xy
+    if total <= 0:
+        s = material[0][1]
+        return (s.lo[0] + s.hi[0]) / 2, (s.lo[1] + s.hi[1]) / 2
+    return mx / total, my / total
 
 
 def stands_on(t: ObjectType, part: str) -> bool:
