@@ -10,7 +10,8 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
   on its top only;
 * small objects do not support larger ones: on a flat surface the footprint of the
   supported object must fit the surface (on a round one, the circle), with a margin
-  inside a rim (a tray's floor, a plate's well); a concave surface (a pan) only
+  inside a rim (a tray's floor, a plate's well) or for an object taller than wide (a glass
+  on another's foot tips over); a concave surface (a pan) only
   supports objects whose standing surface spans its opening with a margin (a pan's
   narrower floor would sink into another pan); the supporter's robustness bounds the
   load;
@@ -46,8 +47,10 @@ LIFT_FRACTION = 0.5  # "significantly lighter than the payload"
 EDGE_LIFT_LIMIT = 0.5  # kg an edge (pinch) grasp can carry
 BLOCKING_GAP = 0.005  # m: a sibling member this close blocks a finger
 LOAD_CAPACITY = {"fragile": 0.5, "sturdy": 3.0, "solid": 100.0}  # kg
-#: m a side: what is set into a recessed surface clears its rim by this (the robot's pose
-#: estimates are a few millimetres off); what spans a concave opening overlaps its rim so
+#: m a side: what is set into a recessed surface clears its rim by this, and what is taller
+#: than wide stays this far inside the surface's edge (the robot's pose estimates are a few
+#: millimetres off, and a glass landed on the edge of another tips over); what spans a
+#: concave opening overlaps its rim so
 PLACE_MARGIN = 0.004
 SPAN_MARGIN = 0.008
 FINGER_PAIRS = (("left", "right"), ("front", "back"))
@@ -93,7 +96,8 @@ def _fits_flat(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     surface a footprint must fit the circle: a round one by its diameter, any other by
     its diagonal. (Plain floats: the scene generator asks this many thousand times.)"""
     footprint = t1.bbox.face_size(p1)
-    margin = 2 * PLACE_MARGIN if _recessed(t2, p2) else 0.0
+    tall = t1.bbox.max[2] - t1.bbox.min[2] > min(footprint)  # tips if landed off-centre
+    margin = 2 * PLACE_MARGIN if tall or _recessed(t2, p2) else 0.0
     disc = _disc(t2, p2)
     if disc is None:
         surface = t2.surface_size(p2)
