@@ -71,7 +71,7 @@ TOUCH = 0.0005  # m: closer than this is touching, not colliding
 CONTACT = 0.002  # m beside the face where the pad ends up touching (a curved wall bulges in)
 # ------------------------------------------------------------------ what a grasp holds
 G = 9.81
-TORQUE_LIMIT = 1.8  # N m about the grasp, hanging (the object's centre below or level)
+TORQUE_LIMIT = 1.4  # N m about the grasp, hanging (the object's centre below or level)
 TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
 ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
 STAND_MARGIN = 0.01  # m: the centre of mass stays this far inside the standing surface
