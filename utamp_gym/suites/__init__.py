@@ -46,9 +46,7 @@ def suite_scenes(suite: str) -> tuple[Scene, ...]:
     if suite in PROCEDURAL_SUITES:
         from utamp_gym.suites import procedural
 
-        split = _split(suite)
-        count = len(procedural.split_seeds(split))
-        return tuple(procedural.split_scene(split, i).scene for i in range(count))
+        return tuple(g.scene for g in procedural.split_scenes(_split(suite)))
     return _enumerated.suite_scenes(suite)
 
 
@@ -99,10 +97,8 @@ def scene_summary(suite: str) -> list[dict[str, Any]]:
     if suite in PROCEDURAL_SUITES:
         from utamp_gym.suites import procedural
 
-        split = _split(suite)
         out = []
-        for i in range(len(procedural.split_seeds(split))):
-            g = procedural.split_scene(split, i)
+        for g in procedural.split_scenes(_split(suite)):
             out.append(
                 {
                     "name": g.scene.name,
