@@ -16,14 +16,14 @@ from utamp_gym.cli import main
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.io import load_scene, scene_to_toml
-from utamp_gym.suites import PROCEDURAL_SUITES, SUITES, all_scene_names, resolve_scene
+from utamp_gym.suites import ALL_SUITES, PROCEDURAL_SUITES, all_scene_names, resolve_scene
 from utamp_gym.suites import procedural as pv
 
 SPLITS = pv.SPLITS
 
 
 def test_splits_are_versioned_suites_of_the_required_sizes() -> None:
-    assert set(PROCEDURAL_SUITES) <= set(SUITES)
+    assert set(PROCEDURAL_SUITES) <= set(ALL_SUITES)
     assert tuple(f"procedural-v1/{s}" for s in SPLITS) == PROCEDURAL_SUITES
     table = pv._seed_table()
     for split in SPLITS:
