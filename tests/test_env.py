@@ -27,6 +27,9 @@ def _registered() -> None:
 
 
 def make(env_id: str, **kwargs: Any) -> gym.Env:
+    """Symbolic grounding and the grounded interface (an id may default to the objects one:
+    tests/test_env_objects.py and tests/test_env_procedural.py check that)."""
+    kwargs.setdefault("interface", "grounded")
     return gym.make(env_id, grounding="symbolic", **kwargs)
 
 

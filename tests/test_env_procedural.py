@@ -27,11 +27,14 @@ def _registered() -> None:
     register_envs()
 
 
+@pytest.mark.parametrize("interface", ["objects", "grounded"])
 @pytest.mark.parametrize("split", SPLITS)
 def test_check_env_symbolic(
-    split: str, session_display: Any, monkeypatch: pytest.MonkeyPatch
+    split: str, interface: str, session_display: Any, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    env = gym.make(ENV_ID, split=split, grounding="symbolic", render_mode="rgb_array")
+    env = gym.make(
+        ENV_ID, split=split, interface=interface, grounding="symbolic", render_mode="rgb_array"
+    )
     if session_display is not None:
         monkeypatch.setenv("DISPLAY", session_display.name)
     with warnings.catch_warnings():
@@ -54,7 +57,11 @@ def test_check_env_physics(split: str, session_display: Any, monkeypatch) -> Non
 
 
 def test_every_split_shares_the_action_space_and_rows() -> None:
-    envs = [gym.make(ENV_ID, split=s, grounding="symbolic").unwrapped for s in SPLITS]
+    assert gym.spec(ENV_ID).kwargs["interface"] == "objects"  # #24's default for this id
+    envs = [
+        gym.make(ENV_ID, split=s, grounding="symbolic", interface="grounded").unwrapped
+        for s in SPLITS
+    ]
     assert len({e.universe for e in envs}) == 1
     assert all(e.options.objects == procedural.OBJECT_NAMES for e in envs)
     for env, split in zip(envs, SPLITS, strict=True):

@@ -88,12 +88,13 @@ def test_planner_policy_rejects_bad_input() -> None:
 
 @pytest.mark.parametrize("env_id", env_ids())
 def test_symbolic_action_wrapper_maps_a_plan(env_id: str) -> None:
-    env = gym.make(env_id, grounding="symbolic", num_objects=5)
+    grounded = {"grounding": "symbolic", "num_objects": 5, "interface": "grounded"}
+    env = gym.make(env_id, **grounded)
     policy = PlannerPolicy(env)
     obs, info = solvable_reset(env, 1)
     policy(obs, info)
     plan = policy.plans[-1]
-    wrapped = SymbolicActionWrapper(gym.make(env_id, grounding="symbolic", num_objects=5))
+    wrapped = SymbolicActionWrapper(gym.make(env_id, **grounded))
     wrapped.reset(seed=1, options={"scene": env.unwrapped.scene.name})
     for i, step in enumerate(plan):
         text = step.upper() if i % 2 else f"  {step}  "  # case and spacing do not matter
