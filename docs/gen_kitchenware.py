@@ -1,6 +1,6 @@
 """Pictures and parameter tables of the procedural kitchenware families for docs/procedural.md.
 
-    MUJOCO_GL=egl python docs/gen_kitchenware.py [--instances 8] [--out docs]
+    python docs/gen_kitchenware.py [--instances 8] [--out docs]
 
 For each family (`utamp_gym.kitchenware.FAMILIES`) it renders a grid of sampled instances
 (seeds 0, 1, ...), each built in MuJoCo from its attributes exactly as the simulator builds it
@@ -25,6 +25,7 @@ from utamp_gym.kitchenware.params import Param
 from utamp_gym.kitchenware.sources import SOURCES
 from utamp_gym.scene.catalogue import load_catalogue, type_to_dict
 from utamp_gym.scene.io import scene_from_dict
+from utamp_gym.sim.gl import new_renderer
 from utamp_gym.sim.world import build_world
 
 TILE = (240, 240)  # height, width of one instance's picture
@@ -50,10 +51,13 @@ def render_instance(family: str, seed: int) -> np.ndarray:
     camera.lookat[:] = (pose[0] + t.bbox.center[0], pose[1] + t.bbox.center[1], size[2] / 2)
     camera.distance = 0.12 + 1.5 * float(max(size))
     camera.azimuth, camera.elevation = 230.0, -35.0
-    with mujoco.Renderer(model, *TILE) as renderer:
+    renderer = new_renderer(model, *TILE)  # a working headless GL backend (utamp_gym.sim.gl)
+    try:
         renderer.update_scene(state, camera=camera)
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = 0
         return renderer.render()
+    finally:
+        renderer.close()
 
 
 def grid(images: list[np.ndarray], columns: int = 4) -> np.ndarray:
