@@ -110,20 +110,20 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                         support_family=families.get(target, "") if kind == "place-support" else "",
                         allowed=reason is None,
                         rules_reason=reason or "",
-                        physics=bool(macro.success),
-                        physics_reason=macro.reason or "",
+                        physics=bool(macro["success"]),
+                        physics_reason=macro["reason"] or "",
                         step_s=time.perf_counter() - start,
                     )
                 )
                 print(
                     f"{len(pairs):4d} {split:15s} {env.scene.name:32s} "
                     f"{'allow ' if pairs[-1].allowed else 'forbid'} -> "
-                    f"{'ok  ' if macro.success else 'fail'} {env.action_strings[i]}",
+                    f"{'ok  ' if macro['success'] else 'fail'} {env.action_strings[i]}",
                     flush=True,
                 )
                 if len(pairs) >= n_pairs or terminated:
                     break
-                if not macro.success and not consistent(env):
+                if not macro["success"] and not consistent(env):
                     break
     finally:
         env.close()
