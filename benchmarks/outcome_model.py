@@ -177,20 +177,20 @@ def sample_suite(suite: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                         action=env.action_strings[i],
                         predicted=predicted_reason is None,
                         predicted_reason=predicted_reason or "",
-                        physics=bool(macro.success),
-                        physics_reason=macro.reason or "",
+                        physics=bool(macro["success"]),
+                        physics_reason=macro["reason"] or "",
                         step_s=time.perf_counter() - start,
                     )
                 )
                 print(
                     f"{len(pairs):4d} {suite:10s} {env.scene.name:16s} "
                     f"{'ok  ' if pairs[-1].predicted else 'fail'} -> "
-                    f"{'ok  ' if macro.success else 'fail'} {env.action_strings[i]}",
+                    f"{'ok  ' if macro['success'] else 'fail'} {env.action_strings[i]}",
                     flush=True,
                 )
                 if len(pairs) >= n_pairs or terminated:
                     break
-                if not macro.success and not consistent(env):
+                if not macro["success"] and not consistent(env):
                     break  # the simulator moved away from the symbolic state
     finally:
         env.close()

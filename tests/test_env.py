@@ -27,6 +27,9 @@ def _registered() -> None:
 
 
 def make(env_id: str, **kwargs: Any) -> gym.Env:
+    """Symbolic grounding and the grounded interface (an id may default to the objects one:
+    tests/test_env_objects.py and tests/test_env_procedural.py check that)."""
+    kwargs.setdefault("interface", "grounded")
     return gym.make(env_id, grounding="symbolic", **kwargs)
 
 
@@ -46,7 +49,7 @@ def masked_rollout(env: gym.Env, seed: int, steps: int) -> list[tuple[Any, ...]]
 
 
 def test_registry_has_one_file_per_id() -> None:
-    assert set(ENV_IDS) == {"UTampKitchen-v0", "UTampKitchenSlide-v0"}
+    assert set(ENV_IDS) == {"UTampKitchen-v0", "UTampKitchenSlide-v0", "UTampKitchenProcedural-v0"}
     for d in env_definitions():
         assert d.source.stem == d.id and d.max_episode_steps > 0
     assert register_envs() == ENV_IDS  # idempotent

@@ -32,15 +32,25 @@ if TYPE_CHECKING:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import SUITES, packaged_scene_names, resolve_scene, suite_scenes
+    from utamp_gym.suites import (
+        ALL_SUITES,
+        all_scene_names,
+        packaged_scene_names,
+        resolve_scene,
+        scene_summary,
+    )
 
     if args.scenes_cmd == "list":
-        if not args.suite:  # the packaged scenes (kitchen-demo), then every suite's
+        if not args.suite and not args.json:  # packaged scenes (kitchen-demo), then suites
             for name in packaged_scene_names():
                 print(name)
-        for suite in (args.suite,) if args.suite else SUITES:
-            for scene in suite_scenes(suite):
-                print(scene.name)
+        for suite in (args.suite,) if args.suite else ALL_SUITES:
+            if args.json:  # one JSON object per line and scene
+                for record in scene_summary(suite):
+                    print(json.dumps(record))
+            else:
+                for name in all_scene_names(suite):
+                    print(name)
         return 0
     sys.stdout.write(scene_to_toml(resolve_scene(args.name)))
     return 0
@@ -200,7 +210,7 @@ def _add_eval_parser(sub: Any) -> None:
     """
     from utamp_gym.distributed import EXECUTORS
     from utamp_gym.planning.methods import DEFAULT_NOISE
-    from utamp_gym.suites import SUITES
+    from utamp_gym.suites import ALL_SUITES as SUITES
 
     ev = sub.add_parser(
         "eval",
@@ -494,7 +504,7 @@ def _help_line(command: str) -> str:
 
 
 def _add_scenes_parser(sub: Any) -> None:
-    from utamp_gym.suites import SUITES
+    from utamp_gym.suites import ALL_SUITES as SUITES
 
     scenes = sub.add_parser("scenes", help=_help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
@@ -502,6 +512,11 @@ def _add_scenes_parser(sub: Any) -> None:
         "list", help="scene names, one per line: the packaged scenes, then every suite's"
     )
     lst.add_argument("--suite", choices=SUITES, help="only this suite's scenes")
+    lst.add_argument(
+        "--json",
+        action="store_true",
+        help="one JSON object per scene and line: name, n_objects, families, achievable",
+    )
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name", help=SCENE_HELP)
     scenes.set_defaults(func=_cmd_scenes)

@@ -145,6 +145,20 @@ CONSTANTS = {
     "test_tilt_deg": ("utamp_gym.sim.skills", "TEST_TILT_DEG", 1),
     "grasp_attempts": ("utamp_gym.sim.skills", "GRASP_ATTEMPTS", 1),
     "max_turn_deg": ("utamp_gym.sim.skills", "MAX_TURN_DEG", 1),
+    # rules that agree with physics, and the procedural scenes (docs/procedural.md)
+    "wrap_clearance_mm": ("utamp_gym.affordances.hand", "WRAP_CLEARANCE", 1000),
+    "min_pinch_mm": ("utamp_gym.affordances.hand", "MIN_PINCH", 1000),
+    "stop_tolerance_mm": ("utamp_gym.affordances.hand", "STOP_TOLERANCE", 1000),
+    "torque_limit_nm": ("utamp_gym.affordances.hand", "TORQUE_LIMIT", 1),
+    "torque_limit_above_nm": ("utamp_gym.affordances.hand", "TORQUE_LIMIT_ABOVE", 1),
+    "stand_margin_cm": ("utamp_gym.affordances.hand", "STAND_MARGIN", 100),
+    "place_margin_mm": ("utamp_gym.affordances.rules", "PLACE_MARGIN", 1000),
+    "span_margin_mm": ("utamp_gym.affordances.rules", "SPAN_MARGIN", 1000),
+    "procedural_reach_cm": ("utamp_gym.suites.procedural", "REACH", 100),
+    "procedural_height_cm": ("utamp_gym.suites.procedural", "MAX_TOTAL_HEIGHT", 100),
+    "procedural_unachievable_pct": ("utamp_gym.suites.procedural", "UNACHIEVABLE_SHARE", 100),
+    "procedural_free_pct": ("utamp_gym.suites.procedural", "FREE_SHARE", 100),
+    "procedural_min_carry_cm": ("utamp_gym.suites.procedural", "MIN_CARRY", 100),
 }
 
 

@@ -3,42 +3,56 @@
 The rules are the paper's assumptions made explicit (Sections IV and VI):
 
 * a part an object can rest on must be flat (or an open rim) and not a food surface
-  (food surfaces are never put face-down);
+  (food surfaces are never put face-down), and the object's centre of mass must lie over
+  it (a pan whose heavy handle outweighs its shallow body tips onto the handle);
 * a part supports others only if it is flat (or a concave dish spanned by the object
   on it) and the object can rest with that part facing up; fixed furniture supports
   on its top only;
 * small objects do not support larger ones: on a flat surface the footprint of the
-  supported object must fit the surface (on a round one, the circle); a concave
-  surface (a pan) only supports objects that span its opening; the supporter's
-  robustness bounds the load;
+  supported object must fit the surface (on a round one, the circle), with a margin
+  inside a rim (a tray's floor, a plate's well) or for an object taller than wide (a glass
+  on another's foot tips over); a concave surface (a pan) only
+  supports objects whose standing surface spans its opening with a margin (a pan's
+  narrower floor would sink into another pan); the supporter's robustness bounds the
+  load;
 * the gripper approaches from above (palm on a part that can face up) and comes down
   onto the member's palm face: no sibling member (the body included) stands over it
   (a bottle's neck over its body, a bowl's floor under its rim when upside-down); its
-  fingers close across a member no wider than the 8 cm opening and are not blocked by
-  a sibling member;
+  fingers close across a member that fits the 8 cm opening with room to spare (an edge
+  is pinched) and find room beside it: no sibling member in the way, and no material of
+  the object under a finger above its target (`utamp_gym.affordances.hand`: a slab's edge
+  lying flat, a bowl's curved wall beside a rim strip, a jar's shoulder beside its lid);
 * an object can be lifted by a member if it is well below the Panda's 3 kg payload
-  (edge grasps carry much less); an edge grasp is only useful when it can lift the
-  object or when the object cannot be lifted at all (then it is slid);
+  (edge grasps carry much less) and the pads hold the moment of its weight about the
+  grasp (a heavy board far out on its handle, an upside-down pot by a lug); an edge grasp
+  is only useful when it can lift the object or when the object cannot be lifted at all
+  (then it is slid);
 * an object that cannot be lifted but rests flat on a fixed surface can be slid.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 
-import numpy as np
-
 from utamp_gym.affordances.facts import Fact
+from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
+from utamp_gym.affordances.hand import fingers_fit, holds, stands_on, width_fits
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
 
-GRIPPER_OPENING = 0.08  # m, Franka Hand
 MIN_GRASP_WIDTH = 0.005  # m
 PAYLOAD = 3.0  # kg, Franka Panda
 LIFT_FRACTION = 0.5  # "significantly lighter than the payload"
 EDGE_LIFT_LIMIT = 0.5  # kg an edge (pinch) grasp can carry
 BLOCKING_GAP = 0.005  # m: a sibling member this close blocks a finger
 LOAD_CAPACITY = {"fragile": 0.5, "sturdy": 3.0, "solid": 100.0}  # kg
+#: m a side: what is set into a recessed surface clears its rim by this, and what is taller
+#: than wide stays this far inside the surface's edge (the robot's pose estimates are a few
+#: millimetres off, and a glass landed on the edge of another tips over); what spans a
+#: concave opening overlaps its rim so
+PLACE_MARGIN = 0.004
+SPAN_MARGIN = 0.008
 FINGER_PAIRS = (("left", "right"), ("front", "back"))
 PALM_PARTS = ("on", "under")
 
@@ -49,7 +63,7 @@ def can_rest_on(t: ObjectType, part: str) -> bool:
 
 
 def is_supportable(t: ObjectType, part: str) -> bool:
-    return t.movable and can_rest_on(t, part)
+    return t.movable and can_rest_on(t, part) and stands_on(t, part)
 
 
 def is_supportive(t: ObjectType, part: str) -> bool:
@@ -68,33 +82,53 @@ def _disc(t: ObjectType, part: str) -> float | None:
     if t.body.geom != "cylinder" or not forms:
         return None
     size = t.parts[part].size
-    return float(min(*body.size[:2], *(size if size is not None else ())))
+    extent = (body.max[0] - body.min[0], body.max[1] - body.min[1])
+    return float(min(*extent, *(size if size is not None else ())))
+
+
+def _close(a: float, b: float) -> bool:
+    return abs(a - b) <= 1e-8 + 1e-5 * abs(b)  # numpy's isclose
 
 
 def _fits_flat(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Does t1's footprint (resting on p1) fit the flat surface p2 of t2? Objects keep
     their yaw (all x-aligned), so a rectangle is compared axis by axis; on a round
     surface a footprint must fit the circle: a round one by its diameter, any other by
-    its diagonal."""
-    footprint = np.asarray(t1.bbox.face_size(p1))
+    its diagonal. (Plain floats: the scene generator asks this many thousand times.)"""
+    footprint = t1.bbox.face_size(p1)
+    tall = t1.bbox.max[2] - t1.bbox.min[2] > min(footprint)  # tips if landed off-centre
+    margin = 2 * PLACE_MARGIN if tall or _recessed(t2, p2) else 0.0
     disc = _disc(t2, p2)
     if disc is None:
-        return bool(np.all(footprint <= np.asarray(t2.surface_size(p2)) + 1e-9))
+        surface = t2.surface_size(p2)
+        return all(f + margin <= s + 1e-9 for f, s in zip(footprint, surface, strict=True))
     own = _disc(t1, p1)
-    round_ = own is not None and np.allclose(t1.body.box.size[:2], t1.bbox.size[:2])
-    return (own if round_ and own is not None else float(np.hypot(*footprint))) <= disc + 1e-9
+    body, bbox = t1.body.box, t1.bbox
+    round_ = own is not None and all(
+        _close(body.max[i] - body.min[i], bbox.max[i] - bbox.min[i]) for i in (0, 1)
+    )
+    size = own if round_ and own is not None else math.hypot(*footprint)
+    return size + margin <= disc + 1e-9
+
+
+def _recessed(t: ObjectType, part: str) -> bool:
+    """A surface below the object's top (a tray's floor inside its rims, a plate's well):
+    what is set on it must clear the rim."""
+    return part == "on" and t.surface_height("on") < t.bbox.max[2] - 1e-6
 
 
 def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Can part p2 of t2 stably support t1 resting on its part p1?"""
-    if t1.name == t2.name or not (is_supportive(t2, p2) and is_supportable(t1, p1)):
+    if t1.name == t2.name or t1.mass > LOAD_CAPACITY[t2.robustness]:
+        return False
+    if not (is_supportive(t2, p2) and t1.movable and can_rest_on(t1, p1)):
         return False
     if t2.parts[p2].shape == "flat":
         fits = _fits_flat(t2, p2, t1, p1)
-    else:  # a concave surface: the object spans its opening
-        footprint = np.asarray(t1.bbox.face_size(p1))
-        fits = bool(np.all(footprint >= np.asarray(t2.surface_size(p2)) - 1e-9))
-    return fits and t1.mass <= LOAD_CAPACITY[t2.robustness]
+    else:  # a concave surface: the surface the object stands on spans its opening
+        span = zip(t1.surface_size(p1), t2.surface_size(p2), strict=True)
+        fits = all(f >= s + 2 * SPAN_MARGIN - 1e-9 for f, s in span)
+    return fits and stands_on(t1, p1)  # t1 is supportable on p1 (the costliest test last)
 
 
 def _blocked(t: ObjectType, member: str, side: str) -> bool:
@@ -139,9 +173,11 @@ def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
                 continue  # that part never faces up, or the hand cannot reach the member
             for f1, f2 in FINGER_PAIRS:
                 width = float(m.box.size[axis_of(f1)])
-                if not MIN_GRASP_WIDTH <= width <= GRIPPER_OPENING:
+                if width < MIN_GRASP_WIDTH or not width_fits(width, m):
                     continue
                 if _blocked(t, mname, f1) or _blocked(t, mname, f2):
+                    continue
+                if not fingers_fit(t, mname, palm, f1):
                     continue
                 out.append((mname, palm, f1, f2))
     return out
@@ -165,6 +201,8 @@ def object_facts(t: ObjectType) -> set[Fact]:
     for member, palm, f1, f2 in grasps:
         if t.members[member].kind == "edge" and not liftable_via(t, member) and any_liftable:
             continue  # an edge grasp that cannot carry the object is never useful
+        if liftable_via(t, member) and not holds(t, member, palm):
+            continue  # light enough, but it would turn out of the pads when lifted
         facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
         if liftable_via(t, member):
             facts.add(("canLift", t.name, member))

@@ -109,8 +109,13 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       "symbolic" (effects applied to the symbolic state, >20k steps/s);
     * ``domain``: "utamp2" | "utamp1"; ``affordances``: "gt" | "rules" | "noisy" (re-detected
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
-    * ``num_objects`` (2–5) restricts the scenes, ``scene`` fixes one (suite, packaged or file
-      name); ``reset(options={"scene": name})`` picks the scene of one episode;
+    * ``num_objects`` (2–5; 2–6 for procedural splits) restricts the scenes, ``scene`` fixes
+      one (suite, packaged or file name); ``reset(options={"scene": name})`` picks the scene
+      of one episode;
+    * ``split``: a procedural split ("train", "test-instances", "test-families", "test-count";
+      `utamp_gym.suites.procedural`): its scenes instead of a suite's. All splits share one
+      action universe and the observation rows ``base, obj1 .. obj5``
+      (``UTampKitchenProcedural-v0``);
     * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array" |
       "rgb_array_list" | "human"), ``camera`` (adds ``image``), ``image_size`` /
       ``render_size`` ((height, width));
@@ -181,6 +186,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         masks: str = "affordances",
         disturbance: float = 0.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
+        split: str | None = None,
         interface: str = "grounded",
     ) -> None:
         kwargs: dict[str, Any] = {
@@ -191,6 +197,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             "image_size": image_size, "render_size": render_size, "backend": backend,
             "backend_kwargs": dict(backend_kwargs or {}), "record_timings": record_timings,
             "masks": masks, "disturbance": disturbance, "pose_noise": pose_noise,
+            "split": split,
             "interface": interface,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option

@@ -18,7 +18,13 @@ from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
-from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
+from utamp_gym.suites import (
+    ALL_SUITES,
+    PROCEDURAL,
+    PROCEDURAL_SUITES,
+    resolve_scene,
+    suite_scenes,
+)
 from utamp_gym.symbolic.problem import DOMAINS
 
 GROUNDINGS = ("physics", "symbolic")
@@ -86,11 +92,23 @@ class EnvOptions:
     masks: str = "affordances"
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE
+    split: str | None = None
     interface: str = "grounded"
 
     def __post_init__(self) -> None:
+        if self.split is not None:  # a procedural split: "train" or "procedural-v1/train"
+            splits = [s.removeprefix(f"{PROCEDURAL}/") for s in PROCEDURAL_SUITES]
+            short = str(self.split).removeprefix(f"{PROCEDURAL}/")
+            _choice("split", short, splits)
+            suite = f"{PROCEDURAL}/{short}"
+            if self.suite is not None and self.suite != suite:
+                raise ValueError(
+                    f"split={self.split!r} is the suite {suite!r}; drop suite={self.suite!r}"
+                )
+            object.__setattr__(self, "split", short)
+            object.__setattr__(self, "suite", suite)
         if self.suite is not None:
-            _choice("suite", self.suite, SUITES)
+            _choice("suite", self.suite, ALL_SUITES)
         if self.suite is None and self.scene is None:
             raise ValueError("an env needs a suite or a scene")
         names = self.objects
@@ -146,19 +164,25 @@ class EnvOptions:
 
     # ------------------------------------------------------------------ derived
     def universe_key(self) -> UniverseKey:
-        """The action universe: the whole suite (plus a fixed scene from outside it).
+        """The action universe: the whole suite (plus a fixed scene from outside it); for a
+        procedural split, every split of its version (one action space for all of them).
 
         It ignores `num_objects` and a fixed suite `scene`, so those options keep the action
         and observation spaces of the env id (useful for curricula).
         """
-        in_suite = self.suite is not None and self.scene in {
-            s.name for s in suite_scenes(self.suite)
-        }
+        if self.suite in PROCEDURAL_SUITES:  # every split shares one action space
+            suite: str | None = PROCEDURAL
+            in_suite = self.scene is None or self.scene.startswith(f"{PROCEDURAL}/")
+        else:
+            suite = self.suite
+            in_suite = self.suite is not None and self.scene in {
+                s.name for s in suite_scenes(self.suite)
+            }
         extra = (self.scene,) if self.scene is not None and not in_suite else ()
         if self.masks != "affordances":  # "geometric" and "none" share one action space
-            return UniverseKey(self.domain, "none", self.suite, extra, "geometric")
+            return UniverseKey(self.domain, "none", suite, extra, "geometric")
         affordances = "none" if self.domain == "utamp1" else self.affordances
-        return UniverseKey(self.domain, affordances, self.suite, extra)
+        return UniverseKey(self.domain, affordances, suite, extra)
 
     def scenes(self) -> tuple[Scene, ...]:
         """The scenes episodes are sampled from (one if `scene` is set)."""

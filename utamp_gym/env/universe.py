@@ -44,7 +44,7 @@ from utamp_gym.env.geometric import geometric_domain, prune
 from utamp_gym.errors import PddlError, UnknownNameError
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.scene.model import Scene
-from utamp_gym.suites import resolve_scene, suite_scenes
+from utamp_gym.suites import resolve_scene, universe_scenes
 from utamp_gym.symbolic.pddl import Domain, Literal, Problem, parse_domain
 from utamp_gym.symbolic.problem import domain_text, goal_atoms
 from utamp_gym.symbolic.reach import reachable_ops
@@ -69,7 +69,8 @@ class UniverseKey:
 
     `affordances` is ``"none"`` for U-TAMP-1 (no affordance predicates) and for geometric
     preconditions (they mention none); `scenes` are names that `resolve_scene` understands
-    (suite scenes are given by `suite`); `preconditions` is one of `PRECONDITIONS` (see the
+    (suite scenes are given by `suite`: a suite, or ``procedural-v1`` for all its splits);
+    `preconditions` is one of `PRECONDITIONS` (see the
     module docstring; ``"geometric"`` needs the utamp2 domain).
     """
 
@@ -93,7 +94,7 @@ class UniverseKey:
             )
 
     def resolve(self) -> tuple[Scene, ...]:
-        base = suite_scenes(self.suite) if self.suite is not None else ()
+        base = universe_scenes(self.suite) if self.suite is not None else ()
         known = {s.name for s in base}
         return (*base, *(resolve_scene(r) for r in self.scenes if r not in known))
 

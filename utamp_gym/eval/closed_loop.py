@@ -54,10 +54,12 @@ def run_closed_loop(
     """Run `method`'s planner policy on `scene` in the env until the episode ends."""
     spec = method_spec(method)
     suite = scene.split("/", 1)[0] if scene.split("/", 1)[0] in SUITES else None
+    names = resolve_scene(scene).object_names  # a procedural scene: the universe of its own
+    objects = DEFAULT_OBJECTS if set(names) <= set(DEFAULT_OBJECTS) else names
     physics: dict[str, float] = {} if pose_noise is None else {"pose_noise": pose_noise}
     env = UTampKitchenEnv(
         suite=suite,
-        objects=DEFAULT_OBJECTS,
+        objects=objects,
         scene=scene,
         grounding=grounding,
         domain=spec.domain,

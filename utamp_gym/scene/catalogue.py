@@ -8,6 +8,7 @@ robustness. Types come from `assets/objects/*.toml` or from a scene file.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, NamedTuple
@@ -58,7 +59,13 @@ class PartAttrs(NamedTuple):
 
 
 def _union(members: Mapping[str, Member]) -> Box:
-    boxes = [m.box for m in members.values()]
+    return _union_of(tuple(m.box for m in members.values()))
+
+
+@lru_cache(maxsize=16_384)
+def _union_of(boxes: tuple[Box, ...]) -> Box:
+    """The box around `boxes` (cached: rules and the scene generator ask for bounding boxes
+    many times)."""
     out = boxes[0]
     for b in boxes[1:]:
         out = out.union(b)

@@ -35,20 +35,22 @@ import numpy as np
 
 from utamp_gym.errors import SimulationError
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
-from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import DEFAULT, MATERIALS, hex_rgba, material
 from utamp_gym.scene.model import Pose, Scene
+from utamp_gym.scene.shapes import (
+    BAR,
+    FLOOR,
+    LOOP_OPENING,
+    RIM_WALL,
+    WALL,
+    floor_thickness,
+    touch_axis,
+)
 from utamp_gym.sim.prims import Prim, box, box_walls, cap, ring, slab
 
-WALL = 0.004  # m, default wall thickness of hollow (open-top) bodies
-FLOOR = 0.008  # m, floor thickness of hollow bodies
-RIM_WALL = 0.003  # m, default flared rim thickness of concave bodies
-CONCAVE_FLOOR = 0.005  # m, floor thickness of concave bodies
 PLATE_RIM = 0.003  # m, rim above the plate when the part declares no surface height
 FOOT = 0.008  # m, height of a foot (an `under` part smaller than the body's face)
 CAP_FRACTION = 0.4  # a round head is at most this fraction of the body height
-BAR = 0.008  # m, bar thickness of a loop handle
-LOOP_OPENING = (0.015, 0.03)  # m, smallest (outward, vertical) opening of a loop handle
 POST = 0.01  # m, width of the posts holding a detached handle bar
 EMBED = 0.003  # m, an attached handle reaches this far into the body (no seam)
 TOL = 1e-6  # m, declared dimensions closer than this are equal
@@ -105,7 +107,7 @@ def _hollow(t: ObjectType, top: PartAttrs, bottom: PartAttrs) -> list[Prim]:
     xy, half = (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2
     concave = top.shape == "concave"
     default_wall = RIM_WALL if concave else WALL
-    z = lo[2] + min(CONCAVE_FLOOR if concave else FLOOR, (hi[2] - lo[2]) / 4)
+    z = lo[2] + floor_thickness(concave, hi[2] - lo[2])
     offset, usable = _inner(t, top, half, default_wall, round_)
     floor = half if bottom.size is None else np.minimum(np.asarray(bottom.size) / 2, half)
     if round_:
@@ -164,19 +166,6 @@ def _body_prims(t: ObjectType) -> list[Prim]:
     return [*out, *box_walls(name, (lo[:2], hi[:2]), inner, z, hi[2])]
 
 
-def _touch_axis(a: Box, b: Box, tol: float = 1e-6) -> tuple[int, int] | None:
-    """(axis, sign) if box `a` lies beside `b` along one axis (touching or apart), else None."""
-    for ax in range(3):
-        others = [i for i in range(3) if i != ax]
-        if not all(a.min[i] < b.max[i] and b.min[i] < a.max[i] for i in others):
-            continue
-        if a.min[ax] >= b.max[ax] - tol:
-            return ax, 1
-        if a.max[ax] <= b.min[ax] + tol:
-            return ax, -1
-    return None
-
-
 def _member_prims(t: ObjectType, m: Member) -> list[Prim]:
     body = t.body.box
     lo, hi = np.asarray(m.box.min, dtype=float), np.asarray(m.box.max, dtype=float)
@@ -186,7 +175,7 @@ def _member_prims(t: ObjectType, m: Member) -> list[Prim]:
         return [
             slab(m.name, m.name, True, (lo[:2] + hi[:2]) / 2, (hi[:2] - lo[:2]) / 2, lo[2], hi[2])
         ]
-    side = _touch_axis(m.box, body)
+    side = touch_axis(m.box, body)
     if side is None or side[0] == 2:
         return [box(m.name, m.name, lo, hi)]
     ax, sign = side

@@ -1,0 +1,261 @@
+"""Rules against physics on procedural states, per kitchenware family.
+
+    nice -n 10 python benchmarks/procedural_outcomes.py [--pairs 1200] [--workers 2]
+        [--splits train,test-families] [--seed 0] [--max-steps 12]
+        [--out docs/results/procedural_outcomes] [--from-json]
+
+The sibling of `benchmarks/outcome_model.py` on the procedural splits, where the rule parser
+is the only source of affordances (the "ground truth" of a generated type is the rules'):
+episodes in the physics env (``UTampKitchenProcedural-v0``, ``masks="geometric"``, MuJoCo)
+on scenes drawn by the env's RNG; at every step an action is drawn among the mask-allowed
+ones, with probability 1/2 among those the rules allow (their U-TAMP-2 precondition holds)
+and otherwise among those they forbid; the rules' verdict is recorded, then the simulator
+executes it. An episode ends at the goal, after `--max-steps` steps, or when the simulation
+no longer matches the symbolic state after a failure.
+
+Reported per family of the object acted on (and, for placements, of the support): how
+often physics succeeds where the rules allow (target >= 98 %) and where they forbid (not a
+failure: the rules are conservative where physics is lucky or forgiving), with the reasons
+of every allowed action physics failed. Writes ``<out>.json`` and ``<out>.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import Counter, defaultdict
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from outcome_model import _physics_class, consistent
+
+from utamp_gym.suites import procedural
+
+
+@dataclass(frozen=True)
+class Pair:
+    """One (state, action) pair: the rules' verdict and what physics did."""
+
+    split: str
+    scene: str
+    step: int
+    action: str
+    kind: str  # pick-support | place-support | slide-support
+    family: str  # of the object acted on
+    support_family: str  # of what it is placed on ("" for a slot or a pick)
+    allowed: bool
+    rules_reason: str
+    physics: bool
+    physics_reason: str
+    step_s: float
+
+
+def _families(scene_name: str) -> dict[str, str]:
+    parsed = procedural.parse_name(scene_name)
+    assert parsed is not None, scene_name
+    g = procedural.split_scene(*parsed)
+    return {o.name: f for o, f in zip(g.scene.objects, g.families, strict=True)}
+
+
+def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pair]:
+    """`n_pairs` pairs from physics episodes on one split (see the module docstring)."""
+    from utamp_gym.env.kitchen import UTampKitchenEnv
+    from utamp_gym.env.outcome import OutcomeModel
+
+    env = UTampKitchenEnv(
+        split=split,
+        objects=procedural.OBJECT_NAMES,
+        masks="geometric",
+        record_timings=False,
+    )
+    model = OutcomeModel(env.universe)
+    rng = np.random.default_rng(seed)
+    pairs: list[Pair] = []
+    first = True
+    try:
+        while len(pairs) < n_pairs:
+            _, info = env.reset(seed=seed if first else None)
+            first = False
+            model.reset(env.scene)
+            families = _families(env.scene.name)
+            for step in range(max_steps):
+                allowed = np.flatnonzero(info["action_mask"])
+                if not allowed.size:
+                    break
+                ok = model.affordances_hold()[allowed]
+                pool = (
+                    allowed[ok] if ok.any() and (rng.random() < 0.5 or ok.all()) else allowed[~ok]
+                )
+                i = int(rng.choice(pool))
+                reason = model.affordance_failure(i)
+                kind, obj, target = env.universe.roles[i]
+                start = time.perf_counter()
+                _, _, terminated, _, info = env.step(i)
+                macro = info["macro_result"]
+                pairs.append(
+                    Pair(
+                        split=split,
+                        scene=env.scene.name,
+                        step=step,
+                        action=env.action_strings[i],
+                        kind=kind,
+                        family=families.get(obj, "?"),
+                        support_family=families.get(target, "") if kind == "place-support" else "",
+                        allowed=reason is None,
+                        rules_reason=reason or "",
+                        physics=bool(macro["success"]),
+                        physics_reason=macro["reason"] or "",
+                        step_s=time.perf_counter() - start,
+                    )
+                )
+                print(
+                    f"{len(pairs):4d} {split:15s} {env.scene.name:32s} "
+                    f"{'allow ' if pairs[-1].allowed else 'forbid'} -> "
+                    f"{'ok  ' if macro['success'] else 'fail'} {env.action_strings[i]}",
+                    flush=True,
+                )
+                if len(pairs) >= n_pairs or terminated:
+                    break
+                if not macro["success"] and not consistent(env):
+                    break
+    finally:
+        env.close()
+    return pairs
+
+
+def _rate(ok: int, n: int) -> str:
+    return f"{ok}/{n} ({ok / n:.1%})" if n else "–"
+
+
+def summarize(pairs: list[Pair]) -> dict[str, Any]:
+    by_family: dict[str, Counter[str]] = defaultdict(Counter)
+    by_support: dict[str, Counter[str]] = defaultdict(Counter)
+    for p in pairs:
+        key = "allowed" if p.allowed else "forbidden"
+        for table, fam in ((by_family, p.family), (by_support, p.support_family)):
+            if fam:
+                table[fam][f"{key}"] += 1
+                table[fam][f"{key}_ok"] += p.physics
+    allowed = [p for p in pairs if p.allowed]
+    failures = Counter(
+        f"{p.kind} {p.family}"
+        + (f" on {p.support_family}" if p.support_family else "")
+        + f": {_physics_class(p.physics_reason)}"
+        for p in allowed
+        if not p.physics
+    )
+    examples = {}
+    for p in allowed:
+        if not p.physics:
+            examples.setdefault(p.family, []).append(
+                {"scene": p.scene, "action": p.action, "reason": p.physics_reason}
+            )
+    return {
+        "pairs": len(pairs),
+        "allowed": len(allowed),
+        "allowed_physics_ok": sum(p.physics for p in allowed),
+        "forbidden": len(pairs) - len(allowed),
+        "forbidden_physics_ok": sum(p.physics for p in pairs if not p.allowed),
+        "by_family": {f: dict(c) for f, c in sorted(by_family.items())},
+        "by_support_family": {f: dict(c) for f, c in sorted(by_support.items())},
+        "allowed_failures": dict(failures.most_common()),
+        "failure_examples": examples,
+        "median_step_s": float(np.median([p.step_s for p in pairs])) if pairs else None,
+    }
+
+
+def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float) -> str:
+    s = summary
+    out = [
+        "<!-- written by benchmarks/procedural_outcomes.py; do not edit -->",
+        "",
+        f"`python benchmarks/procedural_outcomes.py --pairs {args.pairs} --splits "
+        f"{args.splits} --seed {args.seed} --max-steps {args.max_steps}`: {s['pairs']} "
+        f"(state, action) pairs in physics, {wall_s / 60:.1f} min wall with "
+        f"{args.workers} workers (shared 2-core machine).",
+        "",
+        f"**Physics succeeded on {_rate(s['allowed_physics_ok'], s['allowed'])} of the actions "
+        f"the rules allow**, and on {_rate(s['forbidden_physics_ok'], s['forbidden'])} of those "
+        "they forbid.",
+        "",
+        "| family (object acted on) | rules allow: physics succeeds | rules forbid: physics "
+        "succeeds |",
+        "|---|---|---|",
+    ]
+    for fam, c in s["by_family"].items():
+        out.append(
+            f"| {fam} | {_rate(c.get('allowed_ok', 0), c.get('allowed', 0))} | "
+            f"{_rate(c.get('forbidden_ok', 0), c.get('forbidden', 0))} |"
+        )
+    out += [
+        "",
+        "| family (support of a placement) | rules allow: physics succeeds | rules forbid: "
+        "physics succeeds |",
+        "|---|---|---|",
+    ]
+    for fam, c in s["by_support_family"].items():
+        out.append(
+            f"| {fam} | {_rate(c.get('allowed_ok', 0), c.get('allowed', 0))} | "
+            f"{_rate(c.get('forbidden_ok', 0), c.get('forbidden', 0))} |"
+        )
+    out += ["", "Allowed actions physics failed, by kind:", ""]
+    if not s["allowed_failures"]:
+        out.append("none")
+    out += [f"* {k}: {n}" for k, n in s["allowed_failures"].items()]
+    return "\n".join(out) + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=1200, help="pairs in all (split by split)")
+    ap.add_argument("--splits", default="train,test-families")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--max-steps", type=int, default=12)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="docs/results/procedural_outcomes")
+    ap.add_argument("--from-json", action="store_true", help="re-summarize <out>.json")
+    args = ap.parse_args()
+    out = Path(args.out)
+    splits = [s.strip() for s in args.splits.split(",") if s.strip()]
+    start = time.perf_counter()
+    if args.from_json:
+        old = json.loads(out.with_suffix(".json").read_text())
+        names = {f.name for f in fields(Pair)}
+        pairs = [Pair(**{k: v for k, v in p.items() if k in names}) for p in old["all_pairs"]]
+        wall = float(old["wall_time_s"])
+    else:
+        # each worker samples its share of one split from its own seed
+        jobs = []
+        per_worker = max(1, args.workers // len(splits)) if args.workers >= len(splits) else 1
+        for k, split in enumerate(splits):
+            share = args.pairs // len(splits) + (k < args.pairs % len(splits))
+            for w in range(per_worker):
+                n = share // per_worker + (w < share % per_worker)
+                jobs.append((split, n, args.seed + 1000 * k + w, args.max_steps))
+        with ProcessPoolExecutor(args.workers) as pool:
+            parts = list(pool.map(sample_split, *zip(*jobs, strict=True)))
+        pairs = [p for part in parts for p in part]
+        wall = time.perf_counter() - start
+    summary = summarize(pairs)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    data = {
+        **summary,
+        "args": vars(args),
+        "wall_time_s": wall,
+        "all_pairs": [asdict(p) for p in pairs],
+    }
+    out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
+    text = to_markdown(summary, args, wall)
+    out.with_suffix(".md").write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

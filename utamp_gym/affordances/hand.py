@@ -1,0 +1,372 @@
+"""The room an object leaves for the Panda's fingers, and what a grasp can hold: geometry only.
+
+The rule parser grants a grasp only where the hand can carry it out. Everything here is
+computed from a type's attributes (member boxes, part shapes, sizes and heights, mass) and
+from facts about the robot: the Franka Hand's fingers and the way a grasp is decoded
+(`utamp_gym.sim.decode`: the TCP at the member's middle, `GRASP_DEPTH` below its palm face,
+fingertips `TIP_BELOW_TCP` below the TCP and at least `TIP_CLEARANCE` above the object's
+bottom). Nothing here knows an object, a type or a family by name.
+
+**The object's material** (`solids`): the body member is a box or an upright cylinder; an
+open or concave top leaves a cavity inside its usable surface down to its floor
+(`utamp_gym.scene.shapes`: the floor the simulator builds, under a flared wall as wide as
+the `under` part); a flat top below the body's top or
+smaller than its face leaves a well above its surface height; every other member is solid
+(edges inside the body are the body's own walls).
+
+**Finger room** (`finger_room`): each finger descends beside its side of the member, opened
+`OPEN_CLEARANCE` beyond it (less if the hand's 8 cm do not allow it), then closes. It is a pad
+(the lowest `PAD_HEIGHT`, `PAD_THICKNESS` across, `PAD_WIDTH` wide) under a thicker upper
+finger. The finger stops where it first meets material beside the member; the shortfall is
+how far above its target that is. A member with its own geometry (a handle, a neck, a lid, a
+body) needs no shortfall at all: the motion planner allows fingers to touch only the grasped
+member. An edge that is the body's own wall (a tray's rim, a bowl's rim, a plate's rim) may
+let a finger land up to `STOP_TOLERANCE` early on the body (the approach guard stops the hand
+1 cm short at most), as long as the pad still overlaps the edge by `MIN_PAD_OVERLAP`: a
+handleless board lying flat has no room beside its edges, the fingers would meet the board
+or the table.
+
+**What stands** (`stands_on`): the mass is spread evenly over the material, as the
+simulator spreads it, and its centre must lie over the standing surface.
+
+**What a grasp holds** (`holds`): the object's weight hangs at a lever from the grasp point
+(the member's middle to the body's centre, horizontally); its moment turns the object between
+the pads unless the pads' friction holds it, up to `TORQUE_LIMIT`, and only `TORQUE_LIMIT_ABOVE`
+when the object's centre lies above the grasp (an upside-down pot held by a lug near its
+rim tips over in the grasp).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import NamedTuple
+
+from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
+from utamp_gym.scene.geometry import Box, axis_of
+from utamp_gym.scene.shapes import BAR, floor_thickness, loop_axis
+
+# ------------------------------------------------------------------ the Franka Hand
+GRIPPER_OPENING = 0.08  # m, fully open
+WRAP_CLEARANCE = 0.003  # m a side: the open fingers must clear what they close on
+PAD_WIDTH = 0.0176  # m, across the finger (the rubber tip)
+PAD_THICKNESS = 0.0152  # m, along the closing direction
+PAD_HEIGHT = 0.0184  # m
+LOWER_FINGER = 0.033  # m above the tip: the pad and the slim part of the finger
+UPPER_FINGER = (0.021, 0.026, 0.022)  # m: height, thickness, width of the finger above
+NOISE_MARGIN = 0.002  # m, the robot's pose estimate is this uncertain (one sigma)
+HAND_ABOVE_TCP = 0.031  # m: the hand's underside above the TCP
+HAND_HALF_THICKNESS = 0.0172  # m: half the hand's thickness across the fingers' plane, low down
+MIN_PINCH = 0.007  # m: a pinched wall the 70 N squeeze leaves wider than the 4 mm the hand
+#: reads as "holding something"
+# ------------------------------------------------------------------ how a grasp is decoded
+GRASP_DEPTH = 0.025  # m below the member's palm face (at most half the member)
+TIP_BELOW_TCP = 0.0095  # m
+TIP_CLEARANCE = 0.003  # m above the object's bottom
+OPEN_CLEARANCE = 0.008  # m a side beyond the member when the fingers come down
+# ------------------------------------------------------------------ tolerances
+STOP_TOLERANCE = 0.002  # m a finger may land early on the body it pinches
+MIN_PAD_OVERLAP = 0.005  # m of pad on the pinched edge
+TOUCH = 0.0005  # m: closer than this is touching, not colliding
+CONTACT = 0.002  # m beside the face where the pad ends up touching (a curved wall bulges in)
+# ------------------------------------------------------------------ what a grasp holds
+G = 9.81
+TORQUE_LIMIT = 1.4  # N m about the grasp, hanging (the object's centre below or level)
+TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
+ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
+STAND_MARGIN = 0.01  # m: the centre of mass stays this far inside the standing surface
+
+
+class Solid(NamedTuple):
+    """A box or upright cylinder of material (object frame), with an optional hole in its
+    footprint: ``(cx, cy, hx, hy)``, a rectangle (or a circle of radius hx if round)."""
+
+    lo: tuple[float, float, float]
+    hi: tuple[float, float, float]
+    round: bool = False
+    hole: tuple[float, float, float, float] | None = None
+
+    def covers(self, x: float, y: float) -> bool:
+        return self.overlaps((x, x), (y, y))
+
+    def overlaps(self, xs: tuple[float, float], ys: tuple[float, float]) -> bool:
+        """True if the footprint meets the rectangle `xs` x `ys` (closed; exact)."""
+        cx, cy = (self.lo[0] + self.hi[0]) / 2, (self.lo[1] + self.hi[1]) / 2
+        if self.round:
+            r = min(self.hi[0] - self.lo[0], self.hi[1] - self.lo[1]) / 2
+            dx = max(xs[0] - cx, 0.0, cx - xs[1])
+            dy = max(ys[0] - cy, 0.0, cy - ys[1])
+            if dx * dx + dy * dy > r * r:
+                return False
+        elif xs[0] > self.hi[0] or xs[1] < self.lo[0] or ys[0] > self.hi[1] or ys[1] < self.lo[1]:
+            return False
+        if self.hole is None:
+            return True
+        hx0, hy0, hr, hh = self.hole  # the rectangle lies wholly in the hole: no material
+        if self.round:
+            far = max(abs(x - hx0) for x in xs) ** 2 + max(abs(y - hy0) for y in ys) ** 2
+            return far >= hr * hr
+        inside = all(abs(x - hx0) < hr for x in xs) and all(abs(y - hy0) < hh for y in ys)
+        return not inside
+
+
+def _flip(b: tuple[tuple[float, float, float], tuple[float, float, float]]) -> tuple:
+    """A half turn about x: y -> -y, z -> -z."""
+    lo, hi = b
+    return (lo[0], -hi[1], -hi[2]), (hi[0], -lo[1], -lo[2])
+
+
+def realised_by_body(t: ObjectType, m: Member) -> bool:
+    """An edge inside the body's box is the body's own wall or rim."""
+    return m.kind == "edge" and t.body.box.contains(m.box, tol=1e-6)
+
+
+def solids(t: ObjectType, flipped: bool = False) -> tuple[tuple[str, Solid], ...]:
+    """(member, solid) material of the object (see the module docstring); `flipped`: the
+    object turned upside down (a half turn about x). Cached by what decides it: the
+    members and the top and bottom parts."""
+    return _solids(tuple(t.members.values()), t.parts["on"], t.parts["under"], flipped)
+
+
+@lru_cache(maxsize=16_384)
+def _solids(
+    members: tuple[Member, ...], top: PartAttrs, under: PartAttrs, flipped: bool
+) -> tuple[tuple[str, Solid], ...]:
+    body = next(m for m in members if m.kind == "body")
+    bottom = min(m.box.min[2] for m in members)
+    lo, hi = body.box.min, body.box.max
+    round_ = body.geom == "cylinder"
+    face = (hi[0] - lo[0], hi[1] - lo[1])
+    forms_top = hi[2] >= max(m.box.max[2] for m in members) - 1e-9
+    out: list[tuple[str, Solid]] = []
+    size = top.size if top.size is not None else face
+    cx, cy = top.center if top.center is not None else ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
+    smaller = size[0] < face[0] - 1e-9 or size[1] < face[1] - 1e-9
+    hole = (cx, cy, size[0] / 2, size[1] / 2)
+    if forms_top and top.shape in ("open", "concave") and smaller:
+        floor = lo[2] + floor_thickness(top.shape == "concave", hi[2] - lo[2])
+        base = under.size if lo[2] <= bottom + 1e-9 else None
+        if round_ and base is not None and min(base) < min(face) - 1e-9:  # a flared wall
+            r = min(base) / 2
+            mid = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
+            out.append(
+                (
+                    body.name,
+                    Solid((mid[0] - r, mid[1] - r, lo[2]), (mid[0] + r, mid[1] + r, floor), True),
+                )
+            )
+        else:
+            out.append((body.name, Solid(lo, (hi[0], hi[1], floor), round_)))
+        out.append((body.name, Solid(lo, hi, round_, hole)))
+    elif (
+        forms_top
+        and top.shape == "flat"
+        and (smaller or (top.height is not None and top.height < hi[2] - 1e-9))
+    ):
+        surface = top.height if top.height is not None else hi[2]
+        out.append((body.name, Solid(lo, (hi[0], hi[1], surface), round_)))
+        if smaller:
+            out.append((body.name, Solid(lo, hi, round_, hole)))
+    else:
+        out.append((body.name, Solid(lo, hi, round_)))
+    for m in members:
+        if m.kind != "body" and not (m.kind == "edge" and body.box.contains(m.box, tol=1e-6)):
+            out.append((m.name, Solid(m.box.min, m.box.max, m.geom == "cylinder")))
+    if not flipped:
+        return tuple(out)
+    flip = []
+    for name, s in out:
+        slo, shi = _flip((s.lo, s.hi))
+        hole = None if s.hole is None else (s.hole[0], -s.hole[1], s.hole[2], s.hole[3])
+        flip.append((name, Solid(slo, shi, s.round, hole)))
+    return tuple(flip)
+
+
+def _area(s: Solid) -> tuple[float, float, float]:
+    """(area, x moment, y moment) of a solid's footprint, its hole taken out."""
+    w, d = s.hi[0] - s.lo[0], s.hi[1] - s.lo[1]
+    cx, cy = (s.lo[0] + s.hi[0]) / 2, (s.lo[1] + s.hi[1]) / 2
+    area = math.pi * min(w, d) ** 2 / 4 if s.round else w * d
+    mx, my = area * cx, area * cy
+    if s.hole is not None:
+        hx, hy = s.hole[2], s.hole[3]
+        hole = math.pi * hx * hx if s.round else 4 * hx * hy
+        area, mx, my = area - hole, mx - hole * s.hole[0], my - hole * s.hole[1]
+    return area, mx, my
+
+
+def centre_of_mass(t: ObjectType) -> tuple[float, float]:
+    """xy of the object's centre of mass with its mass spread evenly over its material
+    (`solids`), as the simulator spreads it over the primitives it builds."""
+    return _centre_of_mass(solids(t))
+
+
+@lru_cache(maxsize=16_384)
+def _centre_of_mass(material: tuple[tuple[str, Solid], ...]) -> tuple[float, float]:
+    total = mx = my = 0.0
+    for _, s in material:
+        area, ax, ay = _area(s)
+        h = s.hi[2] - s.lo[2]
+        total, mx, my = total + area * h, mx + ax * h, my + ay * h
+    if total <= 0:
+        s = material[0][1]
+        return (s.lo[0] + s.hi[0]) / 2, (s.lo[1] + s.hi[1]) / 2
+    return mx / total, my / total
+
+
+def stands_on(t: ObjectType, part: str) -> bool:
+    """The object's centre of mass lies over its standing surface `part` (``under`` or
+    ``on``), `STAND_MARGIN` inside its edge: a pan whose handle outweighs its shallow body
+    tips over onto it."""
+    x, y = centre_of_mass(t)
+    (w, d), (cx, cy) = t.surface_size(part), t.surface_center(part)
+    return abs(x - cx) <= w / 2 - STAND_MARGIN and abs(y - cy) <= d / 2 - STAND_MARGIN
+
+
+def _member_box(t: ObjectType, member: str, flipped: bool) -> Box:
+    b = t.members[member].box
+    return Box(*_flip((b.min, b.max))) if flipped else b
+
+
+class FingerRoom(NamedTuple):
+    """How far above its target each finger would stop (m), and the pad's overlap with the
+    member when it stops there."""
+
+    shortfall: tuple[float, float]
+    on_body: tuple[bool, bool]  # the stop is on the grasped edge's own body
+    overlap: tuple[float, float]
+
+
+def grip_centre(t: ObjectType, member: str, lat: int, flipped: bool) -> float:
+    """Where along the lateral axis `lat` the fingers close: the member's middle, or a loop
+    handle's outer bar (`utamp_gym.scene.shapes`), as the decoder places them."""
+    box = _member_box(t, member, flipped)
+    loop = loop_axis(t, t.members[member])
+    if loop is None or loop[0] != lat:
+        return (box.min[lat] + box.max[lat]) / 2
+    sign = -loop[1] if flipped and lat == 1 else loop[1]
+    outer = box.max[lat] if sign > 0 else box.min[lat]
+    return outer - sign * BAR / 2
+
+
+def tip_height(t: ObjectType, member: str, palm: str) -> float:
+    """Where the decoder puts the fingertips (frame of the object turned palm-part up)."""
+    box = _member_box(t, member, palm == "under")
+    bottom = min(_member_box(t, m, palm == "under").min[2] for m in t.members)
+    top = box.max[2]
+    tcp = top - min(GRASP_DEPTH, (box.max[2] - box.min[2]) / 2)
+    tcp = max(tcp, bottom + TIP_CLEARANCE + TIP_BELOW_TCP)
+    return tcp - TIP_BELOW_TCP
+
+
+def finger_room(t: ObjectType, member: str, palm: str, finger: str) -> FingerRoom:
+    """Where the fingers closing along `finger`'s axis on `member` (palm on `palm`) stop."""
+    flipped = palm == "under"
+    box = _member_box(t, member, flipped)
+    ax = axis_of(finger)
+    lat = 1 - ax
+    width = box.max[ax] - box.min[ax]
+    opening = min(OPEN_CLEARANCE, max(GRIPPER_OPENING - width, 0.0) / 2)
+    tip = tip_height(t, member, palm)
+    centre = grip_centre(t, member, lat, flipped)
+    m = t.members[member]
+    own = t.body.name if realised_by_body(t, m) else member
+    material = [(n, s) for n, s in solids(t, flipped) if n != member]
+    segments = (  # (height above the tip, from, to along the closing axis, half width)
+        (0.0, CONTACT, opening + PAD_THICKNESS + NOISE_MARGIN, PAD_WIDTH / 2 + NOISE_MARGIN),
+        (LOWER_FINGER, opening, opening + UPPER_FINGER[1] + NOISE_MARGIN,
+         UPPER_FINGER[2] / 2 + NOISE_MARGIN),
+    )  # fmt: skip
+    shortfall, on_body, overlap = [], [], []
+    for sign in (-1, 1):
+        face = box.max[ax] if sign > 0 else box.min[ax]
+        stop, stop_body = tip, True
+        for above, near, far, half in segments:
+            closing = sorted((face + sign * near, face + sign * far))
+            rect = [(0.0, 0.0), (0.0, 0.0)]
+            rect[ax] = (closing[0], closing[1])
+            rect[lat] = (centre - half, centre + half)
+            for name, s in material:
+                if s.hi[2] - above > stop + 1e-12 and s.overlaps(rect[0], rect[1]):
+                    stop, stop_body = s.hi[2] - above, name == own
+        short = max(0.0, stop - tip)
+        shortfall.append(short)
+        on_body.append(stop_body)
+        pad_lo = tip + short
+        overlap.append(min(pad_lo + PAD_HEIGHT, box.max[2]) - max(pad_lo, box.min[2]))
+    return FingerRoom(
+        (shortfall[0], shortfall[1]), (on_body[0], on_body[1]), (overlap[0], overlap[1])
+    )
+
+
+def hand_room(t: ObjectType, member: str, palm: str, finger: str) -> bool:
+    """The hand above the fingers comes down without landing on the object: no material
+    (but the grasped member) rises above the hand's underside within its thickness across
+    the fingers' plane (an upside-down pot whose lug stands out too little)."""
+    flipped = palm == "under"
+    box = _member_box(t, member, flipped)
+    ax = axis_of(finger)
+    lat = 1 - ax
+    tcp = tip_height(t, member, palm) + TIP_BELOW_TCP
+    bottom = tcp + HAND_ABOVE_TCP + STOP_TOLERANCE
+    reach = (box.max[ax] - box.min[ax]) / 2 + OPEN_CLEARANCE + UPPER_FINGER[1]
+    cl, ca = grip_centre(t, member, lat, flipped), (box.min[ax] + box.max[ax]) / 2
+    material = [s for n, s in solids(t, flipped) if n != member and s.hi[2] > bottom]
+    rect = [(0.0, 0.0), (0.0, 0.0)]
+    rect[ax] = (ca - reach, ca + reach)
+    rect[lat] = (cl - HAND_HALF_THICKNESS, cl + HAND_HALF_THICKNESS)
+    return not any(s.overlaps(rect[0], rect[1]) for s in material)
+
+
+def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
+    """Both fingers reach their places beside the member, the hand comes down above them,
+    and a pinched edge is thick enough to be felt (see the module docstring)."""
+    edge_member = t.members[member].kind == "edge"
+    if edge_member and t.members[member].box.size[axis_of(finger)] < MIN_PINCH - 1e-9:
+        return False
+    if not hand_room(t, member, palm, finger):
+        return False
+    room = finger_room(t, member, palm, finger)
+    edge = realised_by_body(t, t.members[member])
+    for short, body, overlap in zip(room.shortfall, room.on_body, room.overlap, strict=True):
+        if short <= TOUCH:
+            continue
+        if not (edge and body and short <= STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
+            return False
+    return True
+
+
+def width_fits(width: float, member: Member) -> bool:
+    """The open hand clears a member it wraps (a body, a handle); an edge is pinched."""
+    return width <= GRIPPER_OPENING - (0.0 if member.kind == "edge" else 2 * WRAP_CLEARANCE)
+
+
+def holds(t: ObjectType, member: str, palm: str) -> bool:
+    """The pads hold the moment of the object's weight about the grasp (module docstring)."""
+    flipped = palm == "under"
+    grip = _member_box(t, member, flipped)
+    body = _member_box(t, t.body.name, flipped)
+    gx, gy = grip.center_xy
+    bx, by = body.center_xy
+    lever = math.hypot(gx - bx, gy - by)
+    grasp_z = grip.max[2] - min(GRASP_DEPTH, (grip.max[2] - grip.min[2]) / 2)
+    above = (body.min[2] + body.max[2]) / 2 > grasp_z + ABOVE
+    return t.mass * G * lever <= (TORQUE_LIMIT_ABOVE if above else TORQUE_LIMIT)
+
+
+__all__ = [
+    "GRIPPER_OPENING",
+    "FingerRoom",
+    "Solid",
+    "centre_of_mass",
+    "finger_room",
+    "fingers_fit",
+    "grip_centre",
+    "hand_room",
+    "holds",
+    "realised_by_body",
+    "solids",
+    "stands_on",
+    "tip_height",
+    "width_fits",
+]
