@@ -29,9 +29,11 @@ import numpy as np
 from utamp_gym.backend import DEFAULT_POSE_NOISE, Fault, MacroResult
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
 from utamp_gym.perception.state import Grasp, PhysicalState
+from utamp_gym.perception.views import RobotState, ViewBundle
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.model import Scene
+from utamp_gym.sim.cameras import SURVEY_SIZE, SURVEY_VIEWS, CameraRig, add_wrist_camera
 from utamp_gym.sim.control import ArmDriver, Timings
 from utamp_gym.sim.decode import parse_action
 from utamp_gym.sim.estimate import PoseEstimator
@@ -76,6 +78,7 @@ class MujocoBackend:
         self.frame_period, self.frame_size = frame_period, frame_size
         self._kin: PandaKinematics | None = None
         self._state: SimState | None = None
+        self._rig: CameraRig | None = None
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._steps = 0
         self._watchers: dict[int, tuple[Callable[[], None], float]] = {}
@@ -93,6 +96,7 @@ class MujocoBackend:
             scene, rng=rng, pos_noise=self.pos_noise, yaw_noise_deg=self.yaw_noise_deg
         )
         handles = add_panda(spec)
+        add_wrist_camera(spec, handles.prefix)
         world = compile_world(spec, info)
         data = mujoco.MjData(world.model)
         ids = handles.bind(world.model)
@@ -187,6 +191,28 @@ class MujocoBackend:
         self._close_renderers()
         self._state = None
 
+    # ------------------------------------------------------------ cameras
+    @property
+    def cameras(self) -> CameraRig:
+        """The world's RGB-D cameras (`utamp_gym.sim.cameras`), made on first use."""
+        st = self._require()
+        if self._rig is None or self._rig.model is not st.world.model:
+            if self._rig is not None:
+                self._rig.close()
+            self._rig = CameraRig(st.world.model, st.world.body_ids, st.arm.ids.body_ids)
+        return self._rig
+
+    def survey(self) -> ViewBundle:
+        """The first, careful look at the table: every scene camera, colour, depth and
+        instance masks at `cameras.SURVEY_SIZE` (what `utamp2-perceived` perceives)."""
+        st = self._require()
+        return self.cameras.look(st.data, SURVEY_VIEWS, SURVEY_SIZE, robot=self.robot_state())
+
+    def robot_state(self) -> RobotState:
+        """The robot's own state (joints, finger gap, TCP pose)."""
+        st = self._require()
+        return RobotState(st.arm.q(), st.arm.gap(), st.arm.tcp())
+
     # ------------------------------------------------------------ frames
     @property
     def frame_sink(self) -> FrameSink | None:
@@ -258,6 +284,9 @@ class MujocoBackend:
         for r in self._renderers.values():
             r.close()
         self._renderers.clear()
+        if self._rig is not None:
+            self._rig.close()
+            self._rig = None
 
 
 def _every(period: float, dt: float) -> int:

@@ -27,6 +27,12 @@ import numpy as np
 from utamp_gym.errors import SimulationError, UnknownNameError
 from utamp_gym.perception.abstraction import TILT_DEG
 from utamp_gym.scene.model import Pose, Scene
+from utamp_gym.sim.appearance import (
+    ACCENT_MATERIAL,
+    add_materials,
+    material_name,
+    object_appearance,
+)
 from utamp_gym.sim.bodies import (
     BODY_PREFIX,
     ROLLING,
@@ -36,8 +42,8 @@ from utamp_gym.sim.bodies import (
     add_object_body,
     friction_of,
     initial_poses,
-    object_colours,
 )
+from utamp_gym.sim.cameras import add_scene_cameras
 
 TABLE_GEOM = "table"
 FLOOR_Z = -0.75  # m, the floor under the table (objects that fall off land here)
@@ -133,6 +139,7 @@ def _add_environment(spec: mujoco.MjSpec, scene: Scene) -> None:
         quat, np.array([[0.0, -0.6, 0.8], [1.0, 0.0, 0.0], [0.0, 0.8, 0.6]]).ravel()
     )
     spec.worldbody.add_camera(name="overview", pos=[1.55, 0.0, 1.05], quat=quat.tolist())
+    add_scene_cameras(spec)
 
 
 def build_world_spec(
@@ -158,9 +165,18 @@ def build_world_spec(
     spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
     _add_environment(spec, scene)
     poses = initial_poses(scene, rng, pos_noise, yaw_noise_deg)
-    colours = object_colours(scene)
+    looks = object_appearance(scene, rng)  # a child generator: the draws above are unchanged
+    add_materials(spec, looks)
     geoms = {
-        o.name: add_object_body(spec, scene, o.name, poses[o.name], colours[o.name])
+        o.name: add_object_body(
+            spec,
+            scene,
+            o.name,
+            poses[o.name],
+            looks[o.name].rgba,
+            material=material_name(o.name),
+            accent_material=ACCENT_MATERIAL,
+        )
         for o in scene.objects
     }
     info = WorldInfo(
