@@ -7,12 +7,17 @@ scales all three channels alike), its median saturation and brightness, and its 
 are) — the finish: glazed ceramic and steel shine, wood and cardboard do not; and the
 spread of its colour where something shows through it (glass is translucent).
 
-**The classifier** (`MaterialModel`) is a Gaussian per material over those features (plain
-numpy), trained on rendered instances whose colours and finishes were drawn from each
-material's palette (`utamp_gym.scene.materials`), by `benchmarks/material_model.py`, which
-writes `assets/perception/material_model.json` and measures it against scikit-learn's
-classifiers (docs/perception.md). Without the file, the nearest palette colour in
-chromaticity decides.
+**The classifier** (`MaterialModel`) is a mixture of Gaussians over those features (plain
+numpy; one component per palette colour of each material), trained on rendered instances
+whose colours and finishes were drawn from each material's palette
+(`utamp_gym.scene.materials`) independently of their shape, times a prior of the material
+given the object's coarse shape (`shape_class`: a rimmed tray is rarely cardboard, a
+closed box often is), counted over the packaged catalogues with `PRIOR_ALPHA` pseudo-counts
+per material — the context a person (or a VLM) uses where colour and finish are alike, as
+those of wood and cardboard are. `benchmarks/material_model.py` trains it, writes
+`assets/perception/material_model.json` and measures it against scikit-learn's classifiers
+(docs/perception.md). Without the file, the nearest palette colour in chromaticity
+decides.
 
 **Mass** (`estimate_mass`) is volume x density: solid pieces (carved wood: `Material.wall`
 is None) fill their visible envelope less what is seen to be hollow; the others are shells
@@ -32,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.materials import MATERIALS, hex_rgba, material
 
 FEATURES = (
@@ -40,11 +46,15 @@ FEATURES = (
     "chroma_b",
     "saturation",
     "value",
-    "highlight_rise",
-    "highlight_whiteness",
-    "highlight_share",
+    "top_gain",
+    "top_white",
+    "low_peak",
+    "low_whiteness",
     "chroma_spread",
 )
+#: camera optical axes pointing down steeper than this look from above; flatter than
+#: `LOW_AXIS_Z` look along the table (their own light then strikes sides head-on)
+TOP_AXIS_Z, LOW_AXIS_Z = -0.85, -0.3
 MODEL_FILE = ("perception", "material_model.json")
 
 
@@ -55,32 +65,44 @@ def _hsv(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return sat, mx
 
 
-def appearance_features(colours: np.ndarray) -> np.ndarray:
-    """The `FEATURES` of an object's pixel colours (N, 3) uint8 (module docstring)."""
-    rgb = np.asarray(colours, dtype=float) / 255.0
-    if len(rgb) < 5:
+def appearance_features(views: list[tuple[float, np.ndarray]]) -> np.ndarray:
+    """The `FEATURES` of an object from its pixels: (optical axis z, colours (N, 3) uint8)
+    per view (module docstring). The colour comes from the views that do not look from
+    above (from above, the sun's reflection washes shiny tops out); the finish from how
+    much brighter and whiter the object looks from above than from the side, and from the
+    peak of the highlight the low cameras' own light puts on faces turned to them."""
+    top = [c for z, c in views if z < TOP_AXIS_Z and len(c)]
+    low = [c for z, c in views if z > LOW_AXIS_Z and len(c)]
+    side = [c for z, c in views if z >= TOP_AXIS_Z and len(c)]
+    if not side:
+        side = top
+    if not side or sum(len(c) for c in side) < 5:
         return np.full(len(FEATURES), np.nan)
+    rgb = np.concatenate(side).astype(float) / 255.0
     sat, val = _hsv(rgb)
     lo, hi = np.percentile(val, [20, 80])
     body = rgb[(val >= lo) & (val <= hi)]
     if len(body) < 3:
         body = rgb
-    total = body.sum(axis=1, keepdims=True)
-    chroma = body / np.maximum(total, 1e-6)
+    chroma = body / np.maximum(body.sum(axis=1, keepdims=True), 1e-6)
     med = np.median(chroma, axis=0)
     spread = float(np.median(np.abs(chroma - med).sum(axis=1)))
-    v50, v97 = np.percentile(val, [50, 97])
-    bright = val >= v97
+    v50 = float(np.median(val))
+    top_gain = top_white = 0.0
+    if top:
+        t = np.concatenate(top).astype(float) / 255.0
+        ts, tv = _hsv(t)
+        top_gain = float(np.median(tv)) - v50
+        top_white = float(np.mean((tv > 0.93) & (ts < 0.2)))
+    low_peak = low_white = 0.0
+    if low:
+        lw = np.concatenate(low).astype(float) / 255.0
+        ls, lv = _hsv(lw)
+        peak = lv >= np.percentile(lv, 99)
+        low_peak = float(np.percentile(lv, 99.5) - np.median(lv))
+        low_white = float(1.0 - np.median(ls[peak]))
     return np.array(
-        [
-            *med,
-            float(np.median(sat)),
-            float(v50),
-            float(v97 - v50),
-            float(1.0 - np.median(sat[bright])) if bright.any() else 0.0,
-            float(np.mean(val > v50 + 0.2)),
-            spread,
-        ]
+        [*med, float(np.median(sat)), v50, top_gain, top_white, low_peak, low_white, spread]
     )
 
 
@@ -93,43 +115,124 @@ class MaterialEstimate:
 
 
 class MaterialModel:
-    """Gaussian class-conditional model (diagonal covariance) over `FEATURES`."""
+    """A mixture of Gaussians (diagonal covariance) over `FEATURES`: one component per
+    palette colour of each material (a material's colours are far apart), each weighted by
+    how many training objects it explained."""
 
-    def __init__(self, names: list[str], means: np.ndarray, stds: np.ndarray) -> None:
-        self.names, self.means, self.stds = names, np.asarray(means), np.asarray(stds)
+    def __init__(
+        self,
+        materials: list[str],
+        means: np.ndarray,
+        stds: np.ndarray,
+        weights: np.ndarray,
+        prior: dict[str, dict[str, float]] | None = None,
+        temperature: float = 1.0,
+    ) -> None:
+        self.materials = list(materials)  # the material of each component
+        self.means, self.stds = np.asarray(means), np.asarray(stds)
+        self.weights = np.asarray(weights, dtype=float)
+        self.prior = prior or {}  # shape class -> material -> probability
+        #: the appearance log-likelihood is divided by it: correlated features would
+        #: otherwise count as independent evidence (calibrated on held-out renders)
+        self.temperature = float(temperature)
 
     @classmethod
-    def fit(cls, features: np.ndarray, labels: list[str], floor: float = 0.01) -> MaterialModel:
-        names = sorted(set(labels))
-        lab = np.asarray(labels)
-        means = np.array([features[lab == n].mean(axis=0) for n in names])
-        stds = np.array([features[lab == n].std(axis=0) + floor for n in names])
-        return cls(names, means, stds)
+    def fit(cls, features: np.ndarray, labels: list[str], floor: float = 0.004) -> MaterialModel:
+        """One component per (material, nearest palette colour) of the training objects."""
+        comp_of = [(lab, _nearest_colour(lab, x)) for x, lab in zip(features, labels, strict=True)]
+        keys = sorted(set(comp_of))
+        pooled = {lab: features[[c[0] == lab for c in comp_of]].std(axis=0) for lab in set(labels)}
+        mats, means, stds, weights = [], [], [], []
+        for key in keys:
+            sel = np.array([c == key for c in comp_of])
+            x = features[sel]
+            std = x.std(axis=0) if len(x) >= 5 else pooled[key[0]]
+            mats.append(key[0])
+            means.append(x.mean(axis=0))
+            stds.append(np.maximum(std, floor))
+            weights.append(len(x))
+        return cls(mats, np.array(means), np.array(stds), np.array(weights))
 
     def to_json(self) -> dict[str, object]:
         return {
             "features": list(FEATURES),
-            "materials": self.names,
-            "means": np.round(self.means, 6).tolist(),
-            "stds": np.round(self.stds, 6).tolist(),
-        }
+            "temperature": round(self.temperature, 4),
+            "prior": {
+                c: {m: round(p, 4) for m, p in sorted(ps.items())}
+                for c, ps in sorted(self.prior.items())
+            },
+            "components": [
+                {"material": m, "weight": float(w), "mean": np.round(mu, 6).tolist(),
+                 "std": np.round(sd, 6).tolist()}
+                for m, w, mu, sd in zip(self.materials, self.weights, self.means, self.stds,
+                                        strict=True)
+            ],
+        }  # fmt: skip
 
     @classmethod
     def from_json(cls, data: dict[str, object]) -> MaterialModel:
         if list(data["features"]) != list(FEATURES):  # type: ignore[call-overload]
             raise ValueError("material model was trained on other features")
-        return cls(list(data["materials"]), np.asarray(data["means"]), np.asarray(data["stds"]))  # type: ignore[call-overload, arg-type]
+        comps = data["components"]
+        return cls(
+            [c["material"] for c in comps],  # type: ignore[union-attr, index]
+            np.array([c["mean"] for c in comps]),  # type: ignore[union-attr, index]
+            np.array([c["std"] for c in comps]),  # type: ignore[union-attr, index]
+            np.array([c["weight"] for c in comps]),  # type: ignore[union-attr, index]
+            data.get("prior"),  # type: ignore[arg-type]
+            float(data.get("temperature", 1.0)),  # type: ignore[arg-type]
+        )
 
-    def log_likelihood(self, x: np.ndarray) -> np.ndarray:
+    def with_prior(
+        self, prior: dict[str, dict[str, float]], temperature: float | None = None
+    ) -> MaterialModel:
+        t = self.temperature if temperature is None else temperature
+        return MaterialModel(self.materials, self.means, self.stds, self.weights, prior, t)
+
+    def calibrated(self, features: np.ndarray, labels: list[str]) -> MaterialModel:
+        """This model with the temperature that best predicts `labels` (held-out objects:
+        the lowest mean negative log posterior of the true material)."""
+        best, best_nll = 1.0, math.inf
+        for t in (1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0):
+            m = self.with_prior(self.prior, t)
+            nll = -np.mean(
+                [
+                    math.log(max(m.classify(x).posterior.get(y, 0.0), 1e-12))
+                    for x, y in zip(features, labels, strict=True)
+                ]
+            )
+            if nll < best_nll:
+                best, best_nll = t, nll
+        return self.with_prior(self.prior, best)
+
+    def classify(self, x: np.ndarray, shape: str | None = None) -> MaterialEstimate:
+        """Posterior over materials of appearance `x` on an object of shape class `shape`."""
         z = (x[None, :] - self.means) / self.stds
-        return -0.5 * (z**2).sum(axis=1) - np.log(self.stds).sum(axis=1)
-
-    def classify(self, x: np.ndarray) -> MaterialEstimate:
-        ll = self.log_likelihood(x)
+        ll = -0.5 * (z**2).sum(axis=1) - np.log(self.stds).sum(axis=1)
+        ll = ll / self.temperature + np.log(self.weights)
         p = np.exp(ll - ll.max())
-        p /= p.sum()
-        post = {n: float(v) for n, v in zip(self.names, p, strict=True)}
-        return MaterialEstimate(self.names[int(np.argmax(p))], post)
+        post: dict[str, float] = {}
+        for m, v in zip(self.materials, p, strict=True):
+            post[m] = post.get(m, 0.0) + float(v)
+        total = sum(post.values())
+        post = {m: v / total for m, v in post.items()}
+        context = self.prior.get(shape or "", {})
+        if context:
+            post = {m: v * context.get(m, min(context.values())) for m, v in post.items()}
+        total = sum(post.values())
+        post = {m: v / total for m, v in post.items()}
+        return MaterialEstimate(max(post, key=post.__getitem__), post)
+
+
+def _nearest_colour(material_name: str, x: np.ndarray) -> int:
+    """Index of the palette colour of `material_name` nearest to features `x` (chroma)."""
+    best, best_d = 0, math.inf
+    for k, c in enumerate(material(material_name).palette):
+        rgb = np.asarray(hex_rgba(c)[:3])
+        d = float(np.abs(rgb / max(rgb.sum(), 1e-6) - x[:3]).sum())
+        if d < best_d:
+            best, best_d = k, d
+    return best
 
 
 @lru_cache(maxsize=1)
@@ -161,14 +264,49 @@ def nearest_palette(x: np.ndarray) -> MaterialEstimate:
 
 
 def classify_material(
-    colours: np.ndarray | None, model: MaterialModel | None = None
+    views: list[tuple[float, np.ndarray]],
+    shape: str | None = None,
+    model: MaterialModel | None = None,
 ) -> MaterialEstimate:
-    """Material of an object from its pixel colours (the packaged model unless given)."""
-    if colours is None or len(colours) < 5:
+    """Material of an object from its pixels per view (see `appearance_features`) and its
+    shape class (`shape_class`), with the packaged model unless `model` is given."""
+    if sum(len(c) for _, c in views) < 5:
         return MaterialEstimate("default", {"default": 1.0})
-    x = appearance_features(colours)
+    x = appearance_features(views)
     model = model if model is not None else packaged_model()
-    return model.classify(x) if model is not None else nearest_palette(x)
+    return model.classify(x, shape) if model is not None else nearest_palette(x)
+
+
+#: pseudo-count per material and shape class: a small one trusts the catalogues' pairing of
+#: shapes and materials (measured in docs/perception.md, with and without it)
+PRIOR_ALPHA = 0.1
+SHAPE_CLASSES = ("necked", "vessel", "dish", "well", "slab", "closed-box", "closed-round")
+
+
+def shape_class(t: ObjectType) -> str:
+    """Coarse shape of a catalogue type (perceived or declared), for the material prior."""
+    on, body = t.parts["on"], t.body
+    if on.shape == "pointy" and body.box.max[2] < t.bbox.max[2] - 1e-6:
+        return "necked"
+    if on.shape == "open":
+        return "vessel"
+    if on.shape == "concave":
+        return "dish"
+    if on.shape == "flat" and on.height is not None and on.height < body.box.max[2] - 0.003:
+        return "well"
+    if body.geom == "cylinder":
+        return "closed-round"
+    return "slab" if body.box.size[2] < 0.055 else "closed-box"
+
+
+def shape_prior(types: list[ObjectType], alpha: float = PRIOR_ALPHA) -> dict[str, dict[str, float]]:
+    """P(material | shape class) counted over `types` with `alpha` pseudo-counts."""
+    names = sorted(MATERIALS)
+    counts = {c: dict.fromkeys(names, alpha) for c in SHAPE_CLASSES}
+    for t in types:
+        if t.movable and t.material in MATERIALS:
+            counts[shape_class(t)][t.material] += 1.0
+    return {c: {m: v / sum(ms.values()) for m, v in ms.items()} for c, ms in counts.items()}
 
 
 def estimate_mass(material_name: str, solid_volume: float, area: float) -> tuple[float, float]:
@@ -189,4 +327,6 @@ __all__ = [
     "estimate_mass",
     "nearest_palette",
     "packaged_model",
+    "shape_class",
+    "shape_prior",
 ]

@@ -36,7 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from utamp_gym.perception.cloud import Scene3D, fuse
-from utamp_gym.perception.material import MaterialEstimate, classify_material, estimate_mass
+from utamp_gym.perception.material import (
+    MaterialEstimate,
+    classify_material,
+    estimate_mass,
+    shape_class,
+)
 from utamp_gym.perception.shape import SeenBox, SeenMember, SeenShape, fit_shape
 from utamp_gym.perception.views import ViewBundle
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
@@ -79,6 +84,12 @@ class PerceivedObject:
         """Height of the object's top above its support (m)."""
         boxes = [self.shape.body.box, *(m.box for m in self.shape.members)]
         return max(b.hi[2] for b in boxes)
+
+    def shape_class(self, orientation: str | None = None) -> str:
+        """Coarse shape (`material.shape_class`) of the object in its own frame: upright
+        unless `orientation` (or the look: a flat top seen over a rim-less body standing
+        on a hidden face is read upright)."""
+        return shape_class(self.as_type("probe", orientation or "upright"))
 
     def as_type(self, name: str, orientation: str = "upright") -> ObjectType:
         """The perceived catalogue type in the object's frame (module docstring)."""
@@ -246,14 +257,34 @@ def _shell_area(shape: SeenShape) -> float:
 def perceive_objects(bundle: ViewBundle, *, prior_yaw: float = 0.0) -> dict[int, PerceivedObject]:
     """Every object instance seen in `bundle`, perceived (module docstring)."""
     scene = fuse(bundle)
-    return {i: perceive_instance(scene, i, prior_yaw=prior_yaw) for i in sorted(scene.objects)}
+    return {
+        i: perceive_instance(scene, i, instance_pixels(bundle, i), prior_yaw=prior_yaw)
+        for i in sorted(scene.objects)
+    }
 
 
-def perceive_instance(scene: Scene3D, instance: int, *, prior_yaw: float = 0.0) -> PerceivedObject:
-    """One object of a fused look."""
+def instance_pixels(bundle: ViewBundle, instance: int) -> list[tuple[float, np.ndarray]]:
+    """(optical axis z, colours (N, 3)) of an instance's pixels in every view with colour."""
+    return [
+        (float(v.world_from_camera[2, 2]), v.rgb[v.instances == instance])
+        for v in bundle.views
+        if v.rgb is not None
+    ]
+
+
+def perceive_instance(
+    scene: Scene3D,
+    instance: int,
+    colours: list[tuple[float, np.ndarray]],
+    *,
+    prior_yaw: float = 0.0,
+) -> PerceivedObject:
+    """One object of a fused look (`colours`: its pixels per view, `instance_pixels`)."""
     cloud = scene.objects[instance]
     shape = fit_shape(cloud, scene, instance, prior_yaw=prior_yaw)
-    mat = classify_material(cloud.colours)
+    provisional = MaterialEstimate("default", {"default": 1.0})
+    looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, ())
+    mat = classify_material(colours, looks.shape_class())
     mass, low = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
     return PerceivedObject(instance, shape, mat, mass, low, _edges(shape, mass))
 

@@ -441,6 +441,8 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     )
     if geom == "cylinder" and top_shape.visible and top_shape.shape in ("open", "concave"):
         top_shape = _round_opening(top_shape, local[in_body], centre, radius)
+    elif geom == "box" and top_shape.visible and top_shape.rim > 0:
+        top_shape = _box_opening(top_shape, local[in_body], body_lo, body_hi, body_top)
     flare = _flare(local[in_body], centre, body_top) if geom == "cylinder" else 0.0
     if not top_shape.visible:
         shape = "concave" if flare > 0.12 else "flat"
@@ -591,6 +593,34 @@ def _round_opening(top: SeenTop, pts: np.ndarray, centre: np.ndarray, radius: fl
     return SeenTop(
         top.shape, (d, d), top.height, top.center, radius - inner, top.floor, top.visible
     )
+
+
+def _box_opening(
+    top: SeenTop, pts: np.ndarray, lo: np.ndarray, hi: np.ndarray, level: float
+) -> SeenTop:
+    """A box's opening or well from the inner edges of its rim's top on each side (finer
+    than cells; objects standing in the well do not shrink it)."""
+    rim = pts[pts[:, 2] >= level - 0.003]
+    size, mid = hi - lo, (hi + lo) / 2
+    inner = []
+    for ax in (0, 1):
+        other = 1 - ax
+        across = np.abs(rim[:, other] - mid[other]) <= 0.25 * size[other]
+        edges = []
+        for sign in (1.0, -1.0):
+            near = across & (sign * (rim[:, ax] - mid[ax]) >= 0.25 * size[ax])
+            if near.sum() < 5:
+                return top
+            d = sign * (rim[near, ax] - mid[ax])
+            edges.append(float(np.percentile(d, 1)))
+        inner.append(edges)
+    opening = (inner[0][0] + inner[0][1], inner[1][0] + inner[1][1])
+    centre = (
+        float(mid[0] + (inner[0][0] - inner[0][1]) / 2),
+        float(mid[1] + (inner[1][0] - inner[1][1]) / 2),
+    )
+    rim_width = float(np.mean(size - np.asarray(opening))) / 2
+    return SeenTop(top.shape, opening, top.height, centre, rim_width, top.floor, top.visible)
 
 
 def _has_ring(rim: np.ndarray, body: np.ndarray) -> bool:
