@@ -178,9 +178,14 @@ def _wall_fit(
         if new.sum() < 20 or np.array_equal(new, keep):
             break
         keep = new
-    top = ids[used]
-    upper = radii[top >= top.max() - 1]
-    return c, float(upper.max())
+    # the outer surface: a wall's inner face (seen over a rim) is no part of the footprint
+    dist = np.linalg.norm(wall[:, :2] - c, axis=1)
+    bands = np.floor(wall[:, 2] / band).astype(int)
+    top = bands.max()
+    upper = (bands >= top - 1) & keep
+    if upper.sum() < 5:
+        upper = keep
+    return c, float(np.percentile(dist[upper], 90))
 
 
 def _circle(xy: np.ndarray) -> tuple[np.ndarray, float] | None:
