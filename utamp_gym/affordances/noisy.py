@@ -15,7 +15,7 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores, restrict, score
 from utamp_gym.affordances.rules import derive_affordances
-from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES, Member, ObjectType, PartAttrs
+from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES, Member, ObjectType
 from utamp_gym.scene.geometry import Box
 
 
@@ -30,7 +30,7 @@ def corrupt_type(t: ObjectType, p: float, rng: np.random.Generator) -> ObjectTyp
             shape = str(rng.choice([s for s in SHAPES if s != shape]))
         if rng.random() < p:
             food = not food
-        parts[name] = PartAttrs(shape, attrs.size, food)
+        parts[name] = attrs._replace(shape=shape, food_surface=food)
     mass, robustness = t.mass, t.robustness
     if rng.random() < p:
         mass = float(t.mass * np.exp(rng.normal(0.0, 1.0)))

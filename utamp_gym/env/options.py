@@ -12,7 +12,13 @@ from typing import Any
 
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, MAX_POSE_NOISE
+from utamp_gym.backend import (
+    DEFAULT_BACKEND,
+    DEFAULT_PERCEPTION,
+    DEFAULT_POSE_NOISE,
+    MAX_POSE_NOISE,
+    PERCEPTION_MODES,
+)
 from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
@@ -85,6 +91,7 @@ class EnvOptions:
     masks: str = "affordances"
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE
+    perception: str = DEFAULT_PERCEPTION
 
     def __post_init__(self) -> None:
         if self.suite is not None:
@@ -116,6 +123,7 @@ class EnvOptions:
         object.__setattr__(
             self, "pose_noise", _unit("pose_noise (m)", self.pose_noise, MAX_POSE_NOISE)
         )
+        _choice("perception", self.perception, PERCEPTION_MODES)
         if self.num_objects is not None and (
             isinstance(self.num_objects, bool)
             or not isinstance(self.num_objects, int)

@@ -22,30 +22,26 @@ in the evaluation layer, may read the scene, and does what needs both:
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores, score
+from utamp_gym.errors import UtampError
+from utamp_gym.eval.stages import ATTRIBUTES
+from utamp_gym.planning.methods import SEEN_SUFFIX, PlanOutcome
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box
 from utamp_gym.scene.model import Scene
 
-SEEN_SUFFIX = "-seen"
-#: per-attribute accuracy columns of the eval rows (fractions of objects / parts / members)
-ATTRIBUTES = (
-    "body",  # body primitive (box or cylinder)
-    "members",  # members found (Dice of matched members)
-    "member_size",  # matched members' boxes within SIZE_TOL in every extent
-    "shape",  # part shapes (six sides)
-    "surface",  # usable surface sizes of on/under within SIZE_TOL
-    "height",  # usable surface heights of on/under within HEIGHT_TOL
-    "food",  # food-surface flags
-    "material",
-    "mass",  # within a factor MASS_FACTOR
-    "robustness",
-)
+#: what each ``acc_<attribute>`` column measures (`attribute_accuracy`):
+#: body (box or cylinder), members (Dice of the matched members), member_size (matched boxes
+#: within SIZE_TOL in every extent), shape (the six part shapes), surface (usable sizes of
+#: on / under within SIZE_TOL), height (their heights within HEIGHT_TOL), food (food-surface
+#: flags), material, mass (within a factor MASS_FACTOR), robustness
 SIZE_TOL = 0.01  # m
 HEIGHT_TOL = 0.005  # m
 MASS_FACTOR = 1.5
@@ -118,6 +114,13 @@ class PerceivedScene:
         types = {seen_type_name(o.name): o.type for o in self.declared.objects}
         members = {seen_type_name(o): m for o, m in self.members.items()}
         return frozenset(rename_fact(f, types, members) for f in facts)
+
+    def usable_facts(self, facts: Iterable[Fact]) -> frozenset[Fact]:
+        """`declared_facts` without those on members the declared types do not have (the
+        declared world has no symbol for them: a planner in it cannot use them)."""
+        return frozenset(
+            f for f in self.declared_facts(facts) if not any(a.startswith("?") for a in f)
+        )
 
     def scores(self, facts: Iterable[Fact], truth: Iterable[Fact]) -> Scores:
         return score(self.declared_facts(facts), truth)
@@ -210,12 +213,135 @@ def build_perceived_scene(
     return PerceivedScene(scene, planning, types, members, mean_accuracy(acc), perceive_s)
 
 
+def perceive_scene(scene: Scene, seed: int = 0, *, backend: Any = None) -> PerceivedScene:
+    """Look at the episode's world of (`scene`, `seed`) with the survey cameras and perceive
+    every object (module docstring). `backend`: a `MujocoBackend` to reuse (it is reset)."""
+    import numpy as np
+
+    from utamp_gym.seeding import run_seed
+    from utamp_gym.sim.backend import MujocoBackend
+
+    own = backend is None
+    sim = MujocoBackend() if own else backend
+    start = time.perf_counter()
+    try:
+        sim.reset(scene, np.random.default_rng(run_seed(scene.name, seed)))
+        return perceive_live(scene, sim, start)
+    finally:
+        if own:
+            sim.close()
+
+
+def perceive_live(scene: Scene, backend: Any, start: float | None = None) -> PerceivedScene:
+    """Perceive the world a backend simulates now (its survey look); `scene` is the
+    declared scene (for the orientations and the alignment)."""
+    from utamp_gym.perception.objects import perceive_objects
+
+    start = time.perf_counter() if start is None else start
+    bundle = backend.survey()
+    names = backend.cameras.instances
+    seen = {
+        names[i]: p.as_type(names[i], scene.object(names[i]).orientation)
+        for i, p in perceive_objects(bundle).items()
+    }
+    missing = [o.name for o in scene.objects if o.name not in seen]
+    if missing:
+        raise PerceptionError(f"no camera saw {', '.join(missing)} in {scene.name}")
+    return build_perceived_scene(scene, seen, time.perf_counter() - start)
+
+
+class PerceptionError(UtampError):
+    """The cameras did not see every object of the scene."""
+
+
+def plan_perceived(
+    scene: Scene,
+    seed: int = 0,
+    *,
+    timeout: float = 30.0,
+    search: str | None = None,
+    deadline: Any = None,
+    backend: Any = None,
+) -> tuple[PlanOutcome, PerceivedScene | None]:
+    """`utamp2-perceived` on a declared scene: perceive it, plan its planning scene with the
+    perceived types. The outcome's plan, problem and facts are the planning scene's (member
+    symbols as perceived: `PerceivedScene.declared_plan` renames them for the declared
+    world); its scores are against the declared scene's ground truth; its planning time
+    includes the perception (render and fit). A scene the cameras could not perceive is
+    unsolved, with the reason (and no perceived scene)."""
+    from utamp_gym.planning.methods import ground_truth_for, plan_scene
+
+    start = time.perf_counter()
+    try:
+        ps = perceive_scene(scene, seed, backend=backend)
+    except PerceptionError as exc:
+        nothing = Scores(0.0, 0.0, 0.0, 0, 0, 0)
+        reason = f"perception: {exc}"
+        elapsed = time.perf_counter() - start
+        outcome = PlanOutcome(
+            scene.name,
+            "utamp2-perceived",
+            scene.n_objects,
+            False,
+            (),
+            elapsed,
+            reason,
+            seed,
+            nothing,
+        )
+        return outcome, None
+    outcome = plan_scene(
+        ps.planning,
+        "utamp2-perceived",
+        seed=seed,
+        timeout=timeout,
+        search=search,
+        deadline=deadline,
+    )
+    scores = ps.scores(outcome.facts, ground_truth_for(scene))
+    return (
+        outcome._replace(
+            affordance_scores=scores,
+            planning_time_s=outcome.planning_time_s + ps.perceive_s,
+        ),
+        ps,
+    )
+
+
+def run_perceived_episode(
+    scene: Scene,
+    seed: int = 0,
+    video: Any = None,
+    *,
+    pose_noise: float | None = None,
+    disturbance: float = 0.0,
+    perception: str = "gaussian",
+) -> Any:
+    """`utamp run --method utamp2-perceived`: perceive, plan, execute in the declared world
+    (an `utamp_gym.sim.execute.EpisodeResult`)."""
+    from utamp_gym.backend import DEFAULT_POSE_NOISE
+    from utamp_gym.sim.execute import episode_result
+
+    t0 = time.perf_counter()
+    outcome, seen = plan_perceived(scene, seed)
+    plan = () if seen is None else seen.declared_plan(outcome.plan)
+    noise = DEFAULT_POSE_NOISE if pose_noise is None else pose_noise
+    return episode_result(
+        scene, outcome, plan, seed, video, t0, None, noise, disturbance, perception
+    )
+
+
 __all__ = [
     "ATTRIBUTES",
     "PerceivedScene",
+    "PerceptionError",
     "align_members",
     "attribute_accuracy",
     "build_perceived_scene",
+    "perceive_live",
+    "perceive_scene",
+    "plan_perceived",
     "rename_fact",
+    "run_perceived_episode",
     "seen_type_name",
 ]

@@ -142,7 +142,7 @@ def _support_height(local: np.ndarray, others: np.ndarray, bg: np.ndarray, grid:
     return best if best > -math.inf else zmin
 
 
-def _wall_fit(
+def wall_fit(
     wall: np.ndarray, centre: np.ndarray, radius: float, band: float = 0.01
 ) -> tuple[np.ndarray, float] | None:
     """Centre and top radius of a round wall, which may flare: circles with one shared
@@ -363,7 +363,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         zt = float(np.percentile(body_pts[:, 2], 98)) if len(body_pts) else 0.0
         near_wall = np.abs(np.linalg.norm(local[:, :2] - centre, axis=1) - radius) < 0.35 * radius
         wall = near_wall & (local[:, 2] > 0.003) & (local[:, 2] < zt - 0.002)
-        fit = _wall_fit(local[wall], centre, radius)
+        fit = wall_fit(local[wall], centre, radius)
         if fit is not None:
             centre, radius = fit
         body_lo, body_hi = centre - radius, centre + radius
@@ -684,4 +684,4 @@ def _surface_area(body: SeenMember, members: list[SeenMember]) -> float:
     return float(area)
 
 
-__all__ = ["CELL", "SeenBox", "SeenMember", "SeenShape", "SeenTop", "fit_shape"]
+__all__ = ["CELL", "SeenBox", "SeenMember", "SeenShape", "SeenTop", "fit_shape", "wall_fit"]

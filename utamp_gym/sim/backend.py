@@ -22,28 +22,41 @@ from __future__ import annotations
 import functools
 import itertools
 from collections.abc import Callable
+from dataclasses import replace
 
 import mujoco
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_POSE_NOISE, Fault, MacroResult
+from utamp_gym.backend import DEFAULT_POSE_NOISE, PERCEPTION_MODES, Fault, MacroResult
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
+from utamp_gym.perception.poses import PoseModel
 from utamp_gym.perception.state import Grasp, PhysicalState
 from utamp_gym.perception.views import RobotState, ViewBundle
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.model import Scene
-from utamp_gym.sim.cameras import SURVEY_SIZE, SURVEY_VIEWS, CameraRig, add_wrist_camera
+from utamp_gym.sim.cameras import (
+    ACTING_SIZE,
+    ACTING_VIEWS,
+    SURVEY_SIZE,
+    SURVEY_VIEWS,
+    WRIST,
+    WRIST_SIZE,
+    CameraRig,
+    add_wrist_camera,
+)
 from utamp_gym.sim.control import ArmDriver, Timings
-from utamp_gym.sim.decode import parse_action
+from utamp_gym.sim.decode import parse_action, pose_of
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
 from utamp_gym.sim.measure import SimState, believed_qpos, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
+from utamp_gym.sim.rgbd import RgbdPoseEstimator
 from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top
 
 CAMERA = "overview"
+TIPPED_BELOW = 0.02  # m (see `MujocoBackend._camera_poses`)
 #: receives one RGB frame (height, width, 3) of the overview camera
 FrameSink = Callable[[np.ndarray], None]
 __all__ = ["CAMERA", "FLOOR_BELOW", "FrameSink", "MujocoBackend"]
@@ -55,7 +68,9 @@ class MujocoBackend:
     `pos_noise` (m) and `yaw_noise_deg` randomise where the scene's objects start (uniform,
     per episode). `pose_noise` (m) is the robot's pose-estimation error: grasp, place and
     slide targets are decoded from estimates (`utamp_gym.sim.estimate`), never from the
-    simulator's truth. `frame_sink` (settable at any time; None: off) receives an RGB frame
+    simulator's truth. With ``perception="rgbd"`` the estimates come from the rendered
+    cameras instead (`utamp_gym.sim.rgbd`; `pose_noise` is then unused), and so do the
+    poses of `physical_state`. `frame_sink` (settable at any time; None: off) receives an RGB frame
     (`frame_size` = width, height) every `frame_period` s of simulated time while actions
     run (for videos); `watch` registers any per-period callback (module docstring).
     """
@@ -66,6 +81,7 @@ class MujocoBackend:
         pos_noise: float = 0.003,
         yaw_noise_deg: float = 2.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
+        perception: str = "gaussian",
         settle_s: float = 0.5,
         frame_sink: FrameSink | None = None,
         frame_period: float = 0.1,
@@ -73,6 +89,9 @@ class MujocoBackend:
     ):
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
         self.pose_noise = pose_noise
+        if perception not in PERCEPTION_MODES:
+            raise UnknownNameError("perception", str(perception), PERCEPTION_MODES)
+        self.perception = perception
         if frame_period <= 0:
             raise ValueError(f"frame_period must be > 0 s, got {frame_period!r}")
         self.frame_period, self.frame_size = frame_period, frame_size
@@ -109,6 +128,8 @@ class MujocoBackend:
             scratch=mujoco.MjData(world.model),
             estimator=PoseEstimator(self.pose_noise, rng),
         )
+        if self.perception == "rgbd":
+            self._state.estimator = self._rgbd_estimator(scene)
         arm.belief = functools.partial(believed_qpos, self._state)
         self._steps = 0
         self._hook()
@@ -116,13 +137,41 @@ class MujocoBackend:
         arm.timings = Timings()
 
     def execute(self, action: str) -> MacroResult:
-        """Run one grounded PDDL macro action; a failure comes back with a reason."""
+        """Run one grounded PDDL macro action; a failure comes back with a reason. With
+        ``perception="rgbd"`` its timings include ``perception_s``: rendering and fitting."""
         st = self._require()
         try:
             act = parse_action(action, st.world.scene)
         except (GroundingError, UnknownNameError) as exc:
             return MacroResult(False, f"invalid action {action}: {exc}", Timings().as_dict(0.0))
-        return run_skill(st, act)
+        before = self._perception_seconds()
+        result = run_skill(st, act)
+        if isinstance(st.estimator, RgbdPoseEstimator):
+            timings = {**result.timings, "perception_s": self._perception_seconds() - before}
+            result = replace(result, timings=timings)
+        return result
+
+    # ------------------------------------------------------------ perception="rgbd"
+    def _rgbd_estimator(self, scene: Scene) -> RgbdPoseEstimator:
+        st = self._require()
+        ids = {name: i for i, name in self.cameras.instances.items()}
+        models = {n: PoseModel.of(scene.type_of(n)) for n in st.world.body_ids}
+        declared = {n: pose_of(p.position, p.quat) for n, p in scene.poses.items()}
+        return RgbdPoseEstimator(self._pose_look, ids, models, declared)
+
+    def _pose_look(self, wrist_only: bool) -> ViewBundle:
+        """The views of one look while acting: the wrist camera, and unless `wrist_only`
+        the acting scene cameras (depth and instance masks only)."""
+        st, rig = self._require(), self.cameras
+        wrist = rig.look(st.data, (WRIST,), WRIST_SIZE, rgb=False).views
+        if wrist_only:
+            return ViewBundle(wrist, self.robot_state())
+        scene = rig.look(st.data, ACTING_VIEWS, ACTING_SIZE, rgb=False).views
+        return ViewBundle(scene + wrist, self.robot_state())
+
+    def _perception_seconds(self) -> float:
+        est = self._require().estimator
+        return float(sum(est.seconds)) if isinstance(est, RgbdPoseEstimator) else 0.0
 
     def physical_state(self) -> PhysicalState:
         """Poses, what carries each object (contact forces), containment and the grasp
@@ -133,9 +182,32 @@ class MujocoBackend:
         if st.held is not None and st.arm.holds_something():
             sym = st.held.symbols
             held = Grasp(sym.obj, sym.member, sym.palm, sym.finger1, sym.finger2)
-        return measure_state(
+        state = measure_state(
             st.world, st.data, held=held, gripper_gap=st.arm.gap(), scratch=st.scratch
         )
+        if isinstance(st.estimator, RgbdPoseEstimator):
+            state = replace(state, poses=self._camera_poses())
+        return state
+
+    def _camera_poses(self) -> dict[str, tuple[float, ...]]:
+        """Every object's pose as the cameras see it now (a new look). An object whose
+        estimated bottom lies more than `TIPPED_BELOW` under the table has tipped over (a
+        level pose cannot explain it): it is reported turned on its side."""
+        st = self._require()
+        est = st.estimator
+        assert isinstance(est, RgbdPoseEstimator)
+        est.new_look()
+        quat = np.zeros(4)
+        out = {}
+        for name in st.world.body_ids:
+            pose = est.estimate(name, np.eye(4))
+            box = st.world.scene.type_of(name).bbox
+            bottom = pose[2, 3] + (box.min[2] if pose[2, 2] > 0 else -box.max[2])
+            if bottom < -TIPPED_BELOW:
+                pose = pose @ pose_of(np.zeros(3), np.array([0.7071, 0.7071, 0.0, 0.0]))
+            mujoco.mju_mat2Quat(quat, pose[:3, :3].ravel())
+            out[name] = (*(float(v) for v in pose[:3, 3]), *(float(v) for v in quat))
+        return out
 
     def disturb(self, rng: np.random.Generator) -> Fault | None:
         """Inject one fault (`utamp_gym.sim.faults`), chosen with `rng`."""

@@ -23,6 +23,7 @@ import numpy as np
 from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
 from utamp_gym.robot.collision import CollisionChecker
+from utamp_gym.sim import relook
 from utamp_gym.sim.bodies import BODY_PREFIX
 from utamp_gym.sim.control import ArmDriver, LinePath, Timings, allowing, ignoring
 from utamp_gym.sim.decode import (
@@ -181,10 +182,12 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     Returns the grasp, the planned lift path and what is held. Sets `st.held` as soon as
     the fingers close, so a later failure lets go.
     """
-    g, approach, up = _plan_grasp(st, sym, lift)
     arm = st.arm
-    arm.set_gripper(g.opening)
-    arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
+    g, approach, up = _to_pregrasp(st, sym, lift)
+    # the wrist camera looks closely before the descent (re-aims) and before closing (aborts)
+    g, approach, up = relook.aim_grasp(
+        st, sym.obj, (g, approach, up), lambda: _to_pregrasp(st, sym, lift)
+    )
     arm.open_gripper(g.opening)
     arm.move_line(approach, *APPROACH)
     short = float(np.linalg.norm(arm.tcp()[:3, 3] - g.tcp[:3, 3]))
@@ -193,6 +196,13 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
         raise MissedGrasp(
             f"the hand stopped short of the {sym.member} of {sym.obj} "
             f"({short * 1000:.0f} mm: a finger landed on something)"
+        )
+    off = relook.grasp_offset(st, sym, g)
+    if off is not None:
+        arm.move_line(approach.reversed(), *APPROACH)
+        raise MissedGrasp(
+            f"the wrist camera saw the {sym.member} of {sym.obj} {relook.describe(off)} "
+            "before the fingers closed"
         )
     gap = arm.close_gripper()
     if st.estimator is not None:
@@ -208,6 +218,16 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
             f"(gap {gap * 1000:.1f} mm)"
         )
     return g, up, st.held
+
+
+def _to_pregrasp(
+    st: SimState, sym: GraspSymbols, lift: float
+) -> tuple[GraspPose, LinePath, LinePath]:
+    """Plan the grasp (`_plan_grasp`) and move the hand to its pre-grasp pose."""
+    g, approach, up = _plan_grasp(st, sym, lift)
+    st.arm.set_gripper(g.opening)
+    st.arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
+    return g, approach, up
 
 
 def _release_and_retreat(st: SimState, obj: str, opening: float) -> None:
@@ -421,6 +441,13 @@ def place(st: SimState, act: MacroAction) -> None:
     if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
         up = _plan_place(st, held, act)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
+
+    def aim_again() -> LinePath:
+        path = _plan_place(st, held, act)
+        arm.transfer(path.end, held=(held.body, held.belief), what=what)
+        return path
+
+    up = relook.aim_place(st, act.support, up, aim_again)  # the wrist camera on the support
     for attempt in range(1, PLACE_ATTEMPTS + 1):  # a guarded descent
         arm.move_line(up.reversed(), *PLACE)
         push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]

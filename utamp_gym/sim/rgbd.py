@@ -1,0 +1,119 @@
+"""`RgbdPoseEstimator`: the robot's object poses from rendered RGB-D views.
+
+The drop-in alternative to the Gaussian stand-in (`utamp_gym.sim.estimate.PoseEstimator`),
+chosen with ``perception="rgbd"``. A *look* renders the acting cameras
+(`cameras.ACTING_VIEWS`, depth and object-level instance masks at `cameras.ACTING_SIZE`)
+and the wrist camera, fuses them (`perception.cloud.fuse`) and fits each object's pose when
+it is first asked for (`perception.poses.estimate_pose`, with the robot's model of the
+object: the catalogue type it decodes with). Within a look an object's estimate stays the
+same; `forget` makes the next estimate of an object come from a new rendering, `new_look`
+does so for all. `close_look` renders the wrist camera alone. An object the cameras cannot
+see (fewer than `poses.MIN_POINTS` points) keeps its last estimate. Injected wrong beliefs
+(`offset`) are added to the camera estimate until forgotten, as in the Gaussian model.
+
+It never reads the simulator's poses: `estimate` takes the true pose for the interface's
+sake and ignores it. The first belief is the scene's declared pose (orientation and
+heading: the symbolic state the robot is given).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from utamp_gym.perception.cloud import Scene3D, fuse
+from utamp_gym.perception.poses import PoseModel, estimate_pose
+from utamp_gym.perception.views import ViewBundle
+
+#: the standard deviation (m) the grasps' finger openings allow for, as the Gaussian
+#: model's `noise` does (the measured error: benchmarks/perception_cost.py)
+RGBD_NOISE = 0.002
+
+Look = Callable[[bool], ViewBundle]  # (wrist only?) -> the rendered views
+
+
+def _rot_z(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+class RgbdPoseEstimator:
+    """Object poses from the cameras (module docstring)."""
+
+    def __init__(
+        self,
+        look: Look,
+        instances: Mapping[str, int],
+        models: Mapping[str, PoseModel],
+        initial: Mapping[str, np.ndarray],
+    ) -> None:
+        self.noise = RGBD_NOISE
+        self._render, self._ids, self._models = look, dict(instances), dict(models)
+        self._belief = {n: np.asarray(p, dtype=float).copy() for n, p in initial.items()}
+        self.offsets: dict[str, tuple[np.ndarray, float]] = {}
+        self._look: dict[str, np.ndarray] = {}
+        self._frames: Scene3D | None = None
+        self.seconds: list[float] = []  # wall time of every rendering + fit (perception cost)
+
+    def new_look(self) -> None:
+        self._look.clear()
+        self._frames = None
+
+    def estimate(self, name: str, true_pose: np.ndarray) -> np.ndarray:
+        """The camera estimate (4x4) of `name` in the current look (`true_pose` unused)."""
+        seen = self._look.get(name)
+        if seen is None:
+            if self._frames is None:
+                self._frames = self._fused(wrist_only=False)
+            seen = self._look[name] = self._fit(name, self._frames)
+        return self._with_offset(name, seen)
+
+    def close_look(self, name: str, true_pose: np.ndarray) -> np.ndarray:
+        """The wrist camera's look at `name` (`true_pose` unused); its belief offset ends."""
+        self.offsets.pop(name, None)
+        frames = self._fused(wrist_only=True)
+        if self._ids[name] not in frames.objects:  # out of the wrist's view: the scene's
+            frames = self._fused(wrist_only=False)
+        self._look[name] = self._fit(name, frames)
+        return self._look[name].copy()
+
+    def offset(self, name: str, shift: np.ndarray, yaw: float = 0.0) -> None:
+        self.offsets[name] = (np.asarray(shift, dtype=float).copy(), float(yaw))
+
+    def forget(self, *names: str) -> None:
+        for name in names:
+            self.offsets.pop(name, None)
+            self._look.pop(name, None)
+        self._frames = None
+
+    # ------------------------------------------------------------ internals
+    def _fused(self, *, wrist_only: bool) -> Scene3D:
+        start = time.perf_counter()
+        frames = fuse(self._render(wrist_only))
+        self.seconds.append(time.perf_counter() - start)
+        return frames
+
+    def _fit(self, name: str, frames: Scene3D) -> np.ndarray:
+        start = time.perf_counter()
+        cloud = frames.objects.get(self._ids[name])
+        prior = self._belief[name]
+        pose = None if cloud is None else estimate_pose(cloud.points, self._models[name], prior)
+        if pose is not None:
+            self._belief[name] = pose
+        self.seconds[-1] += time.perf_counter() - start
+        return self._belief[name].copy()
+
+    def _with_offset(self, name: str, pose: np.ndarray) -> np.ndarray:
+        shift, yaw = self.offsets.get(name, (np.zeros(3), 0.0))
+        if yaw == 0.0 and not shift.any():
+            return pose.copy()
+        out = pose.copy()
+        out[:3, :3] = _rot_z(yaw) @ pose[:3, :3]
+        out[:3, 3] = pose[:3, 3] + shift
+        return out
+
+
+__all__ = ["RGBD_NOISE", "RgbdPoseEstimator"]
