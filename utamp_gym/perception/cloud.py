@@ -74,9 +74,14 @@ def _near_objects(instances: np.ndarray) -> np.ndarray:
     return out
 
 
-def fuse(bundle: ViewBundle, *, stride: int = 1, voxel: float = VOXEL) -> Scene3D:
+def fuse(
+    bundle: ViewBundle, *, stride: int = 1, voxel: float = VOXEL, objects_only: bool = False
+) -> Scene3D:
     """Back-project every view and fuse the points per instance (every `stride`-th pixel),
-    keeping one point per `voxel` (objects; 1.5 voxels for the background)."""
+    keeping one point per `voxel` (objects; 1.5 voxels for the background; 0: all points).
+    `objects_only` skips the background and the robot (pose fitting needs neither)."""
+    if objects_only:
+        return _objects_only(bundle, stride)
     per: dict[int, list[tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]]] = {}
     background, robot, steep = [], [], []
     for k, view in enumerate(bundle.views):
@@ -124,6 +129,30 @@ def fuse(bundle: ViewBundle, *, stride: int = 1, voxel: float = VOXEL) -> Scene3
         rb[voxel_keep(rb, 2 * voxel)],
         st[voxel_keep(st[:, :3], 1.5 * voxel)],
     )
+
+
+def _objects_only(bundle: ViewBundle, stride: int) -> Scene3D:
+    """The objects' points of every view, fused per instance (no colours, no rays)."""
+    per: dict[int, list[np.ndarray]] = {}
+    for view in bundle.views:
+        valid = (view.instances > 0) & (view.depth > 0) & (view.depth < MAX_RANGE)
+        if stride > 1:
+            valid[1::stride] = False
+            valid[:, 1::stride] = False
+        points = view.points(valid)
+        ids = view.instances[valid]
+        order = np.argsort(ids, kind="stable")
+        ids, points = ids[order], points[order]
+        cuts = np.flatnonzero(np.diff(ids)) + 1
+        for chunk_ids, chunk in zip(np.split(ids, cuts), np.split(points, cuts), strict=True):
+            if len(chunk_ids):
+                per.setdefault(int(chunk_ids[0]), []).append(chunk)
+    empty = np.zeros((0, 3))
+    objects = {}
+    for i, chunks in per.items():
+        pts = np.concatenate(chunks)
+        objects[i] = Cloud(pts, None, np.zeros(len(pts), dtype=np.int32), np.zeros_like(pts))
+    return Scene3D(objects, empty, empty, np.zeros((0, 6)))
 
 
 def voxel_keep(points: np.ndarray, size: float) -> np.ndarray:

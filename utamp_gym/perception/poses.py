@@ -1,12 +1,14 @@
-"""Object poses from a fused RGB-D look, for a robot that knows roughly what it tracks.
+"""Object poses from a fused RGB-D look, for a robot that knows what it tracks.
 
 Why a model: grasp and placement targets are decoded from an object's frame (origin at the
 centre of its body's bottom face, x its front), so a pose must be given in that frame.
 `PoseModel` is what the robot knows of the object's shape for that: its body (box or
 cylinder) and the body's footprint in the object frame, the height range of the object and
-the direction of its largest protrusion (a handle). The robot's own model — the catalogue
-type it decodes with, or the type it perceived — gives it (`PoseModel.of`); the pose itself
-comes from the cloud alone (`estimate_pose`):
+the direction of its largest protrusion (a handle), and points on its surface. The robot's
+own model — the catalogue type it decodes with, or the type it perceived — gives it
+(`PoseModel.of`, `PoseModel.with_surface`); the pose itself comes from the cloud alone.
+With surface points it is a model-based fit (`icp_pose`: iterative closest points in x, y,
+z and heading); without, a fit of the shape's features (`feature_pose`):
 
 * heading — a round body's from where its protrusion sticks out (a handle), else the
   previous belief's (it is symmetric); a box's from its footprint's smallest bounding
@@ -23,7 +25,8 @@ and ``None`` when the object shows too few points (occluded): the caller keeps i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -32,6 +35,8 @@ from utamp_gym.perception.shape import wall_fit
 from utamp_gym.scene.catalogue import ObjectType
 
 MIN_POINTS = 25
+ICP_POINTS = 300  # observed points an ICP fit uses at most (evenly strided)
+GOOD_FIT = 0.002  # m mean distance: a fit from the prior this good needs no second start
 PROTRUSION = 0.006  # m beyond the body's radius: a point of a handle
 STEP = 0.001  # m, placement search step of a box's footprint
 
@@ -46,6 +51,27 @@ class PoseModel:
     z_range: tuple[float, float]  # lowest and highest point of the object (object frame)
     protrusion: float | None  # angle of the largest protrusion from the body centre
     symmetric: bool = False  # two protrusions half a turn apart (a tray, a pot)
+    surface: np.ndarray | None = None  # (M, 3) points on its surface (object frame)
+    tree: Any = None  # a scipy cKDTree of `surface` (built once per object)
+
+    @property
+    def center(self) -> np.ndarray:
+        """Centre of the object's bounding box (object frame)."""
+        if self.surface is not None and len(self.surface):
+            return (self.surface.min(axis=0) + self.surface.max(axis=0)) / 2
+        return np.array([*self.body_center, sum(self.z_range) / 2])
+
+    @property
+    def round_(self) -> bool:
+        """A round body with nothing sticking out: its heading cannot be seen."""
+        return self.geom == "cylinder" and self.protrusion is None
+
+    def with_surface(self, surface: np.ndarray) -> PoseModel:
+        """This model with surface points for the model-based fit (`icp_pose`)."""
+        from scipy.spatial import cKDTree
+
+        pts = np.asarray(surface, dtype=float)
+        return replace(self, surface=pts, tree=cKDTree(pts))
 
     @classmethod
     def of(cls, t: ObjectType) -> PoseModel:
@@ -92,8 +118,101 @@ def _yaw_of(rot: np.ndarray) -> float:
 
 
 def estimate_pose(points: np.ndarray, model: PoseModel, prior: np.ndarray) -> np.ndarray | None:
-    """The object's pose (4x4) in its frame from its fused points (module docstring);
-    `prior` is the current belief (its orientation class and heading are kept or refined)."""
+    """The object's pose (4x4) in its frame from its fused points: a model-based fit
+    (`icp_pose`) when the model has surface points, else the fit from the shape's features
+    (`feature_pose`). `prior` is the current belief (orientation class, rough position)."""
+    if len(points) < MIN_POINTS:
+        return None
+    if model.surface is not None and len(model.surface):
+        return icp_pose(points, model, prior)
+    return feature_pose(points, model, prior)
+
+
+def icp_pose(
+    points: np.ndarray,
+    model: PoseModel,
+    prior: np.ndarray,
+    *,
+    iterations: int = 10,
+    reject: float = 0.01,
+) -> np.ndarray | None:
+    """Iterative closest points in four degrees of freedom (x, y, z, heading; the object is
+    level, upright or inverted as `prior` is): each observed point is paired with the nearest
+    point of the model's surface, pairs farther than the rejection distance dropped (it
+    shrinks from 3x `reject`), and the rigid motion that best aligns the pairs (Procrustes
+    about z, mean height) applied, until it settles. It starts from the prior, and from the
+    prior moved onto the observed points (the model's top at the points' top, its centre over
+    theirs: an object lifted or pushed since); the start whose fit leaves the smaller mean
+    distance wins."""
+    if model.surface is None or len(points) < MIN_POINTS:
+        return None
+    if len(points) > ICP_POINTS:
+        points = points[:: math.ceil(len(points) / ICP_POINTS)]
+    first = _icp(points, model, prior, iterations, reject)
+    if first is not None and first[0] <= GOOD_FIT:
+        return first[1]
+    moved = prior.copy()
+    corners = model.surface @ prior[:3, :3].T + prior[:3, 3]
+    moved[:2, 3] += (
+        np.median(points[:, :2], axis=0) - (corners[:, :2].min(0) + corners[:, :2].max(0)) / 2
+    )
+    moved[2, 3] += float(np.percentile(points[:, 2], 99.5) - corners[:, 2].max())
+    best = first
+    fit = _icp(points, model, moved, iterations, reject)
+    if fit is not None and (best is None or fit[0] < best[0]):
+        best = fit
+    return None if best is None else best[1]
+
+
+def _icp(
+    points: np.ndarray, model: PoseModel, start: np.ndarray, iterations: int, reject: float
+) -> tuple[float, np.ndarray] | None:
+    """(mean paired distance, pose) of one ICP run from `start` (see `icp_pose`)."""
+    from scipy.spatial import cKDTree
+
+    assert model.surface is not None
+    tree = model.tree if model.tree is not None else cKDTree(model.surface)
+    flip = np.diag([1.0, -1.0, -1.0]) if start[2, 2] < 0 else np.eye(3)
+    t = start[:3, 3].copy()
+    yaw = _yaw_of(start[:3, :3])
+    err = math.inf
+    for k in range(iterations):
+        rot = _rot(yaw) @ flip
+        dist, idx = tree.query((points - t) @ rot)  # observed points in the object frame
+        keep = dist < reject * max(1.0, 3.0 - k)
+        if keep.sum() < MIN_POINTS:
+            return None
+        err = float(dist[keep].mean())
+        obs = points[keep]
+        mod = model.surface[idx[keep]] @ rot.T + t  # their partners, in the world
+        co, cm = obs[:, :2].mean(axis=0), mod[:, :2].mean(axis=0)
+        a, b = obs[:, :2] - co, mod[:, :2] - cm
+        dtheta = 0.0
+        if not model.round_:  # a plain round body: its heading cannot be seen
+            cross = float(np.sum(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0]))
+            dtheta = math.atan2(cross, float(np.sum(b * a)))
+        c, s = math.cos(dtheta), math.sin(dtheta)
+        r2 = np.array([[c, -s], [s, c]])
+        new_xy = r2 @ (t[:2] - cm) + co
+        step = float(np.linalg.norm(new_xy - t[:2]))
+        t[:2] = new_xy
+        t[2] += float(np.mean(obs[:, 2] - mod[:, 2]))
+        yaw += dtheta
+        if k >= 3 and abs(dtheta) < 1e-4 and step < 1e-4:
+            break
+    out = np.eye(4)
+    out[:3, :3] = _rot(yaw) @ flip
+    out[:3, 3] = t
+    return err, out
+
+
+def _rot(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def feature_pose(points: np.ndarray, model: PoseModel, prior: np.ndarray) -> np.ndarray | None:
+    """The pose from the shape's features (no model surface): module docstring."""
     if len(points) < MIN_POINTS:
         return None
     inverted = prior[2, 2] < 0
@@ -137,8 +256,7 @@ def estimate_pose(points: np.ndarray, model: PoseModel, prior: np.ndarray) -> np
             centre_local[ax] = float(starts[best].mean()) + half[ax]
         centre = rotate(centre_local[None, :], yaw)[0]
     flip = np.diag([1.0, -1.0, -1.0]) if inverted else np.eye(3)
-    c, s = math.cos(yaw), math.sin(yaw)
-    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ flip
+    rot = _rot(yaw) @ flip
     body_centre = rot @ np.array([*model.body_center, 0.0])
     out = np.eye(4)
     out[:3, :3] = rot
@@ -147,4 +265,4 @@ def estimate_pose(points: np.ndarray, model: PoseModel, prior: np.ndarray) -> np
     return out
 
 
-__all__ = ["PoseModel", "estimate_pose"]
+__all__ = ["PoseModel", "estimate_pose", "feature_pose", "icp_pose"]

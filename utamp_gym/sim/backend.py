@@ -51,7 +51,7 @@ from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
 from utamp_gym.sim.measure import SimState, believed_qpos, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
-from utamp_gym.sim.rgbd import RgbdPoseEstimator
+from utamp_gym.sim.rgbd import RgbdPoseEstimator, surface_points
 from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top
 
@@ -155,7 +155,10 @@ class MujocoBackend:
     def _rgbd_estimator(self, scene: Scene) -> RgbdPoseEstimator:
         st = self._require()
         ids = {name: i for i, name in self.cameras.instances.items()}
-        models = {n: PoseModel.of(scene.type_of(n)) for n in st.world.body_ids}
+        models = {
+            n: PoseModel.of(t).with_surface(surface_points(t))
+            for n, t in ((n, scene.type_of(n)) for n in st.world.body_ids)
+        }
         declared = {n: pose_of(p.position, p.quat) for n, p in scene.poses.items()}
         return RgbdPoseEstimator(self._pose_look, ids, models, declared)
 

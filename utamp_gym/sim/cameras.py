@@ -61,7 +61,7 @@ WRIST = "wrist"
 _GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)  # an int: comparing arrays with the enum is slow
 ACTING_SIZE = (320, 240)  # width, height
 SURVEY_SIZE = (640, 480)
-WRIST_SIZE = (320, 240)
+WRIST_SIZE = (240, 180)
 
 
 @dataclass(frozen=True)

@@ -4,10 +4,12 @@ The drop-in alternative to the Gaussian stand-in (`utamp_gym.sim.estimate.PoseEs
 chosen with ``perception="rgbd"``. A *look* renders the acting cameras
 (`cameras.ACTING_VIEWS`, depth and object-level instance masks at `cameras.ACTING_SIZE`)
 and the wrist camera, fuses them (`perception.cloud.fuse`) and fits each object's pose when
-it is first asked for (`perception.poses.estimate_pose`, with the robot's model of the
-object: the catalogue type it decodes with). Within a look an object's estimate stays the
-same; `forget` makes the next estimate of an object come from a new rendering, `new_look`
-does so for all. `close_look` renders the wrist camera alone. An object the cameras cannot
+it is first asked for (`perception.poses.estimate_pose`: iterative closest points against
+the robot's model of the object, points on the surfaces of the catalogue type it decodes
+with, `surface_points`). Within a look an object's estimate stays the
+same; `forget` makes the next estimate of an object come from a new rendering (the wrist
+camera's alone if it sees the object well: the object in the hand), `new_look` does so for
+all. `close_look` renders the wrist camera alone. An object the cameras cannot
 see (fewer than `poses.MIN_POINTS` points) keeps its last estimate. Injected wrong beliefs
 (`offset`) are added to the camera estimate until forgotten, as in the Gaussian model.
 
@@ -22,17 +24,78 @@ import math
 import time
 from collections.abc import Callable, Mapping
 
+import mujoco
 import numpy as np
 
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.poses import PoseModel, estimate_pose
 from utamp_gym.perception.views import ViewBundle
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.sim.bodies import object_prims
 
 #: the standard deviation (m) the grasps' finger openings allow for, as the Gaussian
 #: model's `noise` does (the measured error: benchmarks/perception_cost.py)
 RGBD_NOISE = 0.002
+WRIST_POINTS = 150  # an object this well seen by the wrist camera needs no scene look
 
 Look = Callable[[bool], ViewBundle]  # (wrist only?) -> the rendered views
+
+
+def surface_points(t: ObjectType, spacing: float = 0.005) -> np.ndarray:
+    """Points (N, 3) about `spacing` apart on the surfaces of the type's collision
+    primitives (`bodies.object_prims`), in the object frame: the robot's model of it."""
+    out = []
+    for p in object_prims(t):
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, np.asarray(p.quat, dtype=float))
+        local = _primitive_surface(p.shape, np.asarray(p.size, dtype=float), spacing)
+        out.append(local @ rot.reshape(3, 3).T + np.asarray(p.pos))
+    return np.concatenate(out)
+
+
+def _grid(a: float, b: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    u = np.linspace(-a, a, max(2, round(2 * a / spacing) + 1))
+    v = np.linspace(-b, b, max(2, round(2 * b / spacing) + 1))
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    return uu.ravel(), vv.ravel()
+
+
+def _primitive_surface(shape: str, size: np.ndarray, spacing: float) -> np.ndarray:
+    if shape == "box":
+        hx, hy, hz = size
+        faces = []
+        for ax, (a, b) in enumerate(((hy, hz), (hx, hz), (hx, hy))):
+            u, v = _grid(a, b, spacing)
+            for sign in (-1.0, 1.0):
+                f = np.zeros((len(u), 3))
+                f[:, ax] = sign * size[ax]
+                others = [i for i in range(3) if i != ax]
+                f[:, others[0]], f[:, others[1]] = u, v
+                faces.append(f)
+        return np.concatenate(faces)
+    if shape == "cylinder":
+        r, h = float(size[0]), float(size[1])
+        n = max(8, round(2 * math.pi * r / spacing))
+        ang = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+        zs = np.linspace(-h, h, max(2, round(2 * h / spacing) + 1))
+        aa, zz = np.meshgrid(ang, zs, indexing="ij")
+        side = np.column_stack([r * np.cos(aa.ravel()), r * np.sin(aa.ravel()), zz.ravel()])
+        u, v = _grid(r, r, spacing)
+        disc = (u**2 + v**2) <= r * r
+        caps = [np.column_stack([u[disc], v[disc], np.full(disc.sum(), z)]) for z in (-h, h)]
+        return np.concatenate([side, *caps])
+    a, b, c = size  # ellipsoid
+    n = max(8, round(2 * math.pi * max(a, b) / spacing))
+    th = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    ph = np.linspace(-math.pi / 2, math.pi / 2, max(4, n // 2))
+    tt, pp = np.meshgrid(th, ph, indexing="ij")
+    return np.column_stack(
+        [
+            a * np.cos(pp.ravel()) * np.cos(tt.ravel()),
+            b * np.cos(pp.ravel()) * np.sin(tt.ravel()),
+            c * np.sin(pp.ravel()),
+        ]
+    )
 
 
 def _rot_z(yaw: float) -> np.ndarray:
@@ -56,16 +119,27 @@ class RgbdPoseEstimator:
         self.offsets: dict[str, tuple[np.ndarray, float]] = {}
         self._look: dict[str, np.ndarray] = {}
         self._frames: Scene3D | None = None
+        self._again: set[str] = set()  # looked at again: try the wrist camera first
         self.seconds: list[float] = []  # wall time of every rendering + fit (perception cost)
 
     def new_look(self) -> None:
         self._look.clear()
+        self._again.clear()
         self._frames = None
 
     def estimate(self, name: str, true_pose: np.ndarray) -> np.ndarray:
-        """The camera estimate (4x4) of `name` in the current look (`true_pose` unused)."""
+        """The camera estimate (4x4) of `name` in the current look (`true_pose` unused).
+        An object looked at again (`forget`) is first looked for with the wrist camera
+        alone (the object in the hand, the one the hand is at)."""
         seen = self._look.get(name)
         if seen is None:
+            if name in self._again:
+                self._again.discard(name)
+                wrist = self._fused(wrist_only=True)
+                cloud = wrist.objects.get(self._ids[name])
+                if cloud is not None and len(cloud) >= WRIST_POINTS:
+                    seen = self._look[name] = self._fit(name, wrist)
+                    return self._with_offset(name, seen)
             if self._frames is None:
                 self._frames = self._fused(wrist_only=False)
             seen = self._look[name] = self._fit(name, self._frames)
@@ -87,12 +161,13 @@ class RgbdPoseEstimator:
         for name in names:
             self.offsets.pop(name, None)
             self._look.pop(name, None)
+            self._again.add(name)
         self._frames = None
 
     # ------------------------------------------------------------ internals
     def _fused(self, *, wrist_only: bool) -> Scene3D:
         start = time.perf_counter()
-        frames = fuse(self._render(wrist_only))
+        frames = fuse(self._render(wrist_only), objects_only=True)
         self.seconds.append(time.perf_counter() - start)
         return frames
 
@@ -116,4 +191,4 @@ class RgbdPoseEstimator:
         return out
 
 
-__all__ = ["RGBD_NOISE", "RgbdPoseEstimator"]
+__all__ = ["RGBD_NOISE", "RgbdPoseEstimator", "surface_points"]
