@@ -25,6 +25,7 @@ and ``None`` when the object shows too few points (occluded): the caller keeps i
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -117,14 +118,20 @@ def _yaw_of(rot: np.ndarray) -> float:
     return math.atan2(rot[1, 0], rot[0, 0])
 
 
-def estimate_pose(points: np.ndarray, model: PoseModel, prior: np.ndarray) -> np.ndarray | None:
+def estimate_pose(
+    points: np.ndarray,
+    model: PoseModel,
+    prior: np.ndarray,
+    starts: Sequence[np.ndarray] = (),
+) -> np.ndarray | None:
     """The object's pose (4x4) in its frame from its fused points: a model-based fit
-    (`icp_pose`) when the model has surface points, else the fit from the shape's features
-    (`feature_pose`). `prior` is the current belief (orientation class, rough position)."""
+    (`icp_pose`, also from `starts`: e.g. where the hand would have carried it) when the
+    model has surface points, else the fit from the shape's features (`feature_pose`).
+    `prior` is the current belief (orientation class, rough position)."""
     if len(points) < MIN_POINTS:
         return None
     if model.surface is not None and len(model.surface):
-        return icp_pose(points, model, prior)
+        return icp_pose(points, model, prior, starts=starts)
     return feature_pose(points, model, prior)
 
 
@@ -135,6 +142,7 @@ def icp_pose(
     *,
     iterations: int = 10,
     reject: float = 0.01,
+    starts: Sequence[np.ndarray] = (),
 ) -> np.ndarray | None:
     """Iterative closest points in four degrees of freedom (x, y, z, heading; the object is
     level, upright or inverted as `prior` is): each observed point is paired with the nearest
@@ -142,12 +150,11 @@ def icp_pose(
     shrinks from 3x `reject`), and the rigid motion that best aligns the pairs (Procrustes
     about z, mean height) applied, until it settles. It starts from the prior, and from the
     prior moved onto the observed points (the model's top at the points' top, its centre over
-    theirs: an object lifted or pushed since); the start whose fit leaves the smaller mean
-    distance wins."""
+    theirs: an object lifted or pushed since) and from any further `starts`; the start whose
+    fit leaves the smallest mean distance wins."""
     if model.surface is None or len(points) < MIN_POINTS:
         return None
-    if len(points) > ICP_POINTS:
-        points = points[:: math.ceil(len(points) / ICP_POINTS)]
+    points = _spread(points, ICP_POINTS)
     first = _icp(points, model, prior, iterations, reject)
     if first is not None and first[0] <= GOOD_FIT:
         return first[1]
@@ -158,10 +165,25 @@ def icp_pose(
     )
     moved[2, 3] += float(np.percentile(points[:, 2], 99.5) - corners[:, 2].max())
     best = first
-    fit = _icp(points, model, moved, iterations, reject)
-    if fit is not None and (best is None or fit[0] < best[0]):
-        best = fit
+    for start in (moved, *starts):
+        fit = _icp(points, model, start, iterations, reject)
+        if fit is not None and (best is None or fit[0] < best[0]):
+            best = fit
     return None if best is None else best[1]
+
+
+def _spread(points: np.ndarray, n: int) -> np.ndarray:
+    """At most about `n` points spread evenly over the surface seen (one per voxel, the voxel
+    grown until few enough are left), not where a close camera saw most of them."""
+    from utamp_gym.perception.cloud import voxel_keep
+
+    size = 0.004
+    while len(points) > n:
+        kept = points[voxel_keep(points, size)]
+        if len(kept) <= n:
+            return kept
+        points, size = kept, size * 1.4
+    return points
 
 
 def _icp(

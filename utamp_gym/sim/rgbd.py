@@ -36,7 +36,8 @@ from utamp_gym.sim.bodies import object_prims
 #: the standard deviation (m) the grasps' finger openings allow for, as the Gaussian
 #: model's `noise` does (the measured error: benchmarks/perception_cost.py)
 RGBD_NOISE = 0.002
-WRIST_POINTS = 150  # an object this well seen by the wrist camera needs no scene look
+WRIST_POINTS = 150  # an object this well seen by the wrist camera needs no scene look ...
+WHOLE_SPAN = 0.8  # ... if its points span this much of its longest extent
 
 Look = Callable[[bool], ViewBundle]  # (wrist only?) -> the rendered views
 
@@ -120,6 +121,8 @@ class RgbdPoseEstimator:
         self._look: dict[str, np.ndarray] = {}
         self._frames: Scene3D | None = None
         self._again: set[str] = set()  # looked at again: try the wrist camera first
+        self._tcp: np.ndarray | None = None  # the hand's pose at the last rendering
+        self._belief_tcp: dict[str, np.ndarray] = {}  # ... when each belief was formed
         self.seconds: list[float] = []  # wall time of every rendering + fit (perception cost)
 
     def new_look(self) -> None:
@@ -136,8 +139,7 @@ class RgbdPoseEstimator:
             if name in self._again:
                 self._again.discard(name)
                 wrist = self._fused(wrist_only=True)
-                cloud = wrist.objects.get(self._ids[name])
-                if cloud is not None and len(cloud) >= WRIST_POINTS:
+                if self._whole(name, wrist):
                     seen = self._look[name] = self._fit(name, wrist)
                     return self._with_offset(name, seen)
             if self._frames is None:
@@ -149,7 +151,7 @@ class RgbdPoseEstimator:
         """The wrist camera's look at `name` (`true_pose` unused); its belief offset ends."""
         self.offsets.pop(name, None)
         frames = self._fused(wrist_only=True)
-        if self._ids[name] not in frames.objects:  # out of the wrist's view: the scene's
+        if not self._whole(name, frames):  # partly out of the wrist's view: the scene's too
             frames = self._fused(wrist_only=False)
         self._look[name] = self._fit(name, frames)
         return self._look[name].copy()
@@ -165,9 +167,26 @@ class RgbdPoseEstimator:
         self._frames = None
 
     # ------------------------------------------------------------ internals
+    def _whole(self, name: str, frames: Scene3D) -> bool:
+        """Whether `frames` show enough of `name` to fit its pose: `WRIST_POINTS` points
+        spanning at least `WHOLE_SPAN` of its model's longest horizontal extent (a part of a
+        board's flat top would let a fit slide along it)."""
+        cloud = frames.objects.get(self._ids[name])
+        if cloud is None or len(cloud) < WRIST_POINTS:
+            return False
+        surface = self._models[name].surface
+        if surface is None:
+            return True
+        model_span = float(np.max(np.ptp(surface[:, :2], axis=0)))
+        seen = cloud.points[:, :2]
+        span = float(np.max(np.ptp(seen, axis=0)))
+        return span >= WHOLE_SPAN * model_span
+
     def _fused(self, *, wrist_only: bool) -> Scene3D:
         start = time.perf_counter()
-        frames = fuse(self._render(wrist_only), objects_only=True)
+        bundle = self._render(wrist_only)
+        frames = fuse(bundle, objects_only=True)
+        self._tcp = None if bundle.robot is None else bundle.robot.tcp
         self.seconds.append(time.perf_counter() - start)
         return frames
 
@@ -175,9 +194,20 @@ class RgbdPoseEstimator:
         start = time.perf_counter()
         cloud = frames.objects.get(self._ids[name])
         prior = self._belief[name]
-        pose = None if cloud is None else estimate_pose(cloud.points, self._models[name], prior)
+        then = self._belief_tcp.get(name)
+        # where the hand would have carried it since it was last seen (if it holds it)
+        starts = (
+            () if then is None or self._tcp is None else (self._tcp @ np.linalg.inv(then) @ prior,)
+        )
+        pose = (
+            None
+            if cloud is None
+            else estimate_pose(cloud.points, self._models[name], prior, starts)
+        )
         if pose is not None:
             self._belief[name] = pose
+            if self._tcp is not None:
+                self._belief_tcp[name] = self._tcp
         self.seconds[-1] += time.perf_counter() - start
         return self._belief[name].copy()
 
