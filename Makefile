@@ -8,7 +8,7 @@ export MUJOCO_GL ?= egl
 
 MJ4    := .venv-mujoco4
 
-.PHONY: venv demo test test-all test-mujoco4 bench lint clean
+.PHONY: venv demo test test-all test-mujoco4 bench lint docs clean
 
 venv: $(STAMP)
 
@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "torch==2.13.0"
-	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray]"
+	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray,docs]"
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -51,8 +51,16 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/env_throughput.py
 	$(BIN)/python benchmarks/physics_suite.py --seeds 1
 
+# The documentation site: the scripts in docs/_scripts write the generated pages (one per env
+# id, the CLI reference, figures from the code) into docs/_generated and docs/envs, then Sphinx
+# builds build/docs/html with warnings as errors. Nothing is fetched from the network.
+DOCS_OUT ?= build/docs
+docs: $(STAMP)
+	$(BIN)/python docs/_scripts/generate.py
+	$(BIN)/python -m sphinx -W --keep-going -q -b html docs $(DOCS_OUT)/html
+
 lint: $(STAMP)
 	$(BIN)/ruff check utamp_gym tests benchmarks examples
 
 clean:
-	rm -rf $(VENV) $(MJ4) $(OUT) .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(MJ4) $(OUT) .pytest_cache .ruff_cache build docs/_generated docs/envs

@@ -222,7 +222,12 @@ def _add_eval_parser(sub: Any) -> None:
         metavar="ADDR",
         help="Ray cluster to use (default: $RAY_ADDRESS, else a new local Ray instance)",
     )
-    ev.add_argument("--grounding", choices=("physics", "symbolic"), default="physics")
+    ev.add_argument(
+        "--grounding",
+        choices=("physics", "symbolic"),
+        default="physics",
+        help="execute plans in MuJoCo, or check them against the ground-truth model",
+    )
     ev.add_argument("--limit", type=int, help="only the first N (matching) scenes of the suite")
     ev.add_argument(
         "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
@@ -486,9 +491,9 @@ def _add_scenes_parser(sub: Any) -> None:
     scenes = sub.add_parser("scenes", help=_help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
     lst = ssub.add_parser("list", help="scene names, one per line")
-    lst.add_argument("--suite", choices=SUITES)
+    lst.add_argument("--suite", choices=SUITES, help="only this suite (default: every suite)")
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
-    show.add_argument("name")
+    show.add_argument("name", help=SCENE_HELP)
     scenes.set_defaults(func=_cmd_scenes)
 
 
@@ -498,15 +503,20 @@ def _add_plan_parser(sub: Any) -> None:
 
     plan = sub.add_parser("plan", help=_help_line("plan"))
     plan.add_argument("scene", help=SCENE_HELP)
-    plan.add_argument("--method", choices=METHODS, default="utamp2-gt")
-    plan.add_argument("--seed", type=int, default=0)
+    plan.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)
+    plan.add_argument("--seed", type=int, default=0, help="seed of utamp2-noisy's detection")
     plan.add_argument(
         "--timeout",
         type=timeout_seconds,
         default=30.0,
         help="time limit of the whole command (s, at most one day)",
     )
-    plan.add_argument("--search", choices=SEARCH_CONFIGS, default=DEFAULT_SEARCH)
+    plan.add_argument(
+        "--search",
+        choices=SEARCH_CONFIGS,
+        default=DEFAULT_SEARCH,
+        help="Fast Downward search (astar-*: optimal plans)",
+    )
     plan.add_argument(
         "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
     )
@@ -525,7 +535,7 @@ def _add_run_parser(sub: Any) -> None:
 
     run = sub.add_parser("run", help=_help_line("run"))
     run.add_argument("scene", help=SCENE_HELP)
-    run.add_argument("--method", choices=METHODS, default="utamp2-gt")
+    run.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)
     run.add_argument("--seed", type=int, default=0, help="pose noise, IK restarts and OMPL seed")
     run.add_argument("--video", help="write an MP4 (or .gif) of the episode here")
     run.add_argument("--json", action="store_true", help="print one JSON object")
@@ -556,9 +566,9 @@ def _add_view_parser(sub: Any) -> None:
 
 def _add_validate_parser(sub: Any) -> None:
     val = sub.add_parser("validate", help=_help_line("validate"))
-    val.add_argument("domain")
-    val.add_argument("problem")
-    val.add_argument("plan")
+    val.add_argument("domain", help="PDDL domain file")
+    val.add_argument("problem", help="PDDL problem file")
+    val.add_argument("plan", help="plan file: one action per line, e.g. `utamp plan --out`'s")
     val.set_defaults(func=_cmd_validate)
 
 
@@ -569,6 +579,7 @@ def _add_train_parser(sub: Any) -> None:
 
 
 SCENE_HELP = "suite scene (pick-place/017), packaged scene or scene-file path"
+METHOD_HELP = "where the affordances come from: ground truth, rules, noisy rules, none (UTAMP-1)"
 EVAL_HELP = "evaluate planning methods on a suite (the paper's table); `eval merge` joins outputs"
 SUBCOMMANDS: tuple[tuple[str, Callable[[Any], None], str], ...] = (
     ("scenes", _add_scenes_parser, "list or show benchmark scenes"),

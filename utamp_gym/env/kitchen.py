@@ -94,6 +94,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
+    * ``suite`` (set by the env id: "pick-place", "sliding" or "extra") and ``objects`` (the
+      rows of ``object_poses`` and ``present``; every object of every scene needs one);
     * ``grounding``: "physics" (default; the backend simulates every macro action) or
       "symbolic" (effects applied to the symbolic state, >20k steps/s);
     * ``domain``: "utamp2" | "utamp1"; ``affordances``: "gt" | "rules" | "noisy" (re-detected

@@ -117,7 +117,7 @@ class RunIdentity:
 
 @dataclass(frozen=True)
 class ResultRow(RunIdentity):
-    """One evaluated run. Times in seconds; `plan` holds the actions joined by `` ; ``.
+    """One evaluated run. Times in seconds; `plan` holds the actions joined by ``" ; "``.
 
     `valid_gt` is whether the plan is valid under the ground-truth U-TAMP-2 model (None
     without a plan); `crashed` marks rows recorded for a run that raised or whose worker

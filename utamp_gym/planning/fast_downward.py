@@ -58,7 +58,7 @@ _SEARCH_ARGS: dict[str, tuple[str, ...]] = {
     "astar-blind": ("--search", "astar(blind())"),
 }
 SEARCH_CONFIGS: tuple[str, ...] = tuple(_SEARCH_ARGS)
-"""Valid ``search`` names for :func:`solve` (lama-first: satisficing; astar-*: optimal)."""
+"""Valid ``search`` names for :func:`solve` (``lama-first``: satisficing; ``astar-*``: optimal)."""
 DEFAULT_SEARCH = "astar-blind"
 """Optimal plans (lama-first's are up to 3x longer on five objects: 36 steps against 12,
 which triples a physics episode), and of the optimal configurations the fastest on every

@@ -97,9 +97,14 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
         "learning_curve.png and train.json to --out (with --seeds K > 1: one folder per "
         "seed plus aggregate.json and learning_curves.png).",
     )
-    p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids())
-    p.add_argument("--algo", default="maskable-ppo", choices=ALGOS)
-    p.add_argument("--grounding", default="symbolic", choices=GROUNDINGS)
+    p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids(), help="env id to train on")
+    p.add_argument("--algo", default="maskable-ppo", choices=ALGOS, help="RL algorithm")
+    p.add_argument(
+        "--grounding",
+        default="symbolic",
+        choices=GROUNDINGS,
+        help="symbolic (fast; the outcome model decides) or physics (MuJoCo)",
+    )
     p.add_argument(
         "--masks",
         default="affordances",

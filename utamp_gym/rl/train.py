@@ -303,7 +303,7 @@ def train_seeds(
     executor: Executor | None = None,
     **kwargs: Any,
 ) -> dict[str, Any]:
-    """`seeds` independent runs (seeds ``seed .. seed + seeds - 1``), one `train_seed` call
+    """`seeds` independent runs (seeds ``seed`` to ``seed + seeds - 1``), one `train_seed` call
     each, then `aggregate_seeds`; `kwargs` are `train`'s. Returns the aggregate.
 
     With an `executor` (`utamp_gym.distributed`: local worker processes or Ray tasks) the

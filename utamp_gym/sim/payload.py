@@ -10,7 +10,7 @@ plus compensation) is clamped to the Panda's joint torque limit (87 N·m joints 
 where g(q) is the robot's model of its own weight (links, hand and fingers:
 `qfrc_gravcomp`), J the 6x7 Jacobian of the TCP site (`mj_jacSite`) and F the wrench
 (force, moment about the TCP, world frame) the load exerts on the hand. Least squares
-gives F; the load's mass is -F_z / g and its lever arm |M_horizontal| / |F_z|. The
+gives F; the load's mass is -F_z / g and its lever arm ``|M_horizontal| / |F_z|``. The
 estimate is quasi-static, like the Franka's own payload estimation: it is averaged while
 the arm holds a pose, where the arm's inertial and Coriolis torques vanish. The catalogue
 mass is never read: the torques see only what physics puts on the hand (a tray whose far
