@@ -120,7 +120,7 @@ def main() -> None:
     }
     verdict = "met" if summary["perception_ms_median"] <= TARGET_MS else "NOT met"
     lines = [
-        f"Perception cost and accuracy, `perception=\"rgbd\"` (`benchmarks/perception_cost.py`,"
+        f'Perception cost and accuracy, `perception="rgbd"` (`benchmarks/perception_cost.py`,'
         f" {len(scenes)} {args.suite} scenes, UTAMP-2-GT plans, seed 0; load average "
         f"{load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} on 2 cores while measuring).",
         "",

@@ -145,6 +145,14 @@ CONSTANTS = {
     "test_tilt_deg": ("utamp_gym.sim.skills", "TEST_TILT_DEG", 1),
     "grasp_attempts": ("utamp_gym.sim.skills", "GRASP_ATTEMPTS", 1),
     "max_turn_deg": ("utamp_gym.sim.skills", "MAX_TURN_DEG", 1),
+    "voxel_mm": ("utamp_gym.perception.cloud", "VOXEL", 1000),
+    "cell_mm": ("utamp_gym.perception.grid", "CELL", 1000),
+    "open_fraction": ("utamp_gym.perception.shape", "OPEN_FRACTION", 1),
+    "food_surface_cm": ("utamp_gym.perception.objects", "FOOD_SURFACE", 100),
+    "thin_top_cm": ("utamp_gym.perception.objects", "THIN_TOP", 100),
+    "thin_side_cm": ("utamp_gym.perception.objects", "THIN_SIDE", 100),
+    "close_fraction": ("utamp_gym.sim.estimate", "CLOSE_FRACTION", 1),
+    "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }
 
 

@@ -36,7 +36,7 @@ from utamp_gym.perception.shape import wall_fit
 from utamp_gym.scene.catalogue import ObjectType
 
 MIN_POINTS = 25
-ICP_POINTS = 250  # observed points an ICP fit uses at most (evenly strided)
+ICP_POINTS = 200  # observed points an ICP fit uses at most (evenly strided)
 GOOD_FIT = 0.002  # m mean distance: a fit from the prior this good needs no second start
 PROTRUSION = 0.006  # m beyond the body's radius: a point of a handle
 STEP = 0.001  # m, placement search step of a box's footprint
@@ -54,6 +54,7 @@ class PoseModel:
     symmetric: bool = False  # two protrusions half a turn apart (a tray, a pot)
     surface: np.ndarray | None = None  # (M, 3) points on its surface (object frame)
     tree: Any = None  # a scipy cKDTree of `surface` (built once per object)
+    normals: np.ndarray | None = None  # (M, 3) outward unit normals at `surface`
 
     @property
     def center(self) -> np.ndarray:
@@ -67,12 +68,13 @@ class PoseModel:
         """A round body with nothing sticking out: its heading cannot be seen."""
         return self.geom == "cylinder" and self.protrusion is None
 
-    def with_surface(self, surface: np.ndarray) -> PoseModel:
-        """This model with surface points for the model-based fit (`icp_pose`)."""
+    def with_surface(self, surface: np.ndarray, normals: np.ndarray | None = None) -> PoseModel:
+        """This model with surface points (and their normals) for `icp_pose`."""
         from scipy.spatial import cKDTree
 
         pts = np.asarray(surface, dtype=float)
-        return replace(self, surface=pts, tree=cKDTree(pts))
+        nrm = None if normals is None else np.asarray(normals, dtype=float)
+        return replace(self, surface=pts, tree=cKDTree(pts), normals=nrm)
 
     @classmethod
     def of(cls, t: ObjectType) -> PoseModel:
@@ -140,7 +142,7 @@ def icp_pose(
     model: PoseModel,
     prior: np.ndarray,
     *,
-    iterations: int = 10,
+    iterations: int = 20,
     reject: float = 0.01,
     starts: Sequence[np.ndarray] = (),
 ) -> np.ndarray | None:
@@ -191,7 +193,12 @@ def _spread(points: np.ndarray, n: int) -> np.ndarray:
 def _icp(
     points: np.ndarray, model: PoseModel, start: np.ndarray, iterations: int, reject: float
 ) -> tuple[float, np.ndarray] | None:
-    """(mean paired distance, pose) of one ICP run from `start` (see `icp_pose`)."""
+    """(mean paired distance, pose) of one ICP run from `start` (see `icp_pose`).
+
+    With the model's surface normals each step is point-to-plane (the distances along the
+    normals, linearised in x, y, z and the heading about the pairs' centre): points on a flat
+    top then no longer pin a board's position, its edges do. Without normals it is
+    point-to-point (Procrustes about z)."""
     from scipy.spatial import cKDTree
 
     assert model.surface is not None
@@ -202,27 +209,45 @@ def _icp(
     err = math.inf
     for k in range(iterations):
         rot = _rot(yaw) @ flip
-        dist, idx = tree.query((points - t) @ rot)  # observed points in the object frame
-        keep = dist < reject * max(1.0, 3.0 - k)
+        limit = reject * max(1.0, 3.0 - k / 2)
+        dist, idx = tree.query((points - t) @ rot, distance_upper_bound=limit)
+        keep = dist < limit  # observed points in the object frame, paired
         if keep.sum() < MIN_POINTS:
             return None
         err = float(dist[keep].mean())
         obs = points[keep]
         mod = model.surface[idx[keep]] @ rot.T + t  # their partners, in the world
-        co, cm = obs[:, :2].mean(axis=0), mod[:, :2].mean(axis=0)
-        a, b = obs[:, :2] - co, mod[:, :2] - cm
-        dtheta = 0.0
-        if not model.round_:  # a plain round body: its heading cannot be seen
-            cross = float(np.sum(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0]))
-            dtheta = math.atan2(cross, float(np.sum(b * a)))
-        c, s = math.cos(dtheta), math.sin(dtheta)
-        r2 = np.array([[c, -s], [s, c]])
-        new_xy = r2 @ (t[:2] - cm) + co
+        if model.normals is not None:
+            normal = model.normals[idx[keep]] @ rot.T
+            centre = mod.mean(axis=0)
+            arm = mod - centre
+            turn = normal[:, 1] * arm[:, 0] - normal[:, 0] * arm[:, 1]  # n . (z x arm)
+            cols = [normal[:, 0], normal[:, 1], normal[:, 2]]
+            if not model.round_:
+                cols.append(turn)
+            a = np.column_stack(cols)
+            b = np.einsum("ij,ij->i", normal, obs - mod)
+            x = np.linalg.solve(a.T @ a + 1e-6 * np.eye(a.shape[1]), a.T @ b)
+            dtheta = float(x[3]) if not model.round_ else 0.0
+            c, s_ = math.cos(dtheta), math.sin(dtheta)
+            r2 = np.array([[c, -s_], [s_, c]])
+            new_xy = r2 @ (t[:2] - centre[:2]) + centre[:2] + x[:2]
+            t[2] += float(x[2])
+        else:
+            co, cm = obs[:, :2].mean(axis=0), mod[:, :2].mean(axis=0)
+            pa, pb = obs[:, :2] - co, mod[:, :2] - cm
+            dtheta = 0.0
+            if not model.round_:  # a plain round body: its heading cannot be seen
+                cross = float(np.sum(pb[:, 0] * pa[:, 1] - pb[:, 1] * pa[:, 0]))
+                dtheta = math.atan2(cross, float(np.sum(pb * pa)))
+            c, s_ = math.cos(dtheta), math.sin(dtheta)
+            r2 = np.array([[c, -s_], [s_, c]])
+            new_xy = r2 @ (t[:2] - cm) + co
+            t[2] += float(np.mean(obs[:, 2] - mod[:, 2]))
         step = float(np.linalg.norm(new_xy - t[:2]))
         t[:2] = new_xy
-        t[2] += float(np.mean(obs[:, 2] - mod[:, 2]))
         yaw += dtheta
-        if k >= 1 and abs(dtheta) < 2e-4 and step < 2e-4:
+        if k >= 2 and abs(dtheta) < 2e-4 and step < 2e-4:
             break
     out = np.eye(4)
     out[:3, :3] = _rot(yaw) @ flip

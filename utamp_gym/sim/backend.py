@@ -156,10 +156,11 @@ class MujocoBackend:
         st = self._require()
         ids = {name: i for i, name in self.cameras.instances.items()}
         models = {
-            n: PoseModel.of(t).with_surface(surface_points(t))
+            n: PoseModel.of(t).with_surface(*surface_points(t))
             for n, t in ((n, scene.type_of(n)) for n in st.world.body_ids)
         }
         declared = {n: pose_of(p.position, p.quat) for n, p in scene.poses.items()}
+        self._pose_look(False)  # the cameras' renderers, made before the first action
         return RgbdPoseEstimator(self._pose_look, ids, models, declared)
 
     def _pose_look(self, wrist_only: bool) -> ViewBundle:

@@ -6,22 +6,17 @@ instance masks — one id per object (1..N in the scene's object order), never p
 geom, -1 for the robot's own body, 0 for everything else (table, floor). Handles, rims and
 edges have to be found from geometry by the perceiver.
 
-Cameras (positions in the world frame: the robot base is the origin, +x away from the robot,
-z = 0 the table top; each looks at its target with the world's z axis up in the image):
+Cameras (`SCENE_CAMERAS`, `WRIST_CAMERA`; positions in the world frame: the robot base is
+the origin, +x away from the robot, z = 0 the table top; each looks at its target with the
+world's z axis up in the image; docs/perception.md lists them):
 
-* ``scene-left`` at (0.60, 0.80, 0.90) m and ``scene-right`` at (0.60, -0.80, 0.90) m, both
-  looking at (0.62, 0, 0), 60 deg vertical field of view: the two views of every look the
-  robot takes while it acts;
-* ``scene-front`` at (1.55, 0.00, 0.95) m looking at (0.55, 0, 0), and ``scene-top`` at
-  (0.75, 0.00, 1.55) m looking at (0.62, 0, 0), both 55 deg, and two low cameras at the
-  table's sides, ``scene-low-left`` at (0.50, 1.15, 0.16) m and ``scene-low-right`` at
-  (0.50, -1.15, 0.16) m looking at (0.50, 0, 0.03), 50 deg, which see under overhangs (a
-  pan under a cutting board): four more views for the first, careful look at the table
-  (object attributes);
-* ``wrist`` on the Panda hand, 7 cm off the fingers' plane on the hand's +x side and 3 cm
-  down from the flange, looking along the approach, tilted 21 deg towards the grasp axis
-  (aimed at the TCP axis 20 cm below the flange), 75 deg (about a RealSense D405's
-  vertical field of view).
+* two scene cameras above the table's sides (`ACTING_VIEWS`): the views of every look the
+  robot takes while it acts (depth and instance masks at `ACTING_SIZE`);
+* four more for the first, careful look at the table (`SURVEY_VIEWS` at `SURVEY_SIZE`, with
+  colour): one across the table, one above it, and two low at the table's sides, which see
+  under overhangs (a pan under a cutting board);
+* ``wrist`` on the Panda hand, beside the fingers, looking along the approach and tilted
+  towards the grasp axis, with about a RealSense D405's field of view (`WRIST_SIZE`).
 
 Intrinsics follow from the image size and the field of view (pinhole, square pixels,
 principal point at the image centre; `utamp_gym.perception.views.Intrinsics`). Rendering is
