@@ -59,6 +59,13 @@ class Grid:
         np.maximum.at(out, (i[inside], j[inside]), points[inside, 2])
         return out
 
+    def bottom(self, points: np.ndarray) -> np.ndarray:
+        """Lowest z per cell (+inf where no point falls)."""
+        i, j, inside = self.index(points[:, :2])
+        out = np.full(self.shape, np.inf)
+        np.minimum.at(out, (i[inside], j[inside]), points[inside, 2])
+        return out
+
     def bounds(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """xy min and max corners of the cells in `mask`."""
         i, j = np.nonzero(mask)

@@ -65,7 +65,8 @@ FLARE = 0.85  # a floor narrower than this fraction of the opening: the walls fl
 NECK_RISE = 0.02  # m a narrow part must stand above the body's top
 NECK_AREA = 0.35  # of the body's area, at most
 MARGIN = 0.05  # m of grid around an object's points
-SUPPORT_TOL = 0.01  # m: a surface this close below the object's lowest point carries it
+SUPPORT_TOL = 0.01  # m: a surface this close above (occlusion) or ...
+SUPPORT_BELOW = 0.006  # m ... this close below the object's lowest point carries it
 
 
 @dataclass(frozen=True)
@@ -136,7 +137,7 @@ def _support_height(local: np.ndarray, others: np.ndarray, bg: np.ndarray, grid:
         if not len(pts):
             continue
         top = grid.top(pts)
-        ok = ring & (top <= zmin + SUPPORT_TOL) & (top > zmin - 0.05)
+        ok = ring & (top <= zmin + SUPPORT_TOL) & (top > zmin - SUPPORT_BELOW)
         if ok.sum() >= 3:
             best = max(best, float(np.median(top[ok])))
     return best if best > -math.inf else zmin
@@ -417,6 +418,8 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         bar, trimmed = _trim_bar(piece, side)
         if trimmed:  # posts only if the gap between them is open above, not covered
             gap = _between(piece, bar)
+            # posts need evidence: the table seen through the gap, nothing over it (a
+            # handle under another object's handle shows only its sides: no posts)
             covered_gap = (gap & (other_top > 0.003)).sum() > 0.3 * max(1, int(gap.sum()))
             if covered_gap or not (see_through & gap).any():
                 bar, trimmed = piece, False
