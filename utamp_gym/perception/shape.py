@@ -54,7 +54,8 @@ from utamp_gym.perception.grid import (
     rotate,
 )
 
-BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box
+BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box ...
+ROUND_RESIDUAL = 0.003  # m ... and so is one whose wall a circle does not fit this well
 OPEN_FRACTION = 0.6  # of the largest inscribed radius: the disc that keeps only the body
 MIN_MEMBER_CELLS = 12  # cells (about 1 cm^2): smaller leftovers are noise or a corner
 FLAT_TOL = 0.004  # m, heights this close to the top level are on it
@@ -187,6 +188,28 @@ def wall_fit(
     if upper.sum() < 5:
         upper = keep
     return c, float(np.percentile(dist[upper], 90))
+
+
+def _round_wall(grid: Grid, local: np.ndarray, body: np.ndarray) -> bool:
+    """Whether the side wall around `body` is round: a circle fitted to its points (mid
+    height, near the outline) leaves them within `ROUND_RESIDUAL` of it (a rectangle's
+    wall, or a body with a handle block fused to it, does not)."""
+    outline = dilate_disc(body, 5.0) & ~erode_disc(body, 5.0)
+    near = _cells_of(grid, local, outline)
+    zmax = float(np.percentile(local[:, 2], 98)) if len(local) else 0.0
+    wall = local[near & (local[:, 2] > 0.2 * zmax) & (local[:, 2] < 0.8 * zmax)]
+    blo, bhi = grid.bounds(body)
+    fit = wall_fit(wall, (blo + bhi) / 2, float(np.mean(bhi - blo)) / 2)
+    if fit is None:
+        return True  # nothing to tell: keep the footprint's verdict
+    centre, radius = fit
+    dist = np.linalg.norm(wall[:, :2] - centre, axis=1)
+    bands = np.floor(wall[:, 2] / 0.01).astype(int)
+    resid = np.empty(len(dist))
+    for b in np.unique(bands):  # per height band: a flared wall is round at every height
+        sel = bands == b
+        resid[sel] = np.abs(dist[sel] - np.median(dist[sel]))
+    return float(np.median(resid)) <= max(ROUND_RESIDUAL, 0.03 * radius)
 
 
 def _circle(xy: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -351,7 +374,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     body_mask = components(opened)[0] if opened.any() else foot
     blo, bhi = grid.bounds(body_mask)
     fill = body_mask.sum() * grid.cell**2 / float(np.prod(bhi - blo))
-    geom = "box" if fill > BOX_FILL else "cylinder"
+    geom = "box" if fill > BOX_FILL or not _round_wall(grid, local, body_mask) else "cylinder"
     if geom == "box":
         sq = open_square(foot, int(OPEN_FRACTION * rmax / math.sqrt(2)))
         if sq.any():
