@@ -38,6 +38,7 @@ from utamp_gym.sim.bodies import object_prims
 RGBD_NOISE = 0.002
 WRIST_POINTS = 150  # an object this well seen by the wrist camera needs no scene look ...
 WHOLE_SPAN = 0.8  # ... if its points span this much of its longest extent
+STILL = 0.0005  # m: an object whose points' centre moved less than this was not refitted
 
 Look = Callable[[bool], ViewBundle]  # (wrist only?) -> the rendered views
 
@@ -134,6 +135,7 @@ class RgbdPoseEstimator:
         self._again: set[str] = set()  # looked at again: try the wrist camera first
         self._tcp: np.ndarray | None = None  # the hand's pose at the last rendering
         self._belief_tcp: dict[str, np.ndarray] = {}  # ... when each belief was formed
+        self._signature: dict[str, tuple[int, np.ndarray]] = {}  # points when last fitted
         self.seconds: list[float] = []  # wall time of every rendering + fit (perception cost)
 
     def new_look(self) -> None:
@@ -205,6 +207,9 @@ class RgbdPoseEstimator:
         start = time.perf_counter()
         cloud = frames.objects.get(self._ids[name])
         prior = self._belief[name]
+        if cloud is not None and self._unchanged(name, cloud.points):
+            self.seconds[-1] += time.perf_counter() - start
+            return prior.copy()  # seen just as before: it has not moved
         then = self._belief_tcp.get(name)
         # where the hand would have carried it since it was last seen (if it holds it)
         starts = (
@@ -221,6 +226,17 @@ class RgbdPoseEstimator:
                 self._belief_tcp[name] = self._tcp
         self.seconds[-1] += time.perf_counter() - start
         return self._belief[name].copy()
+
+    def _unchanged(self, name: str, points: np.ndarray) -> bool:
+        """Whether `name` shows the same points as when it was last fitted (same cameras,
+        about as many points, the same centre within `STILL`): then its pose is kept."""
+        key = (len(points), points.mean(axis=0))
+        last = self._signature.get(name)
+        self._signature[name] = key
+        if last is None or self._tcp is None:
+            return False
+        n0, c0 = last
+        return abs(key[0] - n0) <= 0.02 * n0 and float(np.linalg.norm(key[1] - c0)) <= STILL
 
     def _with_offset(self, name: str, pose: np.ndarray) -> np.ndarray:
         shift, yaw = self.offsets.get(name, (np.zeros(3), 0.0))
