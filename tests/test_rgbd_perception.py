@@ -215,3 +215,13 @@ def test_rgbd_pose_estimates_at_reset() -> None:
         assert all(v.rgb is None for v in views.views)
     finally:
         backend.close()
+
+
+def test_utamp2_perceived_closed_loop_in_symbolic_grounding() -> None:
+    """The planner policy believes the perceived affordances (renamed to the env's
+    members) and reaches the goal of the demo scene."""
+    from utamp_gym.eval.closed_loop import run_closed_loop
+
+    out = run_closed_loop("kitchen-demo", "utamp2-perceived", grounding="symbolic")
+    assert out.success, out.failure
+    assert out.actions and all("seen" not in a for a in out.actions)
