@@ -15,6 +15,9 @@ sensor of the robot notices. Three steps, each a plain function the skills call:
   report a missed grasp (the pick then looks again and retries, `skills.pick`);
 * `aim_place` — over the support, before lowering: look closely at the support; if it is
   more than `AIM_SHIFT` from where the placement was planned, plan it again.
+
+The object in the hand is always looked at with the wrist camera (`in_hand`), and a
+placement is planned with room for the estimates' error (`place_room`).
 """
 
 from __future__ import annotations
@@ -28,6 +31,9 @@ from utamp_gym.sim.decode import GraspPose, GraspSymbols, grasp_point
 from utamp_gym.sim.measure import SimState, obj_pose, pose_change
 
 AIM_SHIFT = 0.002  # m: a closer estimate farther than this re-aims
+#: a placement may penetrate its support in the robot's belief by this many standard
+#: deviations of the pose estimates (the error of the support's and the held object's)
+PLACE_ROOM_SIGMAS = 3.0
 AIM_TURN_DEG = 1.5
 CHECK_MARGIN = 0.002  # m a finger must clear the member by on each side
 Plan = TypeVar("Plan")
@@ -82,6 +88,21 @@ def aim_place(st: SimState, support: str, plan: Plan, replan: Callable[[], Plan]
     return replan()
 
 
+def in_hand(st: SimState, name: str) -> np.ndarray:
+    """The wrist camera's estimate of `name` in (or at) the hand; its true pose without an
+    estimator."""
+    if st.estimator is None:
+        return obj_pose(st, name)
+    return st.estimator.close_look(name, obj_pose(st, name))
+
+
+def place_room(st: SimState) -> float:
+    """How far (m, as a negative contact distance) the held object may seem to penetrate
+    the support while a placement is planned (`PLACE_ROOM_SIGMAS`)."""
+    noise = 0.0 if st.estimator is None else st.estimator.noise
+    return -PLACE_ROOM_SIGMAS * noise
+
+
 def describe(offset: float) -> str:
     return f"{offset * 1000:.0f} mm beyond the open fingers' reach"
 
@@ -94,4 +115,6 @@ __all__ = [
     "aim_place",
     "describe",
     "grasp_offset",
+    "in_hand",
+    "place_room",
 ]

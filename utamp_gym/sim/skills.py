@@ -205,11 +205,9 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
             "before the fingers closed"
         )
     gap = arm.close_gripper()
-    if st.estimator is not None:
-        st.estimator.forget(sym.obj)  # in the hand, it is looked at again
     hand_t_world = np.linalg.inv(arm.tcp())
     tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)
-    belief = hand_t_world @ st.estimate(sym.obj)
+    belief = hand_t_world @ relook.in_hand(st, sym.obj)  # in the hand: the wrist camera
     body = st.world.body_ids[sym.obj]
     st.held = Held(sym.obj, sym.member, body, tcp_t_obj, g.opening, sym, belief)
     if not arm.holds_something():
@@ -397,9 +395,7 @@ def _verify_lift(
         raise SkillFailure(f"picking {obj} disturbed the scene: {moved}")
     hand_t_world = np.linalg.inv(arm.tcp())  # as carried: measured, and looked at again
     held.tcp_t_obj = hand_t_world @ obj_pose(st, obj)
-    if st.estimator is not None:
-        st.estimator.forget(obj)
-    held.belief = hand_t_world @ st.estimate(obj)
+    held.belief = hand_t_world @ relook.in_hand(st, obj)
 
 
 def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
@@ -473,9 +469,7 @@ def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
     estimate if it differs from the belief by more than `REGRASP_SLIP` / `REGRASP_TILT_DEG`
     beyond what estimation noise explains (3 standard deviations of a difference), or
     `always`."""
-    if st.estimator is not None:
-        st.estimator.forget(held.obj)
-    new = np.linalg.inv(st.arm.tcp()) @ st.estimate(held.obj)
+    new = np.linalg.inv(st.arm.tcp()) @ relook.in_hand(st, held.obj)
     shift, angle = pose_change(held.belief, new)
     noise = 0.0 if st.estimator is None else st.estimator.noise
     explained = 3 * math.sqrt(2)
@@ -504,9 +498,11 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     world = st.world
     support = world.geom_ids.get(act.support, [world.table_geom_id])
     # lowering into a snug support (a board into a rimmed tray) may graze it: touching is
-    # allowed there, penetrating (in the robot's belief) is not
+    # allowed there, and penetrating (in the robot's belief) as far as the estimates' error
+    # allows (`relook.PLACE_ROOM_SIGMAS`); the guarded descent and the close look at the
+    # support (`relook.aim_place`) take care of the rest
     try:
-        with allowing(near, world.geom_ids[name], support, 0.0):
+        with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
             for yaw in (None, base_yaw):
                 tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
