@@ -486,7 +486,8 @@ def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
 def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     """Path from the place configuration up to the pre-place one, or `GroundingError`.
 
-    The object keeps its current yaw; if that does not fit, it turns to its support's.
+    The object turns square to its support (its yaw); if that does not fit, it keeps its
+    current yaw.
     """
     name, arm = held.obj, st.arm
     t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
@@ -503,7 +504,7 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     # support (`relook.aim_place`) take care of the rest
     try:
         with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
-            for yaw in (None, base_yaw):
+            for yaw in (base_yaw, None):  # square to the support first, else as held
                 tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
                     try:
