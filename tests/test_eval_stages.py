@@ -137,3 +137,16 @@ def test_a_perfect_perception_scores_one_on_every_attribute() -> None:
     action = "(pick-support mug mug-handle under left right back under slot4 on on)"
     assert ps.declared_action(action) == action
     assert ps.planning.type_of("mug").name == "mug-seen"
+
+
+def test_the_perception_option_names_the_valid_modes() -> None:
+    from utamp_gym.env.options import EnvOptions
+    from utamp_gym.errors import UnknownNameError as Unknown
+    from utamp_gym.errors import UtampError
+    from utamp_gym.eval.sweep import SweepConfig
+
+    with pytest.raises(Unknown, match="valid: gaussian, rgbd"):
+        EnvOptions(suite="pick-place", objects=("tray", "pan"), perception="lidar")
+    assert EnvOptions(suite="pick-place", objects=("tray", "pan"), perception="rgbd")
+    with pytest.raises(UtampError, match="needs --grounding physics"):
+        SweepConfig("pick-place", ("utamp2-gt",), grounding="symbolic", perception="rgbd")
