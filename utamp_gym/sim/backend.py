@@ -138,16 +138,23 @@ class MujocoBackend:
 
     def execute(self, action: str) -> MacroResult:
         """Run one grounded PDDL macro action; a failure comes back with a reason. With
-        ``perception="rgbd"`` its timings include ``perception_s``: rendering and fitting."""
+        ``perception="rgbd"`` its timings include ``perception_s`` (wall) and
+        ``perception_cpu_s`` (this process's CPU time): rendering and fitting."""
         st = self._require()
         try:
             act = parse_action(action, st.world.scene)
         except (GroundingError, UnknownNameError) as exc:
             return MacroResult(False, f"invalid action {action}: {exc}", Timings().as_dict(0.0))
+        est = st.estimator
         before = self._perception_seconds()
+        cpu = est.cpu_seconds if isinstance(est, RgbdPoseEstimator) else 0.0
         result = run_skill(st, act)
-        if isinstance(st.estimator, RgbdPoseEstimator):
-            timings = {**result.timings, "perception_s": self._perception_seconds() - before}
+        if isinstance(est, RgbdPoseEstimator):
+            timings = {
+                **result.timings,
+                "perception_s": self._perception_seconds() - before,
+                "perception_cpu_s": est.cpu_seconds - cpu,
+            }
             result = replace(result, timings=timings)
         return result
 

@@ -137,6 +137,7 @@ class RgbdPoseEstimator:
         self._belief_tcp: dict[str, np.ndarray] = {}  # ... when each belief was formed
         self._signature: dict[str, tuple[int, np.ndarray]] = {}  # points when last fitted
         self.seconds: list[float] = []  # wall time of every rendering + fit (perception cost)
+        self.cpu_seconds = 0.0  # ... and the process's CPU time spent on them
 
     def new_look(self) -> None:
         self._look.clear()
@@ -196,19 +197,26 @@ class RgbdPoseEstimator:
         return span >= WHOLE_SPAN * model_span
 
     def _fused(self, *, wrist_only: bool) -> Scene3D:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         bundle = self._render(wrist_only)
         frames = fuse(bundle, objects_only=True)
         self._tcp = None if bundle.robot is None else bundle.robot.tcp
         self.seconds.append(time.perf_counter() - start)
+        self.cpu_seconds += time.process_time() - cpu
         return frames
 
     def _fit(self, name: str, frames: Scene3D) -> np.ndarray:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
+        try:
+            return self._fit_timed(name, frames)
+        finally:
+            self.seconds[-1] += time.perf_counter() - start
+            self.cpu_seconds += time.process_time() - cpu
+
+    def _fit_timed(self, name: str, frames: Scene3D) -> np.ndarray:
         cloud = frames.objects.get(self._ids[name])
         prior = self._belief[name]
         if cloud is not None and self._unchanged(name, cloud.points):
-            self.seconds[-1] += time.perf_counter() - start
             return prior.copy()  # seen just as before: it has not moved
         then = self._belief_tcp.get(name)
         # where the hand would have carried it since it was last seen (if it holds it)
@@ -224,7 +232,6 @@ class RgbdPoseEstimator:
             self._belief[name] = pose
             if self._tcp is not None:
                 self._belief_tcp[name] = self._tcp
-        self.seconds[-1] += time.perf_counter() - start
         return self._belief[name].copy()
 
     def _unchanged(self, name: str, points: np.ndarray) -> bool:
