@@ -192,8 +192,7 @@ def test_utamp2_perceived_plans_the_demo_scene() -> None:
     assert outcome.solved, outcome.reason
     assert seen is not None
     assert outcome.affordance_scores.f1 >= 0.95
-    plan = seen.declared_plan(outcome.plan)
-    assert check_against_ground_truth(demo, plan).valid
+    assert check_against_ground_truth(demo, outcome.plan).valid
     assert seen.accuracy["body"] == 1.0 and seen.accuracy["shape"] >= 0.95
 
 

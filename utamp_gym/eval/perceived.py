@@ -6,15 +6,14 @@ in the evaluation layer, may read the scene, and does what needs both:
 * `perceive_scene` resets the physics backend to the episode's world (the same seed gives
   the same initial poses and colours as the physics run), takes the survey look, perceives
   every object and writes each as its own catalogue type (``<object>-seen``) in the object's
-  declared orientation; the *planning scene* is the declared scene with those types, so the
-  rule parser (`affordances.rules`) turns perceived attributes into the affordances the
-  planner uses;
+  declared orientation; the rule parser (`affordances.rules`) turns these perceived types
+  (the *planning scene*'s) into affordance facts;
 * `align_members` pairs each perceived member with a declared one by box overlap (the
   perceiver names members by kind and side, the catalogue by its own convention): the
-  plan's member symbols and the perceived facts are renamed through it, for scoring against
-  the ground truth and for executing the plan in the declared world; a perceived member
-  with no declared counterpart keeps its name (its facts are false positives, an action on
-  it fails);
+  perceived facts are renamed through it, for scoring against the ground truth and for
+  planning the declared scene (`plan_perceived`: its initial state is the scene's, as for
+  `utamp2-noisy`); a perceived member with no declared counterpart keeps its name (its
+  facts are false positives, and have no symbol to plan with);
 * `attribute_accuracy` compares every perceived attribute with the declared one
   (`ATTRIBUTES`), per object, for the eval rows.
 """
@@ -23,7 +22,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -124,22 +123,6 @@ class PerceivedScene:
 
     def scores(self, facts: Iterable[Fact], truth: Iterable[Fact]) -> Scores:
         return score(self.declared_facts(facts), truth)
-
-    def declared_action(self, action: str) -> str:
-        """A planned action with each perceived member symbol renamed to the declared one
-        (``obj-handle-back`` -> ``obj-handle``); an unmatched member keeps its symbol."""
-        tokens = action.strip().strip("()").split()
-        if len(tokens) < 3:
-            return action
-        obj, symbol = tokens[1], tokens[2]
-        member = symbol.removeprefix(f"{obj}-")
-        declared = self.members.get(obj, {}).get(member)
-        if declared is not None:
-            tokens[2] = f"{obj}-{declared}"
-        return "(" + " ".join(tokens) + ")"
-
-    def declared_plan(self, plan: Sequence[str]) -> tuple[str, ...]:
-        return tuple(self.declared_action(a) for a in plan)
 
 
 def attribute_accuracy(
@@ -263,13 +246,16 @@ def plan_perceived(
     deadline: Any = None,
     backend: Any = None,
 ) -> tuple[PlanOutcome, PerceivedScene | None]:
-    """`utamp2-perceived` on a declared scene: perceive it, plan its planning scene with the
-    perceived types. The outcome's plan, problem and facts are the planning scene's (member
-    symbols as perceived: `PerceivedScene.declared_plan` renames them for the declared
-    world); its scores are against the declared scene's ground truth; its planning time
-    includes the perception (render and fit). A scene the cameras could not perceive is
-    unsolved, with the reason (and no perceived scene)."""
-    from utamp_gym.planning.methods import ground_truth_for, plan_scene
+    """`utamp2-perceived` on a declared scene: perceive it, turn the perceived attributes into
+    affordances with the rules, and plan the declared scene with them. As for `utamp2-noisy`,
+    the initial state (stacks, orientations, workspace and free spaces) is the scene's: the
+    attributes are what is perceived. The facts are renamed to the declared members they
+    overlap (`align_members`); those on perceived members with no declared counterpart have
+    no symbol to plan with, but count as false positives in the scores (against the declared
+    scene's ground truth). The planning time includes the perception (render and fit). A
+    scene the cameras could not perceive is unsolved, with the reason (and no perceived
+    scene)."""
+    from utamp_gym.planning.methods import ground_truth_for, plan_affordances, plan_scene
 
     start = time.perf_counter()
     try:
@@ -279,33 +265,22 @@ def plan_perceived(
         reason = f"perception: {exc}"
         elapsed = time.perf_counter() - start
         outcome = PlanOutcome(
-            scene.name,
-            "utamp2-perceived",
-            scene.n_objects,
-            False,
-            (),
-            elapsed,
-            reason,
-            seed,
+            scene.name, "utamp2-perceived", scene.n_objects, False, (), elapsed, reason, seed,
             nothing,
-        )
+        )  # fmt: skip
         return outcome, None
+    perceived = plan_affordances(ps.planning)
+    scores = ps.scores(perceived, ground_truth_for(scene))
     outcome = plan_scene(
-        ps.planning,
+        scene,
         "utamp2-perceived",
         seed=seed,
         timeout=timeout,
         search=search,
         deadline=deadline,
+        affordances=(ps.usable_facts(perceived), scores),
     )
-    scores = ps.scores(outcome.facts, ground_truth_for(scene))
-    return (
-        outcome._replace(
-            affordance_scores=scores,
-            planning_time_s=outcome.planning_time_s + ps.perceive_s,
-        ),
-        ps,
-    )
+    return outcome._replace(planning_time_s=outcome.planning_time_s + ps.perceive_s), ps
 
 
 def run_perceived_episode(
@@ -323,8 +298,8 @@ def run_perceived_episode(
     from utamp_gym.sim.execute import episode_result
 
     t0 = time.perf_counter()
-    outcome, seen = plan_perceived(scene, seed)
-    plan = () if seen is None else seen.declared_plan(outcome.plan)
+    outcome, _ = plan_perceived(scene, seed)
+    plan = outcome.plan
     noise = DEFAULT_POSE_NOISE if pose_noise is None else pose_noise
     return episode_result(
         scene, outcome, plan, seed, video, t0, None, noise, disturbance, perception

@@ -84,7 +84,6 @@ class _Planned:
     reason: str | None
     scores: Scores | None
     facts: frozenset[Fact] | None  # detected U-TAMP-2 affordances, for explanations
-    executed: tuple[str, ...] | None = None  # the plan in the declared world's names
     accuracy: Mapping[str, float] | None = None  # per attribute (detected attributes)
 
 
@@ -110,19 +109,16 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
         from utamp_gym.eval.perceived import plan_perceived
 
         o, seen = plan_perceived(scene, task.seed, timeout=task.timeout)
-        executed = () if seen is None else seen.declared_plan(o.plan)
-        facts = None if seen is None else seen.declared_facts(o.facts)
         accuracy = None if seen is None else seen.accuracy
         return _Planned(
-            o.solved, o.plan, o.planning_time_s, o.reason, o.affordance_scores, facts, executed,
-            accuracy,
-        )  # fmt: skip
+            o.solved, o.plan, o.planning_time_s, o.reason, o.affordance_scores, o.facts, accuracy
+        )
     noise = DEFAULT_NOISE if task.noise is None else task.noise
     o = plan_scene(scene, task.method, seed=task.seed, timeout=task.timeout, noise=noise)
     facts = o.facts if method_spec(task.method).domain == "utamp2" else None
     scores = o.affordance_scores if task.method != "utamp1" else None
     accuracy = _noisy_accuracy(scene, task.seed, noise) if task.method == "utamp2-noisy" else None
-    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts, None, accuracy)
+    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts, accuracy)
 
 
 def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
@@ -215,7 +211,7 @@ def _run(task: EvalTask, start: float) -> ResultRow:
     planned = _plan(scene, task)
     success, failure = False, ""
     valid_gt = None
-    plan = planned.plan if planned.executed is None else planned.executed
+    plan = planned.plan
     if planned.solved:
         check = check_against_ground_truth(scene, plan)
         valid_gt = check.valid

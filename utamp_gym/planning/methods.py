@@ -204,6 +204,7 @@ def plan_scene(
     rng: np.random.Generator | None = None,
     planner: StatePlanner | None = None,
     deadline: Deadline | None = None,
+    affordances: tuple[frozenset[Fact], Scores] | None = None,
 ) -> PlanOutcome:
     """Abstract the scene, plan with Fast Downward, and report.
 
@@ -213,7 +214,9 @@ def plan_scene(
     `detection_rng(seed, scene.name)`. `planner` (a `StatePlanner` of the method's domain)
     re-uses its cached groundings; `search` defaults to its configuration, else
     `DEFAULT_SEARCH`. An unsolvable task or a time-out comes back with ``solved=False`` and
-    a reason (a time-out also with the phase that ran out of time).
+    a reason (a time-out also with the phase that ran out of time). `affordances` (facts and
+    their scores) replaces the method's own source: ``utamp2-perceived`` plans the declared
+    scene with the facts perceived in it (`utamp_gym.eval.perceived.plan_perceived`).
     """
     spec = method_spec(method)
     start = time.perf_counter()
@@ -230,7 +233,10 @@ def plan_scene(
         rng = detection_rng(seed, scene.name)
     timed_out, phase = False, None
     late = deadline.expired()  # already out of time when called: the caller's phase
-    facts, scores = affordances_for(scene, spec.affordances, rng, noise)
+    if affordances is None:
+        facts, scores = affordances_for(scene, spec.affordances, rng, noise)
+    else:
+        facts, scores = affordances
     domain = domain_text(spec.domain)
     problem = build_problem(scene, facts, spec.domain)
     fluent = planner.domain.fluent_predicates()
