@@ -4,7 +4,6 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= out
-export MUJOCO_GL ?= egl
 
 MJ4    := .venv-mujoco4
 
@@ -18,7 +17,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "torch==2.13.0"
-	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray,docs]"
+	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray,docs,data,zoo]"
 	touch $(STAMP)
 
 demo: $(STAMP)

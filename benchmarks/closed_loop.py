@@ -27,8 +27,6 @@ import statistics
 import time
 from pathlib import Path
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
 from utamp_gym.suites import suite_scenes
@@ -45,7 +43,7 @@ def perception_cost(scenes: list[str], seed: int = 0) -> list[float]:
 
     out: list[float] = []
     for name in scenes:
-        env = UTampKitchenEnv(suite=name.split("/")[0], scene=name)
+        env = UTampKitchenEnv(suite=name.split("/")[0], scene=name, record_timings=True)
         policy = PlannerPolicy(env)
         obs, info = env.reset(seed=seed)
         for _ in range(40):

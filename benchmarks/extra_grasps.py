@@ -12,9 +12,6 @@ alone picks one grasp per object; this exercises all of them.
 from __future__ import annotations
 
 import argparse
-import os
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.planning.fast_downward import solve

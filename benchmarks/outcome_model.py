@@ -168,7 +168,7 @@ def sample_suite(suite: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                 predicted_reason = model.affordance_failure(i)
                 start = time.perf_counter()
                 _, _, terminated, _, info = env.step(i)
-                macro = info["macro_result"]
+                macro = env.macro_result  # the MacroResult (info holds its fields)
                 pairs.append(
                     Pair(
                         suite=suite,

@@ -22,9 +22,6 @@ import argparse
 import collections
 import os
 import statistics
-
-os.environ.setdefault("MUJOCO_GL", "egl")
-
 from pathlib import Path
 
 from utamp_gym.backend import DEFAULT_POSE_NOISE

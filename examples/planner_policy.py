@@ -12,11 +12,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import time
 from pathlib import Path
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 import gymnasium as gym
 import imageio
@@ -43,6 +40,7 @@ def main() -> None:
             grounding="physics",
             scene=args.scene,
             backend_kwargs={"frame_sink": video.append_data},
+            record_timings=True,  # wall-clock phase times per step, for summary.json
         )
         policy = PlannerPolicy(env.unwrapped, method=args.method)
         obs, info = env.reset(seed=args.seed)
@@ -57,10 +55,7 @@ def main() -> None:
                     "timings": info.get("timings", {}),
                 }
             )
-            print(
-                f"{len(steps):2d} {info['action']}  "
-                f"{'ok' if info['failure_reason'] is None else info['failure_reason']}"
-            )
+            print(f"{len(steps):2d} {info['action']}  {info['failure_reason'] or 'ok'}")
         tower = env.unwrapped.backend.stacked_on_tray()
         env.close()
     summary = {

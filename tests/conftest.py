@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
-import os
 import tomllib
 from typing import Any
 
 import pytest
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 from utamp_gym.resources import asset_path
 

@@ -32,3 +32,16 @@ def process_alive(pid: int) -> bool:
     except OSError:
         return False
     return stat[stat.rindex(")") + 2] != "Z"
+
+
+#: variables a test's own process may have set or inherited that a user's shell has not:
+#: the GL choice (`utamp_gym.sim.gl` writes MUJOCO_GL once it has probed; MuJoCo's EGL
+#: module sets PYOPENGL_PLATFORM) and the display
+NOT_A_USERS = ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY", "WAYLAND_DISPLAY")
+
+
+def user_env(**extra: str) -> dict[str, str]:
+    """The environment of a headless user's shell for a child process: this one's without
+    `NOT_A_USERS`, plus `extra`. Every test subprocess uses it, so tests see what users see."""
+    env = {k: v for k, v in os.environ.items() if k not in NOT_A_USERS}
+    return {**env, **extra}

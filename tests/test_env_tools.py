@@ -12,6 +12,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from dm_env import StepType, test_utils
+from procs import user_env
 
 from utamp_gym.env.dm_adapter import DmEnvAdapter
 from utamp_gym.env.planner_policy import PlannerPolicy
@@ -35,7 +36,7 @@ def test_planner_policy_solves_a_five_object_scene(env_id: str) -> None:
     assert env.unwrapped.scene.n_objects == 5
     for _ in range(env.spec.max_episode_steps):
         obs, reward, terminated, truncated, info = env.step(policy(obs, info))
-        assert info["failure_reason"] is None
+        assert info["failure_reason"] == ""
         if terminated or truncated:
             break
     assert terminated and not truncated and reward == 1.0
@@ -84,7 +85,7 @@ def test_symbolic_action_wrapper_maps_a_plan(env_id: str) -> None:
     for i, step in enumerate(plan):
         text = step.upper() if i % 2 else f"  {step}  "  # case and spacing do not matter
         _, reward, terminated, _, info = wrapped.step(text)
-        assert info["failure_reason"] is None and info["action"] == step
+        assert info["failure_reason"] == "" and info["action"] == step
     assert terminated and reward == 1.0
     assert wrapped.action_string(wrapped.action(plan[0])) == plan[0]
 
@@ -112,7 +113,7 @@ def test_async_vector_env_runs() -> None:
             actions = np.array([rng.choice(np.flatnonzero(m)) for m in masks])
             obs, reward, _, _, info = envs.step(actions)
             assert reward.shape == (4,)
-            assert all(r is None for r in info["failure_reason"])
+            assert all(r == "" for r in info["failure_reason"])
     finally:
         envs.close()
 
@@ -148,6 +149,7 @@ class DmEnvContractTest(test_utils.EnvironmentTestMixin, unittest.TestCase):
 def test_random_masked_agent_example_runs() -> None:
     out = subprocess.run(
         [sys.executable, str(ROOT / "examples" / "random_masked_agent.py"), "--episodes", "2"],
+        env=user_env(),
         capture_output=True,
         text=True,
         timeout=300,

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from procs import user_env
 
 from utamp_gym.cli import main
 from utamp_gym.errors import UnknownNameError, UtampError
@@ -38,7 +38,7 @@ def test_shard_of_a_run_key_is_a_fixed_hash() -> None:
     )
     outs = set()
     for hash_seed in ("1", "2"):
-        env = {**os.environ, "PYTHONHASHSEED": hash_seed}
+        env = user_env(PYTHONHASHSEED=hash_seed)
         res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
         assert res.returncode == 0, res.stderr
         outs.add(res.stdout)

@@ -104,7 +104,7 @@ def vlm(monkeypatch: pytest.MonkeyPatch) -> Iterator[Server]:
     monkeypatch.setenv("UTAMP_VLM_BASE_URL", server.url)
     monkeypatch.setenv("UTAMP_VLM_MODEL", "test-vlm")
     monkeypatch.setenv("UTAMP_VLM_API_KEY", "sk-test")
-    monkeypatch.setenv("UTAMP_VLM_TIMEOUT", "1")
+    monkeypatch.setenv("UTAMP_VLM_TIMEOUT", "5")  # replies come at once; a loaded machine is slow
     yield server
     server.httpd.shutdown()
     server.httpd.server_close()
@@ -148,7 +148,7 @@ BAD_REPLIES = {
     "not-json-body": (200, b"<html>gateway</html>", 0, "malformed response"),
     "http-500": (500, {"error": {"message": "internal"}}, 0, "HTTP 500"),
     "http-401": (401, {"error": {"message": "bad key"}}, 0, "HTTP 401"),
-    "timeout": (200, completion("{}"), 2.5, "within 1 s"),
+    "timeout": (200, completion("{}"), 7.0, "within 5 s"),
     "no-objects": (200, completion('{"things": []}'), 0, "has no 'objects'"),
     "unknown-object": (200, None, 0, "unknown object 'spoon'"),
     "missing-parts": (200, None, 0, "has no 'parts'"),

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 from utamp_gym.affordances.rules import derive_affordances
@@ -138,7 +136,6 @@ def test_the_rules_plan_every_extra_scene() -> None:
     ],
 )
 def test_new_objects_stack_in_physics(name: str) -> None:
-    os.environ.setdefault("MUJOCO_GL", "egl")
     from utamp_gym.sim.execute import run_episode
 
     scene = resolve_scene(name)

@@ -10,10 +10,13 @@ import subprocess
 import sys
 import textwrap
 
+from procs import user_env
+
 
 def _run(code: str) -> str:
     out = subprocess.run(
         [sys.executable, "-c", textwrap.dedent(code)],
+        env=user_env(),
         capture_output=True,
         text=True,
         check=True,

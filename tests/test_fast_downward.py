@@ -18,7 +18,7 @@ from collections import deque
 from pathlib import Path
 
 import pytest
-from procs import downward_children, process_alive
+from procs import downward_children, process_alive, user_env
 
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
 from utamp_gym.planning import fast_downward as fd
@@ -189,6 +189,7 @@ def test_lama_first_matches_installed_driver_alias():
     )
     out = subprocess.run(
         [sys.executable, "-c", code, str(root / "downward")],
+        env=user_env(),
         capture_output=True,
         text=True,
         check=True,

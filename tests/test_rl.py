@@ -7,12 +7,15 @@ import argparse
 import csv
 import json
 import shlex
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from procs import user_env
 
 pytest.importorskip("sb3_contrib")
 
@@ -63,7 +66,7 @@ def test_saved_model_acts_on_masked_env_without_invalid_actions(maskable_run: Pa
             action = policy(obs, info)
             assert info["action_mask"][action]
             obs, _, terminated, truncated, info = env.step(action)
-            assert info["failure_reason"] is None
+            assert info["failure_reason"] == ""
             done = terminated or truncated
     env.close()
 
@@ -237,8 +240,6 @@ def _eval_rows(out: Path) -> list[dict[str, str]]:
 def test_utamp_eval_runs_a_trained_agent_next_to_the_planner(
     cli_runs: Path, tmp_path: Path, grounding: str
 ) -> None:
-    if grounding == "physics":
-        pytest.importorskip("utamp_gym.sim.backend", reason="the MuJoCo backend is not available")
     model = cli_runs / "seed_3" / "model.zip"
     limit = "5" if grounding == "symbolic" else "1"
     args = (
@@ -318,3 +319,20 @@ def test_train_executor_options_need_several_seeds(tmp_path: Path, capsys) -> No
     args = f"train --steps 64 --executor ray --out {tmp_path}"
     assert main(shlex.split(args)) == 2
     assert "need --seeds K > 1" in capsys.readouterr().err
+
+
+def test_worker_envs_of_the_utamp_process_find_the_env_ids() -> None:
+    """A spawned worker inherits the `utamp` command's argv, so `import utamp_gym` registers
+    nothing there (`utamp train --grounding physics` uses such workers)."""
+    code = (
+        "import sys; sys.argv[0] = 'utamp'\n"
+        "from utamp_gym.rl.envs import make_vec_env\n"
+        "vec = make_vec_env('UTampKitchen-v0', 1, subproc=True, num_objects=2)\n"
+        "print(sorted(vec.reset()))\n"
+        "vec.close()\n"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], env=user_env(), capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "['present', 'symbolic']"

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from utamp_gym.errors import GroundingError
+from utamp_gym.robot import motion
 from utamp_gym.robot.collision import CollisionChecker
 from utamp_gym.robot.kinematics import HOME_Q, PandaKinematics
 from utamp_gym.robot.motion import (
@@ -97,6 +98,21 @@ def test_same_generator_seed_gives_identical_path(scene):
     first = plan_motion(checker, q_a, q_b, np.random.default_rng(42))
     second = plan_motion(checker, q_a, q_b, np.random.default_rng(42))
     np.testing.assert_array_equal(first.waypoints, second.waypoints)
+
+
+def test_the_planner_limit_is_counted_in_checks_not_seconds(scene, monkeypatch):
+    """A budget of 40 collision checks (~2.4 ms at CHECK_S) cannot get round the wall: the
+    failure comes after exactly that many RRTConnect checks, on a slow machine too (here: a
+    clock that jumps 10 ms per reading would have ended a timed search at once)."""
+    *_, checker, q_a, q_b = scene
+    with pytest.raises(GroundingError, match=r"in 40 collision checks \(~0\.00 s"):
+        plan_motion(checker, q_a, q_b, np.random.default_rng(0), timeout=40 * motion.CHECK_S)
+    clock = iter(np.arange(1e6) * 0.01)
+    monkeypatch.setattr(motion.time, "perf_counter", lambda: float(next(clock)))
+    plan = plan_motion(checker, q_a, q_b, np.random.default_rng(42))
+    reference = plan_motion(checker, q_a, q_b, np.random.default_rng(42))
+    np.testing.assert_array_equal(plan.waypoints, reference.waypoints)
+    assert not plan.direct
 
 
 def test_free_straight_line_skips_the_sampler(scene):

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from procs import user_env
 
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.eval.closed_loop import run_closed_loop
@@ -19,7 +20,9 @@ def test_run_seed_is_stable_and_differs_per_scene_and_seed() -> None:
     assert len(seeds) == 60 and all(0 <= s < 2**63 for s in seeds)
     assert run_seed("pick-place/017", 2) == run_seed("pick-place/017", 2)
     code = "from utamp_gym.seeding import run_seed; print(run_seed('pick-place/017', 2))"
-    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    other = subprocess.run(
+        [sys.executable, "-c", code], env=user_env(), capture_output=True, text=True
+    )
     assert int(other.stdout) == run_seed("pick-place/017", 2)  # no per-process hashing
     with pytest.raises(ValueError, match="non-negative"):
         run_seed("pick-place/017", -1)

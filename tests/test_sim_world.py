@@ -150,7 +150,8 @@ def test_a_robot_can_be_attached_before_compiling(demo):
 
 
 def test_the_panda_stands_on_the_table_without_disturbing_the_scene(demo):
-    panda = pytest.importorskip("utamp_gym.robot.panda_mjcf")
+    from utamp_gym.robot import panda_mjcf as panda
+
     spec, info = build_world_spec(demo, rng=np.random.default_rng(0))
     handles = panda.add_panda(spec)
     world = compile_world(spec, info)
@@ -280,9 +281,12 @@ def test_custom_types_get_generic_bodies():
 
 # ------------------------------------------------------------------------- speed
 def test_demo_world_step_rate(demo, record_property):
+    """Records the step rate (speed targets live in benchmarks/, not in timed tests: machines
+    are shared); asserts that the resting scene steps stably."""
     world = build_world(demo, rng=np.random.default_rng(0))
     data = world.make_data()
     settle(world.model, data, 0.2)
+    before = data.qpos.copy()
     n, best = 1000, 0.0
     for _ in range(3):
         t0 = time.perf_counter()
@@ -290,4 +294,5 @@ def test_demo_world_step_rate(demo, record_property):
         best = max(best, n / (time.perf_counter() - t0))
     record_property("mj_step_per_s", round(best))
     print(f"demo world (5 objects, no robot): {best:.0f} mj_step/s, ncon {data.ncon}")
-    assert best > 1000  # generous floor: 2-core CI, shared
+    assert data.time == pytest.approx((3 * n + round(0.2 / world.model.opt.timestep)) * 0.002)
+    assert np.abs(data.qpos - before).max() < 0.01  # 6 s later everything still rests

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from procs import user_env
 
 SCREEN = (1024, 768)
 
@@ -32,13 +33,10 @@ class Display:
     framebuffer: Path
 
     def env(self, **extra: str) -> dict[str, str]:
-        """The current environment with ``DISPLAY`` pointing here and `extra` set.
-
-        ``PYOPENGL_PLATFORM`` is dropped: dm_control sets it to ``egl`` in this process when
-        ``MUJOCO_GL=egl``, and a window's OpenGL context needs GLX.
-        """
-        env = {k: v for k, v in os.environ.items() if k != "PYOPENGL_PLATFORM"}
-        return {**env, "DISPLAY": self.name, **extra}
+        """A desktop user's environment (`procs.user_env`: no ``MUJOCO_GL``, no
+        ``PYOPENGL_PLATFORM``, which MuJoCo's EGL module sets in this process and which a
+        window's GLX context must not have) with ``DISPLAY`` pointing here and `extra` set."""
+        return user_env(DISPLAY=self.name, **extra)
 
     def screenshot(self) -> np.ndarray:
         """The screen as an RGB array (height, width, 3), read from the XWD framebuffer."""

@@ -15,10 +15,17 @@ __version__ = "0.1.0"
 def _started_as_utamp_command() -> bool:
     """True in a process started as the `utamp` command (its console script, or
     ``python -m utamp_gym.cli``): `utamp_gym.cli.main` registers the envs itself, for the
-    subcommands that use them, so that ``utamp plan`` never imports Gymnasium."""
-    if os.path.basename(sys.argv[0]) == "utamp":
-        return True
+    subcommands that use them, so that ``utamp plan`` never imports Gymnasium.
+
+    Decided from the interpreter's own command line (`sys.orig_argv`), not from `sys.argv`
+    alone: the worker processes of ``utamp eval`` / ``utamp train`` (multiprocessing's spawn)
+    inherit the parent's `sys.argv`, whose ``argv[0]`` ends in ``utamp``, but were started as
+    ``python -c ...``; they import this package to unpickle their task and must register.
+    """
     argv = getattr(sys, "orig_argv", [])
+    script = sys.argv[0] if sys.argv else ""
+    if os.path.basename(script) == "utamp" and script in argv[1:]:
+        return True
     return any(a == "-m" and b == "utamp_gym.cli" for a, b in itertools.pairwise(argv))
 
 

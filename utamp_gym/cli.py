@@ -1,8 +1,10 @@
-"""The `utamp` command line: scenes, plan, validate, run, view, eval, train.
+"""The `utamp` command line: scenes, plan, validate, run, view, eval, train, demos.
 
 Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
-see `solved` and `timed_out`), 1 an invalid plan (`validate`), 2 bad input (unknown scene,
-malformed file, bad option value, ...), 130 interrupted (Ctrl-C).
+see `solved` and `timed_out`), 1 an invalid plan (`validate`) or an `eval` sweep with crashed
+runs (named on stderr; their rows are in results.csv and run again on resume), 2 bad input
+(unknown scene, malformed file, bad option value, a failed training seed, ...), 130
+interrupted (Ctrl-C).
 
 Each subcommand imports what it needs when it runs; `utamp plan` imports neither Gymnasium
 nor the physics stack (the RL parser and the env registration load only for the
@@ -21,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from utamp_gym.errors import UtampError
+from utamp_gym.outputs import output_dir, output_file
 
 if TYPE_CHECKING:
     from utamp_gym.planning.methods import PlanOutcome
@@ -29,9 +32,12 @@ if TYPE_CHECKING:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import SUITES, resolve_scene, suite_scenes
+    from utamp_gym.suites import SUITES, packaged_scene_names, resolve_scene, suite_scenes
 
     if args.scenes_cmd == "list":
+        if not args.suite:  # the packaged scenes (kitchen-demo), then every suite's
+            for name in packaged_scene_names():
+                print(name)
         for suite in (args.suite,) if args.suite else SUITES:
             for scene in suite_scenes(suite):
                 print(scene.name)
@@ -49,6 +55,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     # planner's imports included), not from when planning begins.
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
+    out = None if args.out is None else output_dir(args.out, "--out")
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
         from utamp_gym.eval.perceived import plan_perceived
 
@@ -62,9 +69,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             noise=args.noise,
             deadline=deadline,
         )
-    if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         (out / "domain.pddl").write_text(outcome.domain)
         (out / "problem.pddl").write_text(outcome.problem)
         (out / "plan.txt").write_text("".join(f"{a}\n" for a in outcome.plan))
@@ -137,6 +142,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         scenes=args.scenes,
         shard=None if args.shard is None else parse_shard(args.shard),
     )
+    output_dir(args.out, "--out")
     executor = make_executor(args.executor, workers=args.workers, ray_address=args.ray_address)
     try:
         report = run_sweep(cfg, args.out, progress=not args.quiet, executor=executor)
@@ -155,13 +161,32 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         f"{report.wall_time_s:.1f} s; wrote results.csv, summary.md, summary.json and figures "
         f"in {args.out}"
     )
-    return 0
+    return _report_crashes(report.crashed, len(report.rows))
+
+
+def _report_crashes(crashed: Sequence[Any], total: int) -> int:
+    """Exit code 1 and a note on stderr when runs crashed (0 otherwise): a crash is not an
+    outcome of the method, so a sweep with crashes is incomplete."""
+    if not crashed:
+        return 0
+    reasons: dict[str, int] = {}
+    for row in crashed:
+        reasons[row.failure_reason] = reasons.get(row.failure_reason, 0) + 1
+    top = sorted(reasons.items(), key=lambda kv: -kv[1])[:3]
+    shown = "; ".join(f"{n}x {reason}" for reason, n in top)
+    print(
+        f"utamp eval: {len(crashed)} of {total} run(s) crashed ({shown}); their rows say "
+        "crashed=true, and they run again when the same command resumes",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def _cmd_eval_merge(args: argparse.Namespace) -> int:
     from utamp_gym.eval.merge import merge_outputs
     from utamp_gym.eval.summary import to_markdown
 
+    output_dir(args.merge_out, "OUT")
     summary = merge_outputs(args.merge_out, args.dirs)
     if not args.quiet:
         sys.stdout.write(to_markdown(summary))
@@ -269,6 +294,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if args.closed_loop:
         return _run_closed_loop(args)
+    if args.video:
+        output_file(args.video, "--video")
     physics = {
         "seed": args.seed,
         "video": args.video,
@@ -333,7 +360,8 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(args.scene)
-    require_display("utamp view", "utamp run --video PATH (a headless video)")
+    video = "out/" + scene.name.replace("/", "-") + ".mp4"
+    require_display("utamp view", f"utamp run {args.scene} --video {video} (a video, no display)")
     if args.symbolic:
         from utamp_gym.env.viewer import show_schematic
 
@@ -490,8 +518,10 @@ def _add_scenes_parser(sub: Any) -> None:
 
     scenes = sub.add_parser("scenes", help=_help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
-    lst = ssub.add_parser("list", help="scene names, one per line")
-    lst.add_argument("--suite", choices=SUITES, help="only this suite (default: every suite)")
+    lst = ssub.add_parser(
+        "list", help="scene names, one per line: the packaged scenes, then every suite's"
+    )
+    lst.add_argument("--suite", choices=SUITES, help="only this suite's scenes")
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name", help=SCENE_HELP)
     scenes.set_defaults(func=_cmd_scenes)
@@ -578,6 +608,12 @@ def _add_train_parser(sub: Any) -> None:
     add_train_parser(sub)
 
 
+def _add_demos_parser(sub: Any) -> None:
+    from utamp_gym.data.cli import add_demos_parser
+
+    add_demos_parser(sub)
+
+
 SCENE_HELP = "suite scene (pick-place/017), packaged scene or scene-file path"
 METHOD_HELP = "where the affordances come from: ground truth, rules, noisy rules, none (UTAMP-1)"
 EVAL_HELP = "evaluate planning methods on a suite (the paper's table); `eval merge` joins outputs"
@@ -592,7 +628,12 @@ SUBCOMMANDS: tuple[tuple[str, Callable[[Any], None], str], ...] = (
     ),
     ("validate", _add_validate_parser, "check a plan against a domain and problem"),
     ("eval", _add_eval_parser, EVAL_HELP),
-    ("train", _add_train_parser, "train an RL baseline (MaskablePPO, PPO or DQN)"),
+    (
+        "train",
+        _add_train_parser,
+        "train a baseline: MaskablePPO, PPO, DQN or behaviour cloning (bc)",
+    ),
+    ("demos", _add_demos_parser, "record planner demonstrations as Minari datasets"),
 )
 """(name, what adds its parser, its line in `utamp --help`), in `utamp --help` order."""
 
@@ -628,10 +669,15 @@ def _before_exit() -> None:
     """Take every live object out of the garbage collector's sight (`gc.freeze`): Python's
     shutdown runs full collections over all of them, the imported modules' included, which
     took ~8 ms of a ~100 ms `utamp plan`; the process ends next, and nothing of it needs
-    collecting."""
+    collecting.
+
+    Not once OMPL is loaded (`utamp run`, `eval`, `train`, `view`: seconds long, so the
+    8 ms do not matter): its nanobind bindings print a 28-line leak report on stderr when
+    their objects are not collected at shutdown, and frozen objects never are."""
     import gc
 
-    gc.freeze()
+    if not any(name == "ompl" or name.startswith("ompl.") for name in sys.modules):
+        gc.freeze()
 
 
 def _run(argv: Sequence[str], started: float) -> int:

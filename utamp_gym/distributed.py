@@ -208,7 +208,9 @@ class RayExecutor:
 
     def _init(self, ray: ModuleType) -> None:
         address = self.address or os.environ.get("RAY_ADDRESS") or None
-        quiet: dict[str, Any] = {"log_to_driver": False, "logging_level": "warning"}
+        # "error": Ray warns on stderr at every start about its token authentication (on or
+        # off), noise for a command that succeeds
+        quiet: dict[str, Any] = {"log_to_driver": False, "logging_level": "error"}
         if address is None:  # "local": never attach to some other `ray start` on this host
             ray.init(address="local", num_cpus=self.num_cpus, include_dashboard=False, **quiet)
             return

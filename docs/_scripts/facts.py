@@ -206,4 +206,23 @@ def facts(envs: Iterable[EnvFacts]) -> dict[str, Any]:
         "control_timestep_ms": f"{CONTROL_TIMESTEP * 1000:g}",
         "control_rate_hz": f"{1 / CONTROL_TIMESTEP:g}",
         "const": constants(),
+        "objects": objects_interface(),
     }
+
+
+def objects_interface() -> dict[str, Any]:
+    """The sizes of the object-centric interface (`utamp_gym.env.object_space`)."""
+    from utamp_gym.env import object_space as o
+
+    return {
+        "n_actions": o.N_ACTIONS, "n_attributes": o.N_ATTRIBUTES, "k": o.MAX_OBJECTS,
+        "m": o.MAX_MEMBERS, "r": o.MAX_REGIONS, "s": o.MAX_SPACES, "e": o.N_ENTITIES,
+        "g": len(o.GRASPS), "supports": o.MAX_OBJECTS + o.MAX_REGIONS,
+        "image": "×".join(map(str, _demo_image())),
+    }  # fmt: skip
+
+
+def _demo_image() -> tuple[int, int]:
+    from utamp_gym.data.lowlevel import DEFAULT_IMAGE_SIZE
+
+    return DEFAULT_IMAGE_SIZE

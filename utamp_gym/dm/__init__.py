@@ -10,7 +10,7 @@ targets and the gripper command at 50 Hz and whose reward follows tower progress
     from utamp_gym import dm
 
     env = dm.load(scene="pick-place/000", seed=0)
-    viewer.launch(env)                        # needs a display and MUJOCO_GL=glfw
+    viewer.launch(env)                        # needs a display
 
 `record_plan` records the servo commands the physics executor sends for a macro plan and
 `ReplayPolicy` replays them through this interface. Needs the ``dm`` extra
@@ -19,7 +19,12 @@ targets and the gripper command at 50 Hz and whose reward follows tower progress
 
 from __future__ import annotations
 
+from utamp_gym.sim.gl import ensure_gl
+
 try:
+    # dm_control fixes its OpenGL (backend and PyOpenGL platform) when it is imported: settle
+    # the backend first, so its cameras render on a headless machine (`utamp_gym.sim.gl`)
+    ensure_gl()
     from dm_control.rl import control
 except ImportError as exc:  # pragma: no cover - depends on the installed extras
     raise ModuleNotFoundError(

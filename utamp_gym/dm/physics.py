@@ -19,6 +19,7 @@ from utamp_gym.perception.abstraction import Perception, perceive
 from utamp_gym.perception.state import PhysicalState
 from utamp_gym.robot.panda_mjcf import PandaIds, add_panda
 from utamp_gym.scene.model import Scene
+from utamp_gym.sim.gl import ensure_dm_control_gl
 from utamp_gym.sim.physical import gripper_gap, measure_state, measured_grasp, object_poses
 from utamp_gym.sim.world import World, build_world_spec, compile_world
 
@@ -49,6 +50,12 @@ class KitchenPhysics(dm_mujoco.Physics):
     def _attach(self, world: World, ids: PandaIds) -> None:
         self.world, self.ids = world, ids
         self._scratch = mujoco.MjData(world.model)
+
+    def _make_rendering_contexts(self) -> None:
+        """dm_control's GL contexts (made on the first render), on the backend that
+        `utamp_gym.sim.gl` chose (dm_control reads ``MUJOCO_GL`` when it is imported)."""
+        ensure_dm_control_gl()
+        super()._make_rendering_contexts()
 
     def copy(self, share_model: bool = False) -> Any:
         """A copy (dm_control's), keeping the world's name maps."""

@@ -32,6 +32,8 @@ class JointTrajectory:
 
     commands: np.ndarray
     dt: float
+    #: per row, the index in the plan of the macro action that sent it (-1: the final hold)
+    steps: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -41,10 +43,12 @@ class JointTrajectory:
         """The commands averaged over each control step (a zero-order hold replays them)."""
         n = max(1, round(control_timestep / self.dt))
         rows = -(-len(self.commands) // n)
-        padded = np.concatenate(
-            [self.commands, np.repeat(self.commands[-1:], rows * n - len(self.commands), 0)]
-        )
-        return JointTrajectory(padded.reshape(rows, n, -1).mean(axis=1), self.dt * n)
+        pad = rows * n - len(self.commands)
+        padded = np.concatenate([self.commands, np.repeat(self.commands[-1:], pad, 0)])
+        steps = None
+        if self.steps is not None:  # a control step's label: the one of its first row
+            steps = np.concatenate([self.steps, np.full(pad, -1)]).reshape(rows, n)[:, 0]
+        return JointTrajectory(padded.reshape(rows, n, -1).mean(axis=1), self.dt * n, steps)
 
 
 def record_plan(
@@ -63,15 +67,20 @@ def record_plan(
         dt = float(backend.model.opt.timestep)
         data = backend.data
         backend.watch(lambda: rows.append(data.ctrl[act].copy()), dt)
+        ends = []
         for i, action in enumerate(plan):
             result = backend.execute(action)
             if not result.success:
                 raise SimulationError(f"step {i} {action} failed: {result.reason}")
+            ends.append(len(rows))
         last = data.ctrl[act].copy()
     finally:
         backend.close()
     hold = np.repeat(last[None], round(hold_s / dt), axis=0)
-    return JointTrajectory(np.concatenate([np.array(rows).reshape(-1, len(act)), hold]), dt)
+    steps = np.concatenate([np.searchsorted(ends, np.arange(len(rows)), side="right"),
+                            np.full(len(hold), -1)])  # fmt: skip
+    commands = np.concatenate([np.array(rows).reshape(-1, len(act)), hold])
+    return JointTrajectory(commands, dt, steps)
 
 
 class ReplayPolicy:

@@ -19,10 +19,13 @@ from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_PERCEPTION,
     DEFAULT_POSE_NOISE,
+    MacroResult,
     PhysicsBackend,
     backend_factory,
 )
-from utamp_gym.env.atoms import InitialAtoms, parse_atom
+from utamp_gym.env.atoms import InitialAtoms
+from utamp_gym.env.info import step_info
+from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.outcome import OutcomeModel
 from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
@@ -32,6 +35,7 @@ from utamp_gym.env.state import SymbolicState
 from utamp_gym.env.task import KitchenTask, home_joints, observation_space
 from utamp_gym.env.universe import Universe, ground_universe
 from utamp_gym.env.viewer import FRAME_RATE, Rendering
+from utamp_gym.env.views import KitchenViews
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.perception.abstraction import Perception
 from utamp_gym.planning.methods import DEFAULT_NOISE
@@ -42,7 +46,7 @@ DEFAULT_OBJECTS = ("tray", "salt", "mug", "board", "pan")
 Obs = dict[str, np.ndarray]
 
 
-class UTampKitchenEnv(gym.Env[Obs, np.int64]):
+class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     """A Franka Panda stacks every object of a kitchen table on the tray (U-TAMP-2 macro actions).
 
     Each episode samples a scene (uniformly, from the env's RNG) from the env's suite. The
@@ -85,12 +89,18 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
     ``truncated`` comes from Gymnasium's ``TimeLimit`` (``max_episode_steps`` of the env file,
     or ``gym.make(..., max_episode_steps=N)``).
 
-    **Info** – ``action`` (PDDL string or None after reset), ``action_mask``,
-    ``failure_reason`` (None or str), ``timings`` (physics: the macro's phase times,
-    ``perceive_s`` and ``step_s``, unless ``record_timings=False``; symbolic: always empty, so
-    info trajectories are reproducible), ``macro_result`` (physics: the `MacroResult`;
-    symbolic: None), ``unexpected_atoms``, ``anomalies``, ``fault`` (see the closed loop
-    below), ``scene`` (name).
+    **Info** – one fixed structure of numbers, bools and strings from `reset` to the last
+    step, so that dataset writers (Minari's ``DataCollector(env, record_infos=True)``) can
+    stack it (`utamp_gym.env.info` documents every key and its earlier form): ``action``
+    (PDDL string, ``""`` after reset), ``action_mask``, ``failure_reason`` (``""``: none),
+    ``timings`` (empty unless ``record_timings=True``, so equal seeds give equal info;
+    physics then: the macro's wall-clock phase times, ``perceive_s`` and ``step_s``),
+    ``macro_result`` (a dict: executed, success, reason, retries; the `MacroResult` itself
+    is `macro_result`), ``unexpected_atoms`` (one string; the list is `unexpected_atoms`),
+    ``anomalies`` (every object -> its anomaly or ``""``), ``fault`` (``""``: none; see the
+    closed loop below), ``scene`` (name), ``is_success`` (bool: the goal holds now, as for
+    the reward; on every step and after reset, so it is there on the last step of every
+    episode, where stable-baselines3's evaluation and the RL Zoo read it).
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
@@ -112,13 +122,16 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
       mask allows; symbolic grounding decides it with the outcome model
       (`utamp_gym.env.outcome`: the ground-truth U-TAMP-2 precondition; a failure names the
       false affordance);
+    * ``interface``: "grounded" (default: the spaces above) or "objects" (object slots and a
+      parametrised macro action, the same spaces for every scene: `utamp_gym.env.objects`);
     * physics only: ``backend`` ("module:Class" or a callable, built as
-      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (wall-clock times in
-      info), ``disturbance`` (fault probability per macro step, default 0), ``pose_noise``
-      (m, standard deviation of the robot's object-position estimates; `utamp_gym.backend`)
-      and ``perception`` ("gaussian": the true pose plus ``pose_noise``; "rgbd": the poses
-      and the perceived state's poses come from rendered RGB-D cameras, `utamp_gym.sim.rgbd`;
-      passed to the backend as ``perception=`` when not "gaussian").
+      ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
+      wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per
+      macro step, default 0), ``pose_noise`` (m, standard deviation of the robot's
+      object-position estimates; `utamp_gym.backend`) and ``perception`` ("gaussian": the
+      true pose plus ``pose_noise``; "rgbd": the poses and the perceived state's poses come
+      from rendered RGB-D cameras, `utamp_gym.sim.rgbd`; passed to the backend as
+      ``perception=`` when not "gaussian").
 
     **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
     and after every executed step (success or failure) it is *perceived* from the simulator
@@ -168,11 +181,12 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         render_size: int | tuple[int, int] = (480, 480),
         backend: str | Callable[..., PhysicsBackend] = DEFAULT_BACKEND,
         backend_kwargs: Mapping[str, Any] | None = None,
-        record_timings: bool = True,
+        record_timings: bool = False,
         masks: str = "affordances",
         disturbance: float = 0.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
         perception: str = DEFAULT_PERCEPTION,
+        interface: str = "grounded",
     ) -> None:
         kwargs: dict[str, Any] = {
             "suite": suite, "objects": objects, "grounding": grounding, "domain": domain,
@@ -183,17 +197,21 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             "backend_kwargs": dict(backend_kwargs or {}), "record_timings": record_timings,
             "masks": masks, "disturbance": disturbance, "pose_noise": pose_noise,
             "perception": perception,
+            "interface": interface,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option
         self.render_mode = render_mode
         self.scenes = opts.scenes()
         self.universe: Universe = ground_universe(opts.universe_key())
         self.action_space = spaces.Discrete(self.universe.n_actions)
-        self.observation_space = observation_space(
-            len(self.universe.fluent_atoms),
-            len(opts.objects),
-            opts.image_size if opts.camera else None,
-        )
+        self.observation_space = self._grounded_space()
+        self._objects: ObjectInterface | None = None
+        if opts.interface == "objects":  # fixed spaces over object slots (env.objects)
+            self._objects = ObjectInterface(self.universe)
+            self.action_space = self._objects.action_space
+            self.observation_space = self._objects.observation_space
+            if opts.camera:
+                self.observation_space["image"] = self._grounded_space()["image"]
         self._state = SymbolicState(self.universe, opts.masks)
         # masks geometric/none: the outcome model decides symbolic steps the mask allows
         self._outcome = OutcomeModel(self.universe) if opts.masks != "affordances" else None
@@ -209,6 +227,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         self._scene: Scene | None = None
         self._held: str | None = None
         self._declared_static: frozenset[str] = frozenset()
+        self._last: tuple[MacroResult | None, tuple[str, ...]] = (None, ())
         self._backend: PhysicsBackend | None = None
         self._physics: PhysicalGrounding | None = None
         if opts.grounding == "physics":
@@ -223,34 +242,10 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         self.metadata = {**type(self).metadata, "render_fps": self._rendering.fps}
 
     # ------------------------------------------------------------------ public helpers
-    @property
-    def scene(self) -> Scene:
-        """The scene of the current episode."""
-        if self._scene is None:
-            raise RuntimeError("no episode yet: call reset() first")
-        return self._scene
-
-    @property
-    def action_strings(self) -> tuple[str, ...]:
-        """The PDDL string of every action id."""
-        return self.universe.actions
-
-    @property
-    def symbolic_atoms(self) -> tuple[str, ...]:
-        """The fluent atom of every ``symbolic`` observation entry (predicates as declared)."""
-        return tuple(self.universe.domain.show(parse_atom(a)) for a in self.universe.fluent_atoms)
-
-    @property
-    def static_atoms(self) -> frozenset[str]:
-        """The current episode's static atoms (affordances, geometry), lower-case PDDL."""
-        return self._state.static_atoms
-
-    def true_atoms(self) -> list[str]:
-        """The fluent atoms that hold now, lower-case PDDL."""
-        return self._state.true_atoms()
-
     def action_masks(self) -> np.ndarray:
         """Bool mask of the applicable actions (the sb3-contrib `MaskablePPO` convention)."""
+        if self._objects is not None:
+            return self._objects.mask(self._state.mask())
         return self._state.mask()
 
     # ------------------------------------------------------------------ Gymnasium API
@@ -281,19 +276,24 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._physics is not None:
             rng = np.random.default_rng(self.np_random.integers(2**63))
             self._observe(self._physics.reset(scene, rng))
-        self._task.initialize_episode(self._progress(self.options.reward_shaping)[1])
+        goal, height = self._progress(self.options.reward_shaping)
+        self._task.initialize_episode(height)
         self._rendering.reset()
-        return self._observation(), self._info(None, None, {}, None)
+        if self._objects is not None:  # drawn last: the other draws match the grounded env's
+            self._objects.reset(scene, self.np_random)
+        return self._observation(), self._info(goal, None, None, {}, None)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
-        a = action_id(action, self.universe.n_actions)
         if self._scene is None:
+            action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
             raise RuntimeError("call reset() before step()")
-        failure: str | None = None
+        a, failure = self._ground(action)
         executed: Executed | None = None
         timings: dict[str, float] = {}
         unexpected: list[str] = []
-        if not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
+        if a is None:  # an object-centric index without a ground action in this scene
+            pass
+        elif not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
             failure = self._state.failure(a)
         elif self._physics is not None:
             start = time.perf_counter()
@@ -321,14 +321,9 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             goal=goal, failed=failure is not None, tower_height=height
         )
         terminated = terminated or self._state.dead_end() or bool(self._anomalies())
-        info = self._info(a, failure, timings, executed, unexpected)
+        info = self._info(goal, a, failure, timings, executed, unexpected)
         self._rendering.step()
         return self._observation(), reward, terminated, False, info
-
-    @property
-    def backend(self) -> PhysicsBackend | None:
-        """The physics backend (None in symbolic grounding), e.g. to read measured towers."""
-        return self._backend
 
     def render(self) -> np.ndarray | list[np.ndarray] | None:  # type: ignore[override]
         if self.render_mode is None:
@@ -341,12 +336,25 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         if self._backend is not None:
             self._backend.close()  # kept: a closed env must not silently turn symbolic
 
-    @property
-    def perception(self) -> Perception | None:
-        """The last perceived state (physics grounding; None in symbolic grounding)."""
-        return None if self._physics is None else self._physics.perception
-
     # ------------------------------------------------------------------ internals
+    def _grounded_space(self) -> spaces.Dict:
+        opts = self.options
+        image = opts.image_size if opts.camera else None
+        return observation_space(len(self.universe.fluent_atoms), len(opts.objects), image)
+
+    def _ground(self, action: Any) -> tuple[int | None, str | None]:
+        """(universe id, None) of an action; with the objects interface (None, why) for an
+        index that has no ground action in this scene."""
+        if self._objects is None:
+            return action_id(action, self.universe.n_actions), None
+        index = action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
+        a = self._objects.resolve(index, self._state.mask(), self._state.applicable_mask())
+        if a is None:
+            return None, f"no such action in scene {self.scene.name}: " + (
+                self._objects.describe(index)
+            )
+        return a, None
+
     def _observe(self, perception: Perception) -> None:
         """Physics grounding: the symbolic state becomes the perceived one."""
         static = perceived_static(self._declared_static, perception)
@@ -359,10 +367,6 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         assert self.perception is not None
         fluent = self.universe.atoms_of(self.universe.successor(self._state.bits, a))
         return frozenset((*fluent, *self._state.unrepresented)) | self.perception.orientation
-
-    def _anomalies(self) -> dict[str, str]:
-        perception = self.perception
-        return {} if perception is None else dict(perception.anomalies)
 
     def _apply(self, a: int) -> None:
         self._state.apply(a)
@@ -392,12 +396,16 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
             for name, pose in self._backend.object_poses().items():
                 poses[rows[name]] = pose
             robot = np.asarray(self._backend.joint_positions(), np.float32).copy()
-        obs = {
-            "symbolic": self._state.vector(),
-            "object_poses": poses,
-            "present": self._poses.present(),
-            "robot": robot,
-        }
+        if self._objects is not None:
+            rows = dict(zip(self.options.objects, poses, strict=True))
+            obs = self._objects.observation(self._state.vector(), self._state.static_atoms, rows)
+        else:
+            obs = {
+                "symbolic": self._state.vector(),
+                "object_poses": poses,
+                "present": self._poses.present(),
+                "robot": robot,
+            }
         if self.options.camera:
             obs["image"] = self._image(self.options.image_size)
         return obs
@@ -422,6 +430,7 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
 
     def _info(
         self,
+        goal: bool,
         a: int | None,
         failure: str | None,
         timings: dict[str, float],
@@ -429,17 +438,22 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         unexpected: list[str] | None = None,
     ) -> dict[str, Any]:
         fault = None if executed is None or executed.fault is None else str(executed.fault)
-        return {
-            "action": None if a is None else self.universe.actions[a],
-            "action_mask": self._state.mask(),
-            "failure_reason": failure,
-            "timings": dict(timings),
-            "macro_result": None if executed is None else executed.macro,
-            "unexpected_atoms": list(unexpected or []),
-            "anomalies": self._anomalies(),
-            "fault": fault,
-            "scene": self.scene.name,
-        }
+        macro = None if executed is None else executed.macro
+        self._last = (macro, tuple(unexpected or ()))
+        recorded = self._physics is not None and self.options.record_timings
+        return step_info(
+            action=None if a is None else self.universe.actions[a],
+            mask=self.action_masks(),
+            failure=failure,
+            timings=timings if recorded else None,
+            macro=macro,
+            unexpected=self._last[1],
+            objects=self.scene.object_names,
+            anomalies=self._anomalies(),
+            fault=fault,
+            scene=self.scene.name,
+            success=goal,
+        )
 
     # ------------------------------------------------------------------ pickling
     def __getstate__(self) -> dict[str, Any]:
@@ -449,5 +463,8 @@ class UTampKitchenEnv(gym.Env[Obs, np.int64]):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
+        """The backend rebuilt its simulation (`utamp_gym.sim.snapshot`); rendering watches it
+        again."""
         state["universe"] = ground_universe(state["universe"])
         self.__dict__.update(state)
+        self._rendering.attach()

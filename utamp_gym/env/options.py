@@ -19,6 +19,7 @@ from utamp_gym.backend import (
     MAX_POSE_NOISE,
     PERCEPTION_MODES,
 )
+from utamp_gym.env.object_space import INTERFACES
 from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
@@ -87,11 +88,12 @@ class EnvOptions:
     render_size: tuple[int, int] = (480, 480)
     backend: str | Callable[..., Any] = DEFAULT_BACKEND
     backend_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    record_timings: bool = True
+    record_timings: bool = False
     masks: str = "affordances"
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE
     perception: str = DEFAULT_PERCEPTION
+    interface: str = "grounded"
 
     def __post_init__(self) -> None:
         if self.suite is not None:
@@ -112,6 +114,7 @@ class EnvOptions:
         _choice("affordance source", self.affordances, AFFORDANCE_SOURCES)
         _unit("noise", self.noise)
         _choice("masks", self.masks, MASKS)
+        _choice("interface", self.interface, INTERFACES)
         if self.masks != "affordances" and self.domain != "utamp2":
             raise ValueError(
                 f"masks={self.masks!r} needs domain='utamp2' (it drops U-TAMP-2's affordance "

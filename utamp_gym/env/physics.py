@@ -2,7 +2,7 @@
 
 Why a layer of its own: the env never assumes an effect happened. After `reset` and after
 every executed macro action (success or failure) the symbolic state is *perceived* from the
-simulator (`utamp_gym.perception.perceive` on the backend's `physical_state()`), and
+simulator (`utamp_gym.perception.abstraction.perceive` on the backend's `physical_state()`), and
 `unexpected_atoms` compares it with what the action was predicted to do (execution
 monitoring). With ``disturbance`` p > 0, each executed macro action is followed, with
 probability p drawn from the env's generator, by one fault of `utamp_gym.backend.FAULT_KINDS`.

@@ -61,7 +61,8 @@ _State = tuple[str, int, frozenset[str]]  # scene, fluent bits, static atoms
 
 
 class PlannerPolicy:
-    """``policy(obs, info) -> action id`` for a (possibly wrapped) `UTampKitchenEnv`.
+    """``policy(obs, info) -> action id`` for a (possibly wrapped) `UTampKitchenEnv`, in its
+    action space (with ``interface="objects"``: the object-centric index of each plan step).
 
     `method` is a planning method of `utamp_gym.planning.methods` (domain + affordance
     source); if it matches the env's own domain and affordances, the planner sees exactly the
@@ -118,9 +119,14 @@ class PlannerPolicy:
 
     def __call__(self, obs: Mapping[str, np.ndarray], info: Mapping[str, Any] | None = None) -> int:
         universe = self.env.universe
-        if info is not None and info.get("action") is None:  # the first step of an episode
+        if info is not None and not info.get("action"):  # the first step of an episode
             self.reset()
-        bits = sum(1 << int(j) for j in np.flatnonzero(obs["symbolic"]))
+        objects = self.env.objects
+        if objects is None:
+            bits = sum(1 << int(j) for j in np.flatnonzero(obs["symbolic"]))
+        else:  # object-centric observations: the env's own symbolic state
+            index = universe.fluent_index
+            bits = universe.state_bits(a for a in self.env.true_atoms() if a in index)
         state = (self.env.scene.name, bits, self.env.static_atoms)
         if self._last is not None and info is not None and info.get("failure_reason"):
             before, failed = self._last
@@ -132,6 +138,13 @@ class PlannerPolicy:
         action = self._plan.pop(0)
         self._expected = universe.successor(bits, action)
         self._last = (state, action)
+        if objects is not None:
+            index_of = objects.index_of(action)
+            if index_of < 0:
+                raise PlanningError(
+                    f"plan step {universe.actions[action]} has no object-centric action"
+                )
+            return index_of
         return action
 
     # ------------------------------------------------------------------ internals

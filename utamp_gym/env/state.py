@@ -134,6 +134,11 @@ class SymbolicState:
         (static and fluent preconditions hold), or with masks "none" those of the scene."""
         return (self._present if self.masks == "none" else self._mask).copy()
 
+    def applicable_mask(self) -> np.ndarray:
+        """Bool array over all actions: whose precondition holds now (read-only view; with
+        masks other than "none" it is what `mask` shows)."""
+        return self._mask
+
     def allowed(self, i: int) -> bool:
         """Whether the mask shows action `i`."""
         return bool((self._present if self.masks == "none" else self._mask)[i])

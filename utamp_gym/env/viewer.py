@@ -211,25 +211,35 @@ class Rendering:
         title: str = "utamp_gym",
     ) -> None:
         self.mode, self._frame, self._draw, self._backend = mode, frame, draw, backend
+        self._title = title
         self._frames: list[np.ndarray] = []
         self._unwatch: Callable[[], None] | None = None
         self._window: MujocoWindow | SchematicWindow | None = None
         self._clock: tuple[float, float] | None = None  # (wall, simulated) time at sync
-        live = is_live(backend)
-        if mode == "rgb_array_list" and live:
+        if mode == "human" and backend is not None and not is_live(backend):
+            raise ValueError(
+                f"render_mode='human' in physics grounding needs a backend with a live "
+                f"MuJoCo model (model, data, watch); {type(backend).__name__} has none"
+            )
+        self.attach()
+
+    def attach(self) -> None:
+        """Watch the backend while actions run (``rgb_array_list``, ``human``) and make the
+        window; done when made, and again after unpickling (the env calls it)."""
+        backend, live = self._backend, is_live(self._backend)
+        if self.mode == "rgb_array_list" and live:
             self._unwatch = backend.watch(self._record, 1.0 / FRAME_RATE)  # type: ignore[union-attr]
-        elif mode == "human":
-            if backend is not None and not live:
-                raise ValueError(
-                    f"render_mode='human' in physics grounding needs a backend with a live "
-                    f"MuJoCo model (model, data, watch); {type(backend).__name__} has none"
-                )
+        elif self.mode == "human":
             require_display("render_mode='human'", "render_mode='rgb_array'")
             if live:
                 self._window = MujocoWindow()
                 self._unwatch = backend.watch(self._sync, 1.0 / HUMAN_SYNC_HZ)  # type: ignore[union-attr]
             else:
-                self._window = SchematicWindow(title)
+                self._window = SchematicWindow(self._title)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the window and the watch on the backend (`attach` makes them)."""
+        return {**self.__dict__, "_unwatch": None, "_window": None, "_clock": None}
 
     @property
     def fps(self) -> int:

@@ -91,7 +91,7 @@ def run_closed_loop(
             obs, reward, terminated, truncated, info = env.step(action)
             execution += time.perf_counter() - start
             actions.append(str(info["action"]))
-            n_faults += info["fault"] is not None
+            n_faults += bool(info["fault"])
             if terminated or truncated:
                 success = reward > 0
                 if not success:
@@ -129,7 +129,7 @@ def _perceived_facts(env: UTampKitchenEnv, seed: int) -> frozenset:
 
 def _why_ended(info: dict[str, object]) -> str:
     """The reason an episode terminated without reaching the goal."""
-    anomalies = info.get("anomalies") or {}
+    anomalies = {k: v for k, v in dict(info.get("anomalies") or {}).items() if v}
     if anomalies:
         return "no symbol for " + "; ".join(map(str, anomalies.values()))  # type: ignore[attr-defined]
     reason = info.get("failure_reason")

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from utamp_gym.errors import SimulationError
@@ -16,14 +14,14 @@ CAMERA = "overview"
 def render_scene_png(scene: Scene, seed: int = 0, size: tuple[int, int] = IMAGE_SIZE) -> bytes:
     """PNG bytes of `scene` in its initial configuration (no robot), seeded pose noise.
 
-    Needs MuJoCo with an offscreen GL context (``MUJOCO_GL=egl`` on a headless machine);
+    Needs an offscreen GL context (`utamp_gym.sim.gl` picks one when ``MUJOCO_GL`` is unset);
     anything missing raises `SimulationError` naming what to install or set.
     """
-    os.environ.setdefault("MUJOCO_GL", "egl")
     try:
         import imageio.v3 as iio
         import mujoco
 
+        from utamp_gym.sim.gl import new_renderer
         from utamp_gym.sim.world import build_world
     except ImportError as exc:  # pragma: no cover - the physics extras are dependencies
         raise SimulationError(f"cannot render the scene image: {exc}") from exc
@@ -34,12 +32,9 @@ def render_scene_png(scene: Scene, seed: int = 0, size: tuple[int, int] = IMAGE_
     vis = world.model.vis.global_
     vis.offwidth, vis.offheight = max(vis.offwidth, width), max(vis.offheight, height)
     try:
-        renderer = mujoco.Renderer(world.model, height, width)
+        renderer = new_renderer(world.model, height, width)
     except Exception as exc:  # GL context errors come in several types
-        raise SimulationError(
-            f"cannot render the scene image ({exc}); on a headless machine set MUJOCO_GL=egl "
-            "(or osmesa) before starting"
-        ) from exc
+        raise SimulationError(f"cannot render the scene image: {exc}") from exc
     try:
         renderer.update_scene(data, camera=CAMERA)
         pixels = renderer.render()

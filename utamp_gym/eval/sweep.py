@@ -4,7 +4,9 @@ The runs go to an executor (`utamp_gym.distributed`: worker processes on this ma
 or Ray tasks on a cluster), which records each finished row once, even for a run that
 crashed or killed its worker. Every finished row is appended to ``results.csv`` at once
 (flush + fsync), and re-running with the same output directory, with either executor,
-skips the rows already there. `--seed-offset`, `--scenes` and `--shard` select a part
+skips the rows already there, except crashed ones (an exception or a dead worker), which run
+again. `SweepReport.crashed` lists the crashed rows of the sweep; ``utamp eval`` names them on
+stderr and exits 1. `--seed-offset`, `--scenes` and `--shard` select a part
 of a sweep so that several machines can share one (`utamp eval merge` joins them).
 """
 
@@ -107,6 +109,11 @@ class SweepReport:
     notes: list[str] = field(default_factory=list)
     wall_time_s: float = 0.0
 
+    @property
+    def crashed(self) -> list[ResultRow]:
+        """The rows of runs that crashed (raised, or their worker died): not outcomes."""
+        return [r for r in self.rows if r.crashed]
+
 
 def parse_shard(text: str) -> tuple[int, int]:
     """``"I/N"`` -> ``(I, N)`` (1 <= I <= N): the I-th of N parts of a sweep."""
@@ -197,7 +204,8 @@ def run_sweep(
     out.mkdir(parents=True, exist_ok=True)
     tasks, notes = plan_tasks(cfg)
     results = ResultsFile(out / "results.csv")
-    todo = [t for t in tasks if t.key not in results]
+    # crashed rows are run again (the cause may be fixed); finished ones are kept
+    todo = [t for t in tasks if t.key not in results or results.rows[t.key].crashed]
     executor = LocalExecutor(workers) if executor is None else executor
     from tqdm import tqdm
 

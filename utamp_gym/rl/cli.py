@@ -1,7 +1,8 @@
 """`utamp train`: the RL baselines on the command line (wired into `utamp_gym.cli`).
 
     utamp train --env UTampKitchen-v0 --algo maskable-ppo|ppo|dqn [--grounding symbolic|physics]
-        [--masks affordances|geometric|none] [--num-objects N] [--steps N] [--envs K]
+        [--masks affordances|geometric|none] [--interface grounded|objects] [--init-from ZIP]
+        [--num-objects N] [--steps N] [--envs K]
         [--seed S] [--seeds K [--executor local|ray] [--workers N] [--ray-address A]]
         --out DIR
 
@@ -18,6 +19,7 @@ import argparse
 from typing import Any
 
 from utamp_gym.errors import UtampError
+from utamp_gym.outputs import output_dir
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
 #: the parser imports no env code; a test keeps the two equal)
@@ -46,10 +48,20 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "progress": not args.no_progress,
         "stop_at_target": args.stop_at_target,
         "masks": args.masks,
+        "interface": args.interface,
+        "init_from": args.init_from or "",
+        "demos": args.demos or "",
     }
+    from utamp_gym.rl.train import TrainConfig
+
+    try:  # every option checked before anything is built or trained
+        TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
+    except ValueError as exc:
+        raise UtampError(str(exc)) from None
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
         raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")
+    output_dir(args.out, "--out")  # before training, not after
     if args.seeds > 1:
         from utamp_gym.distributed import make_executor
 
@@ -87,18 +99,27 @@ def _cmd_train(args: argparse.Namespace) -> int:
 def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``train`` command to `subparsers` (from ``parser.add_subparsers()``)."""
     from utamp_gym.env.registry import env_ids
-    from utamp_gym.rl.policy import ALGOS
-    from utamp_gym.rl.train import GROUNDINGS
+    from utamp_gym.rl.train import GROUNDINGS, TRAIN_ALGOS
 
     p = subparsers.add_parser(
         "train",
-        help="train an RL baseline (MaskablePPO, PPO or DQN)",
+        help="train a baseline: MaskablePPO, PPO, DQN or behaviour cloning (bc)",
         description="Train an RL agent on a kitchen env; writes model.zip, checkpoints/, "
         "learning_curve.png and train.json to --out (with --seeds K > 1: one folder per "
         "seed plus aggregate.json and learning_curves.png).",
     )
     p.add_argument("--env", default="UTampKitchen-v0", choices=env_ids(), help="env id to train on")
-    p.add_argument("--algo", default="maskable-ppo", choices=ALGOS, help="RL algorithm")
+    p.add_argument(
+        "--algo",
+        default="maskable-ppo",
+        choices=TRAIN_ALGOS,
+        help="RL algorithm, or bc: behaviour cloning from --demos",
+    )
+    p.add_argument(
+        "--demos",
+        metavar="DIR",
+        help="with --algo bc: a `utamp demos` dataset folder (macro track, objects)",
+    )
     p.add_argument(
         "--grounding",
         default="symbolic",
@@ -111,6 +132,18 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
         choices=MASK_CHOICES,
         help="what the action mask shows: the U-TAMP-2 preconditions under ground-truth "
         "affordances (default), the geometric ones only, or every action of the scene",
+    )
+    p.add_argument(
+        "--interface",
+        default="grounded",
+        choices=("grounded", "objects"),
+        help="the env's spaces: the suite's ground actions (default), or object slots with "
+        "the slot-transformer policy (maskable-ppo only; the agent then acts on every suite)",
+    )
+    p.add_argument(
+        "--init-from",
+        metavar="MODEL",
+        help="start from this model zip's policy weights (e.g. from `utamp bc`: fine-tuning)",
     )
     p.add_argument(
         "--num-objects",

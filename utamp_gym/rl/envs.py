@@ -20,6 +20,11 @@ from gymnasium.wrappers import FilterObservation
 
 #: observation entries the RL agents see (None in `make_env` keeps them all)
 DEFAULT_OBS_KEYS = ("symbolic", "present")
+#: the entries of the objects interface (`utamp_gym.env.objects.observation_space`)
+OBJECT_OBS_KEYS = (
+    "present", "attributes", "poses", "up", "regions", "spaces", "held", "contact", "free",
+    "in_workspace", "member_in_workspace", "grasp",
+)  # fmt: skip
 #: offset of the evaluation seeds from the training seed (distinct RNG streams)
 EVAL_SEED_OFFSET = 10_000
 
@@ -34,8 +39,11 @@ def make_env(
     **kwargs: Any,
 ) -> gym.Env:
     """``gym.make(env_id, ...)`` reduced to `obs_keys`, optionally in an SB3 ``Monitor``."""
-    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.registry import register_envs
 
+    # explicitly: `import utamp_gym` registers nothing in a worker of the `utamp` process
+    # (its argv is the command's), e.g. SubprocVecEnv's for `utamp train --grounding physics`
+    register_envs()
     env = gym.make(env_id, grounding=grounding, num_objects=num_objects, **kwargs)
     if obs_keys is not None:
         env = FilterObservation(env, list(obs_keys))
@@ -67,3 +75,9 @@ def make_vec_env(
     vec = SubprocVecEnv(fns, start_method="spawn") if subproc else DummyVecEnv(fns)
     vec.seed(seed)
     return vec
+
+
+def n_fluents(env: Any) -> int:
+    """Entries of the ``symbolic`` observation (0 for the objects interface, which has none)."""
+    space = env.observation_space
+    return int(space["symbolic"].n) if "symbolic" in space.spaces else 0

@@ -24,6 +24,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from utamp_gym.rl.envs import n_fluents
 from utamp_gym.rl.saved import ModelError, ModelMeta, check_model, check_spaces, read_meta
 
 if TYPE_CHECKING:
@@ -55,16 +56,35 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
     if spaces:
         import gymnasium as gym
 
-        import utamp_gym  # noqa: F401  (registers the env ids)
+        from utamp_gym.env.registry import register_envs
+
+        register_envs()  # explicitly: a worker process may have skipped it on import
 
         try:
             env = gym.make(meta.env_id, grounding="symbolic", **meta.env_options)
         except (gym.error.Error, ValueError) as exc:
             raise ModelError(f"{path}: cannot make its env {meta.env_id} ({exc})") from None
-        n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
-        check_spaces(meta, path, int(env.action_space.n), n_fluents)  # type: ignore[attr-defined]
+        check_spaces(meta, path, int(env.action_space.n), n_fluents(env))  # type: ignore[attr-defined]
         env.close()
     return meta
+
+
+def suite_options(scene: str) -> dict[str, Any]:
+    """Env options that put `scene`'s suite under an objects-interface agent (it acts on any
+    suite): the suite and, as pose rows, every object name of the suite's scenes."""
+    from utamp_gym import suites
+
+    every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
+    suite = max((s for s in every if scene.startswith(f"{s}/")), key=len, default=None)
+    if suite is None:
+        return {}
+    names = list(dict.fromkeys(n for s in suites.suite_scenes(suite) for n in s.object_names))
+    procedural = getattr(suites, "PROCEDURAL_SUITES", None)
+    if procedural is None:
+        return {"suite": suite, "objects": names}
+    if suite in procedural:  # a procedural env takes its split, not a suite
+        return {"suite": None, "split": suite.rsplit("/", 1)[1], "objects": names}
+    return {"suite": suite, "split": None, "objects": names}
 
 
 def step_budget(n_objects: int) -> int:
@@ -105,13 +125,17 @@ def run_rl_episode(
     """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
     import gymnasium as gym
 
-    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()  # explicitly: a worker process may have skipped it on import
     from utamp_gym.env.task import GOAL_REWARD
 
     path = model_path(method)
     meta = check_rl_method(method, spaces=False)  # checked below on the env itself
     policy = _load(str(path.resolve()), path.stat().st_mtime_ns)
     options: dict[str, Any] = {**meta.env_options, "disturbance": disturbance}
+    if meta.env_options.get("interface") == "objects":
+        options.update(suite_options(scene))
     if grounding == "physics" and pose_noise is not None:
         options["pose_noise"] = pose_noise
     env = gym.make(
@@ -125,8 +149,7 @@ def run_rl_episode(
     try:
         kitchen = env.unwrapped
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
-        n_fluents = int(env.observation_space["symbolic"].n)  # type: ignore[index]
-        check_spaces(meta, path, n_actions, n_fluents)
+        check_spaces(meta, path, n_actions, n_fluents(env))
         from utamp_gym.seeding import run_seed
         from utamp_gym.suites import resolve_scene
 
@@ -146,8 +169,8 @@ def run_rl_episode(
             obs, reward, terminated, _, info = env.step(action)
             decide, execute = decide + t1 - t0, execute + time.perf_counter() - t1
             actions.append(str(info["action"]))
-            faults += info.get("fault") is not None
-            if info["failure_reason"] is not None:
+            faults += bool(info.get("fault"))
+            if info["failure_reason"]:
                 failed, last_failure = failed + 1, str(info["failure_reason"])
             if terminated:
                 success = float(reward) >= GOAL_REWARD
@@ -163,7 +186,7 @@ def run_rl_episode(
 
 def _terminal_reason(info: dict[str, Any], steps: int) -> str:
     """Why an episode ended without the goal: a perceived anomaly (physics) or a dead end."""
-    anomalies = info.get("anomalies") or {}
+    anomalies = {k: v for k, v in dict(info.get("anomalies") or {}).items() if v}
     if anomalies:
         shown = "; ".join(f"{k}: {v}" for k, v in sorted(anomalies.items()))
         return f"anomaly after {steps} steps: {shown}"

@@ -193,7 +193,7 @@ def run_episodes(
             invalid += not bool(info["action_mask"][action])
             obs, reward, terminated, truncated, info = env.step(action)
             steps += 1
-            failed += info["failure_reason"] is not None
+            failed += bool(info["failure_reason"])
             done = terminated or truncated
             success = bool(terminated and float(reward) >= GOAL_REWARD)
         rows.append({
@@ -227,7 +227,9 @@ def evaluate_rl(
     episode_time_s``; the env is built without reward shaping or termination on failure.
     The env id and options (``masks``) default to the model's saved ones (`ModelMeta`).
     """
-    import utamp_gym  # noqa: F401  (registers the env ids)
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()  # explicitly: a worker process may have skipped it on import
 
     policy = path if isinstance(path, RLPolicy) else load_rl_policy(path, masks=masks)
     meta = policy.meta

@@ -112,7 +112,10 @@ def read_meta(path: str | Path) -> ModelMeta:
 
 
 def check_model(meta: ModelMeta, path: str | Path, *, suite: str | None = None) -> None:
-    """Raise `ModelError` if the model cannot act on the suite's env (`suite` None: any)."""
+    """Raise `ModelError` if the model cannot act on the suite's env (`suite` None: any; an
+    agent of the objects interface acts on every suite)."""
+    if meta.env_options.get("interface") == "objects":
+        return
     if suite is not None and meta.suite != suite:
         raise ModelError(
             f"{path} was trained on {meta.env_id} (suite '{meta.suite}'), but the evaluation "

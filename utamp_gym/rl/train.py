@@ -39,7 +39,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from utamp_gym.errors import UtampError
-from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, EVAL_SEED_OFFSET, make_env, make_vec_env
+from utamp_gym.rl.envs import (
+    DEFAULT_OBS_KEYS,
+    EVAL_SEED_OFFSET,
+    OBJECT_OBS_KEYS,
+    make_env,
+    make_vec_env,
+    n_fluents,
+)
 from utamp_gym.rl.policy import ALGOS, algo_class
 from utamp_gym.rl.saved import ModelMeta, write_meta
 
@@ -47,6 +54,8 @@ if TYPE_CHECKING:
     from utamp_gym.distributed import Executor
 
 GROUNDINGS = ("symbolic", "physics")
+#: what `train` trains: the RL algorithms, and behaviour cloning from demonstrations
+TRAIN_ALGOS = (*ALGOS, "bc")
 
 
 @dataclass(frozen=True)
@@ -54,7 +63,10 @@ class TrainConfig:
     """Everything that defines a run (written to ``train.json``).
 
     `num_objects` None trains on every scene of the suite (2–5 objects); `hyperparams`
-    overrides `default_hyperparams`; `obs_keys` are the observation entries the agent sees.
+    overrides `default_hyperparams`; `obs_keys` are the observation entries the agent sees;
+    `interface` is the env option (``objects``: MaskablePPO with `utamp_gym.rl.slots.SlotPolicy`
+    over all of the objects interface's entries); `init_from` is a model zip whose policy
+    weights the run starts from (fine-tuning a behaviour-cloned policy).
     """
 
     env_id: str = "UTampKitchen-v0"
@@ -74,10 +86,29 @@ class TrainConfig:
     terminate_on_failure: bool = False
     obs_keys: tuple[str, ...] = DEFAULT_OBS_KEYS
     hyperparams: dict[str, Any] = field(default_factory=dict)
+    interface: str = "grounded"
+    init_from: str = ""
+    demos: str = ""
 
     def __post_init__(self) -> None:
-        if self.algo not in ALGOS:
-            raise ValueError(f"unknown algo {self.algo!r}; valid: {', '.join(ALGOS)}")
+        from utamp_gym.env.options import INTERFACES
+
+        if self.interface not in INTERFACES:
+            raise ValueError(f"unknown interface {self.interface!r}; valid: grounded, objects")
+        if self.interface == "objects":
+            if self.algo not in ("maskable-ppo", "bc"):
+                raise ValueError(
+                    f"interface 'objects' trains maskable-ppo with the slot policy "
+                    f"(utamp_gym.rl.slots), not {self.algo!r}"
+                )
+            if tuple(self.obs_keys) == DEFAULT_OBS_KEYS:  # the objects interface's entries
+                object.__setattr__(self, "obs_keys", OBJECT_OBS_KEYS)
+        if self.algo not in TRAIN_ALGOS:
+            raise ValueError(f"unknown algo {self.algo!r}; valid: {', '.join(TRAIN_ALGOS)}")
+        if (self.algo == "bc") != bool(self.demos):
+            raise ValueError("algo 'bc' (and only it) needs demos: a `utamp demos` dataset folder")
+        if self.algo == "bc" and self.interface != "objects":
+            raise ValueError("behaviour cloning trains the slot policy: use interface 'objects'")
         if self.grounding not in GROUNDINGS:
             raise ValueError(f"unknown grounding {self.grounding!r}; valid: symbolic, physics")
         from utamp_gym.env.options import MASKS
@@ -109,9 +140,10 @@ class TrainResult:
     curve: list[dict[str, Any]]
 
 
-def default_hyperparams(algo: str, n_envs: int) -> dict[str, Any]:
-    """The algorithm settings used unless `TrainConfig.hyperparams` overrides them."""
-    net = {"net_arch": [128, 128]}
+def default_hyperparams(algo: str, n_envs: int, interface: str = "grounded") -> dict[str, Any]:
+    """The algorithm settings used unless `TrainConfig.hyperparams` overrides them (the slot
+    policy of the objects interface sizes its own network: `utamp_gym.rl.slots`)."""
+    net: dict[str, Any] = {"net_arch": [128, 128]} if interface == "grounded" else {}
     if algo == "dqn":
         return {
             "learning_rate": 1e-4, "buffer_size": 100_000, "learning_starts": 1_000,
@@ -128,14 +160,17 @@ def default_hyperparams(algo: str, n_envs: int) -> dict[str, Any]:
 def model_meta(config: TrainConfig, env: Any) -> ModelMeta:
     """The `ModelMeta` of a run, read from its (unfiltered) evaluation env."""
     kitchen = env.unwrapped
+    options: dict[str, Any] = {"masks": config.masks}
+    if config.interface != "grounded":
+        options["interface"] = config.interface
     return ModelMeta(
         env_id=config.env_id,
         suite=str(kitchen.options.suite),
-        algo=config.algo,
+        algo="maskable-ppo" if config.algo == "bc" else config.algo,  # the model's class
         obs_keys=tuple(config.obs_keys),
         n_actions=int(env.action_space.n),
-        n_fluents=int(env.observation_space["symbolic"].n),
-        env_options={"masks": config.masks},
+        n_fluents=n_fluents(env),
+        env_options=options,
         trained_grounding=config.grounding,
     )
 
@@ -191,11 +226,18 @@ def train(
     out = Path(out)
     (out / "checkpoints").mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
+    if algo == "bc":
+        from utamp_gym.rl.bc import train_bc
+
+        result, hyper = train_bc(config, out)
+        (out / "train.json").write_text(json.dumps(_report(config, hyper, result), indent=2) + "\n")
+        return result
 
     env_kw: dict[str, Any] = {
         "grounding": grounding,
         "num_objects": num_objects,
         "masks": config.masks,
+        "interface": config.interface,
     }
     vec = make_vec_env(
         env_id, n_envs, seed=seed, subproc=grounding == "physics", obs_keys=config.obs_keys,
@@ -205,8 +247,16 @@ def train(
     eval_env = make_env(env_id, obs_keys=None, **env_kw)
     meta = model_meta(config, eval_env)
     save = functools.partial(save_model, meta=meta)
-    hyper = {**default_hyperparams(algo, n_envs), **config.hyperparams}
-    model = algo_class(algo)(POLICY_CLASSES[algo], vec, seed=seed, verbose=verbose, **hyper)
+    hyper = {**default_hyperparams(algo, n_envs, config.interface), **config.hyperparams}
+    policy_class = POLICY_CLASSES[algo]
+    if config.interface == "objects":
+        from utamp_gym.rl.slots import SlotPolicy
+
+        policy_class = SlotPolicy
+    model = algo_class(algo)(policy_class, vec, seed=seed, verbose=verbose, **hyper)
+    if config.init_from:  # fine-tuning: start from a saved policy (e.g. behaviour cloning)
+        start_from = algo_class(algo).load(config.init_from, device="cpu")
+        model.policy.load_state_dict(start_from.policy.state_dict())
     evaluator = PeriodicEval(
         eval_env, eval_episodes_of(config), out, eval_every, save=save,
         masks=config.eval_masks, stop_at=config.target_success if config.stop_at_target else None,

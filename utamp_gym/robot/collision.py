@@ -75,6 +75,8 @@ class CollisionChecker:
         if margin < 0 or self_margin < 0:
             raise GroundingError(f"margins must be >= 0 (got {margin}, {self_margin})")
         self.model = copy.deepcopy(model)
+        # geometric queries see every geom: no sleeping islands (`sim.world`) in the copy
+        self.model.opt.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         self.data = mujoco.MjData(self.model)
         self.ids = ids
         self.margin = float(margin)

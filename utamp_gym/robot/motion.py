@@ -1,11 +1,13 @@
 """Joint-space motion planning (OMPL RRTConnect) and trajectory timing for the Panda arm.
 
 `plan_motion` checks the straight line first, then runs RRTConnect with a
-`CollisionChecker` as validity checker, simplifies within a time budget and
-returns a dense waypoint path. OMPL's random numbers are seeded from the caller's
-`np.random.Generator` on every call (OMPL 2.0.1 exposes only a global seed, which
-seeds every OMPL RNG created afterwards), so the same Generator state gives the
-same path as long as the time limits are not hit.
+`CollisionChecker` as validity checker, simplifies and returns a dense waypoint path.
+OMPL's random numbers are seeded from the caller's `np.random.Generator` on every call
+(OMPL 2.0.1 exposes only a global seed, which seeds every OMPL RNG created afterwards).
+RRTConnect's limit is counted in collision checks, not seconds (`timeout` / `CHECK_S`, what
+that many seconds allow on an idle machine), so the same Generator state gives the same path,
+or the same failure, however loaded the machine is; a wall-clock limit of
+`SAFETY_FACTOR` x `timeout` only guards against a pathological check.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ PANDA_ACC_LIMITS = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])
 PANDA_VEL_LIMITS.flags.writeable = False
 PANDA_ACC_LIMITS.flags.writeable = False
 LIMIT_SLACK = 0.02  # rad a start/goal may lie outside a joint limit (clipped back in)
+CHECK_S = 60e-6  # s per collision check on an idle machine (a Panda in a kitchen scene)
+SAFETY_FACTOR = 20.0  # wall-clock limit of RRTConnect, in multiples of its nominal timeout
 
 
 @dataclass(frozen=True)
@@ -89,7 +93,7 @@ def plan_motion(
     rng: np.random.Generator,
     *,
     timeout: float = 2.0,
-    simplify_time: float = 0.15,
+    simplify_time: float = 5.0,
     check_resolution: float = 0.02,
     waypoint_step: float = 0.02,
     max_endpoint_penetration: float = 0.01,
@@ -171,14 +175,21 @@ def _rrt_connect(
     setup.setStartAndGoalStates(start, goal)
     setup.setPlanner(og.RRTConnect(info))
     t0 = time.perf_counter()
+    budget, checks0 = round(timeout / CHECK_S), checker.checks
+    wall_end = t0 + SAFETY_FACTOR * timeout
+
+    def used_up() -> bool:  # evaluated once per RRTConnect iteration
+        return checker.checks - checks0 >= budget or time.perf_counter() > wall_end
+
     with _ompl_log_level(ou.LOG_WARN):
-        status = setup.solve(timeout)
+        status = setup.solve(ob.PlannerTerminationCondition(used_up))
     t_plan = time.perf_counter() - t0
     if not setup.haveExactSolutionPath():
         free = [c for c in (checker.contacts(q_start), checker.contacts(q_goal)) if c]
         why = f" ({checker.describe(free[0])})" if free else ""
         raise GroundingError(
-            f"no collision-free arm path found in {timeout:.2f} s (OMPL: {status}){why}"
+            f"no collision-free arm path found in {budget} collision checks (~{timeout:.2f} s; "
+            f"OMPL: {status}){why}"
         )
     path = setup.getSolutionPath()
     t1 = time.perf_counter()
@@ -190,10 +201,12 @@ def _rrt_connect(
 
 
 def _simplify(simplifier: og.PathSimplifier, path: og.PathGeometric, budget: float) -> None:
-    """Shortcut rounds until a round changes nothing or `budget` seconds pass.
+    """Shortcut rounds (at most 20) until a round changes nothing or `budget` seconds pass.
 
-    The budget is only checked between rounds, so results stay reproducible unless
-    it is exhausted (measured: ~20 ms mean, <50 ms max per plan on 2 cores).
+    The budget is only checked between rounds, so results stay reproducible unless it is
+    exhausted; the default (5 s) is a safety net far above what the rounds take (measured:
+    ~20 ms mean, <50 ms max per plan on 2 idle cores), so that equal seeds give equal paths
+    on a loaded machine too (a 0.15 s budget could run out there).
     """
     t_end = time.perf_counter() + budget
     for _ in range(20):

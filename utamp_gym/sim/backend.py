@@ -1,13 +1,14 @@
 """`MujocoBackend`: the physics backend of the Gym env (see `utamp_gym.backend`).
 
-`reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose,
+`reset` builds the scene's MuJoCo world with a Panda at the origin in its ready pose
+(with sleeping islands on: objects at rest cost nothing until touched, `sim.world`),
 draws the initial pose noise from the given generator and lets everything settle;
 `execute` runs one U-TAMP-2 macro action through `skills`; `physical_state` reports what
 perception needs; `disturb` injects a fault (`faults`). Everything random (initial pose
 noise, pose-estimation noise, IK restarts, OMPL seeds) is drawn from the generator given
 to `reset`, and faults from the one given to `disturb`, so the same seeds give the same
-rollout. Rendering is headless (set ``MUJOCO_GL=egl``) and cheap:
-shadows, reflections and skybox are off.
+rollout. Rendering is headless (`utamp_gym.sim.gl` picks a working OpenGL backend when
+``MUJOCO_GL`` is unset) and cheap: shadows, reflections and skybox are off.
 
 **Frames while an action runs.** A macro action simulates several seconds; to see them,
 `watch(callback, period)` has `callback()` called every `period` s of simulated time while
@@ -19,10 +20,10 @@ and no sink the physics steps in bulk (no per-step Python call).
 
 from __future__ import annotations
 
-import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -33,7 +34,6 @@ from utamp_gym.perception.poses import PoseModel
 from utamp_gym.perception.state import Grasp, PhysicalState
 from utamp_gym.perception.views import RobotState, ViewBundle
 from utamp_gym.robot.kinematics import PandaKinematics
-from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.cameras import (
     ACTING_SIZE,
@@ -43,17 +43,19 @@ from utamp_gym.sim.cameras import (
     WRIST,
     WRIST_SIZE,
     CameraRig,
-    add_wrist_camera,
 )
-from utamp_gym.sim.control import ArmDriver, Timings
+from utamp_gym.sim.control import Timings
 from utamp_gym.sim.decode import parse_action, pose_of
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
-from utamp_gym.sim.measure import SimState, believed_qpos, settle_objects
+from utamp_gym.sim.gl import new_renderer
+from utamp_gym.sim.heap import release_free_memory
+from utamp_gym.sim.measure import SimState, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
 from utamp_gym.sim.rgbd import RgbdPoseEstimator, surface_points
 from utamp_gym.sim.skills import run_skill
-from utamp_gym.sim.world import build_world_spec, compile_world, rests_on_top
+from utamp_gym.sim.snapshot import build_state, freeze, thaw
+from utamp_gym.sim.world import build_world_spec, rests_on_top
 
 CAMERA = "overview"
 TIPPED_BELOW = 0.02  # m (see `MujocoBackend._camera_poses`)
@@ -109,32 +111,26 @@ class MujocoBackend:
     def reset(self, scene: Scene, rng: np.random.Generator) -> None:
         """Build the scene's world (+ Panda at home) with seeded pose noise and settle it."""
         self._close_renderers()
+        self._state = None  # the previous episode's memory is free before the next is built
         if self._kin is None:
             self._kin = PandaKinematics()
         spec, info = build_world_spec(
-            scene, rng=rng, pos_noise=self.pos_noise, yaw_noise_deg=self.yaw_noise_deg
+            scene,
+            rng=rng,
+            pos_noise=self.pos_noise,
+            yaw_noise_deg=self.yaw_noise_deg,
+            sleep=True,
         )
-        handles = add_panda(spec)
-        add_wrist_camera(spec, handles.prefix)
-        world = compile_world(spec, info)
-        data = mujoco.MjData(world.model)
-        ids = handles.bind(world.model)
-        set_home(world.model, data, ids)
-        arm = ArmDriver(world.model, data, ids, self._kin, rng)
-        self._state = SimState(
-            world,
-            data,
-            arm,
-            scratch=mujoco.MjData(world.model),
-            estimator=PoseEstimator(self.pose_noise, rng),
-        )
+        estimator = PoseEstimator(self.pose_noise, rng)
+        self._state = build_state(spec, info, self._kin, rng, estimator)
         if self.perception == "rgbd":
             self._state.estimator = self._rgbd_estimator(scene)
-        arm.belief = functools.partial(believed_qpos, self._state)
         self._steps = 0
         self._hook()
         settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
-        arm.timings = Timings()
+        self._state.arm.timings = Timings()
+        self._rest()
+        release_free_memory()  # keeps a long run's resident size flat (`utamp_gym.sim.heap`)
 
     def execute(self, action: str) -> MacroResult:
         """Run one grounded PDDL macro action; a failure comes back with a reason. With
@@ -149,6 +145,7 @@ class MujocoBackend:
         before = self._perception_seconds()
         cpu = est.cpu_seconds if isinstance(est, RgbdPoseEstimator) else 0.0
         result = run_skill(st, act)
+        self._rest()
         if isinstance(est, RgbdPoseEstimator):
             timings = {
                 **result.timings,
@@ -222,7 +219,9 @@ class MujocoBackend:
 
     def disturb(self, rng: np.random.Generator) -> Fault | None:
         """Inject one fault (`utamp_gym.sim.faults`), chosen with `rng`."""
-        return disturb(self._require(), rng)
+        fault = disturb(self._require(), rng)
+        self._rest()
+        return fault
 
     def object_poses(self) -> dict[str, np.ndarray]:
         """Object name -> [x, y, z, qw, qx, qy, qz] of its frame in the world."""
@@ -260,7 +259,7 @@ class MujocoBackend:
         if renderer is None:
             vis = st.world.model.vis.global_
             vis.offwidth, vis.offheight = max(vis.offwidth, key[0]), max(vis.offheight, key[1])
-            renderer = self._renderers[key] = mujoco.Renderer(st.world.model, key[1], key[0])
+            renderer = self._renderers[key] = new_renderer(st.world.model, key[1], key[0])
         renderer.update_scene(st.data, camera=CAMERA)
         for flag in (
             mujoco.mjtRndFlag.mjRND_SHADOW,
@@ -295,6 +294,28 @@ class MujocoBackend:
         """The robot's own state (joints, finger gap, TCP pose)."""
         st = self._require()
         return RobotState(st.arm.q(), st.arm.gap(), st.arm.tcp())
+
+    # ------------------------------------------------------------ pickling
+    def __getstate__(self) -> dict[str, Any]:
+        """The simulation as a `SimSnapshot` (`utamp_gym.sim.snapshot`): the world is rebuilt
+        from its scene on load and continues bit for bit. Renderers, watchers and the frame
+        sink are not pickled (whoever watched attaches again, as the env's rendering does)."""
+        state = {k: v for k, v in self.__dict__.items() if k not in _NOT_PICKLED}
+        state["_state"] = None if self._state is None else freeze(self._state)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        snapshot = state.pop("_state")
+        self.__dict__.update(state)
+        self._renderers, self._watchers, self._tokens = {}, {}, itertools.count()
+        self._frame_sink = None
+        if snapshot is not None and self._kin is None:
+            self._kin = PandaKinematics()
+        self._state = None if snapshot is None else thaw(snapshot, self._kin)
+        self._rig = None
+        if self._state is not None and isinstance(self._state.estimator, RgbdPoseEstimator):
+            self._state.estimator.attach(self._pose_look)  # its cameras are this backend's
+        self._hook()
 
     # ------------------------------------------------------------ frames
     @property
@@ -351,6 +372,13 @@ class MujocoBackend:
             watched = self._frame_sink is not None or bool(self._watchers)
             self._state.arm.on_step = self._on_step if watched else None
 
+    def _rest(self) -> None:
+        """Between calls the data is forwarded: what is read (poses, contacts) belongs to the
+        current state, and a snapshot of the state restores everything (`mj_step` depends on
+        the integration state only, so the trajectory is the same)."""
+        st = self._require()
+        mujoco.mj_forward(st.world.model, st.data)
+
     def _on_step(self) -> None:
         self._steps += 1
         st = self._state
@@ -370,6 +398,10 @@ class MujocoBackend:
         if self._rig is not None:
             self._rig.close()
             self._rig = None
+
+
+#: live objects a pickled backend leaves behind (`MujocoBackend.__getstate__`)
+_NOT_PICKLED = ("_renderers", "_watchers", "_tokens", "_frame_sink", "_rig")
 
 
 def _every(period: float, dt: float) -> int:

@@ -41,6 +41,7 @@ from utamp_gym.perception.views import (
     View,
     ViewBundle,
 )
+from utamp_gym.sim.gl import new_renderer
 
 #: cameras of every look while acting, and of the first careful look
 ACTING_VIEWS = ("scene-left", "scene-right")
@@ -174,7 +175,7 @@ class CameraRig:
         if r is None:
             vis = self.model.vis.global_
             vis.offwidth, vis.offheight = max(vis.offwidth, size[0]), max(vis.offheight, size[1])
-            r = self._renderers[size] = mujoco.Renderer(self.model, size[1], size[0])
+            r = self._renderers[size] = new_renderer(self.model, size[1], size[0])
         return r
 
     def _view(self, data: mujoco.MjData, camera: str, size: tuple[int, int], rgb: bool) -> View:

@@ -36,6 +36,8 @@ HELD_SCALE = (0.5, 0.3)  # ... while carrying an object
 LINE_STEP = 0.01  # m between IK waypoints of a Cartesian segment
 MIN_GAP = 0.004  # m, closed fingers below this gap hold nothing
 MAX_JOINT_JUMP = 0.25  # rad between consecutive Cartesian waypoints (no IK branch flips)
+FINGERS_STILL = 2e-3  # m/s, fingers slower than this have stopped
+SQUEEZE = 0.99  # fraction of the gripper's force limit: the fingers squeeze at full force
 
 
 @dataclass
@@ -168,13 +170,24 @@ class ArmDriver:
 
     def close_gripper(self, *, min_s: float = 0.3, max_s: float = 0.8) -> float:
         """Squeeze (gap command 0, full gripper force) until the fingers stop; return the
-        final gap (m)."""
+        final gap (m).
+
+        Done once the fingers are still at full force (they hold something: the squeeze is
+        complete), checked every 10 ms; otherwise (closed on nothing) once they are still
+        after `min_s`, or after `max_s`.
+        """
         self.set_gripper(0.0)
-        self.step(round(min_s / self.dt))
-        for _ in range(round((max_s - min_s) / 0.02)):
-            if np.abs(self.data.qvel[self.ids.finger_dof_adr]).max() < 2e-3:
+        force = self.model.actuator_forcerange[self.ids.gripper_actuator_id, 1]
+        t, every = 0.0, max(1, round(0.01 / self.dt))
+        while t < max_s - 1e-9:
+            self.step(every)
+            t += every * self.dt
+            still = np.abs(self.data.qvel[self.ids.finger_dof_adr]).max() < FINGERS_STILL
+            squeezing = (
+                abs(self.data.actuator_force[self.ids.gripper_actuator_id]) >= SQUEEZE * force
+            )
+            if still and (squeezing or t >= min_s - 1e-9):
                 break
-            self.step(10)
         return self.gap()
 
     def holds_something(self) -> bool:

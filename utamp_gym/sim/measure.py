@@ -18,12 +18,20 @@ from utamp_gym.errors import GroundingError
 from utamp_gym.sim.control import ArmDriver
 from utamp_gym.sim.decode import GraspSymbols, pose_of, support_point, world_aabb
 from utamp_gym.sim.estimate import PoseEstimator
-from utamp_gym.sim.world import World, object_orientation, rests_on_top, stack_from_poses
+from utamp_gym.sim.world import (
+    World,
+    object_orientation,
+    rests_on_top,
+    sleeping_objects,
+    stack_from_poses,
+)
 
 MOVED = 0.02  # m, another object moving this far was disturbed
 LIFT = 0.12  # m, least lift after grasping
 LIFT_CLEARANCE = 0.03  # m, lift the held object this far over the tallest other object
 MAX_LIFT = 0.30  # m
+SETTLED = 0.01  # m/s (and rad/s): objects slower than this have settled (`settle_objects`)
+SETTLE_CHECK = 0.02  # s between the checks of `settle_objects`
 
 
 class SkillFailure(Exception):
@@ -124,15 +132,23 @@ def grasp_drift(st: SimState, held: Held) -> tuple[float, float]:
 
 
 def settle_objects(st: SimState, *, min_s: float = 0.25, max_s: float = 1.2) -> None:
-    """Step until every object is nearly at rest (or `max_s` passed)."""
-    arm = st.arm
-    arm.step(round(min_s / arm.dt))
+    """Step until every object is at rest, or `max_s` passed.
+
+    At rest: every object asleep (MuJoCo's test, `world.SLEEP_TOLERANCE`: all its
+    velocities under 1 mm/s for 10 steps), checked every `SETTLE_CHECK` s; or, after
+    `min_s`, every object slower than `SETTLED` (an object in the hand never sleeps).
+    """
+    arm, dt = st.arm, st.arm.dt
     dofs = [st.world.dof_adr[n] for n in st.world.body_ids]
-    for _ in range(round((max_s - min_s) / 0.05)):
-        speed = max(float(np.abs(st.data.qvel[a : a + 6]).max()) for a in dofs)
-        if speed < 0.01:
+    every = round(SETTLE_CHECK / dt)
+    for k in range(1, round(max_s / SETTLE_CHECK) + 1):
+        arm.step(every)
+        if len(sleeping_objects(st.world, st.data)) == len(dofs):
             return
-        arm.step(round(0.05 / arm.dt))
+        if k * every * dt >= min_s - 1e-9:
+            speed = max(float(np.abs(st.data.qvel[a : a + 6]).max()) for a in dofs)
+            if speed < SETTLED:
+                return
 
 
 def lift_height(st: SimState, name: str) -> float:

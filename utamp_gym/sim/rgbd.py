@@ -139,6 +139,16 @@ class RgbdPoseEstimator:
         self.seconds: list[float] = []  # wall time of every rendering + fit (perception cost)
         self.cpu_seconds = 0.0  # ... and the process's CPU time spent on them
 
+    def attach(self, look: Look) -> None:
+        """Render with `look` from now on (a backend restored from a pickle)."""
+        self._render = look
+
+    def __getstate__(self) -> dict[str, object]:
+        """Pickled without its renderer (the backend attaches its own) or a stale look."""
+        state = dict(self.__dict__)
+        state["_render"], state["_frames"] = None, None
+        return state
+
     def new_look(self) -> None:
         self._look.clear()
         self._again.clear()

@@ -70,8 +70,9 @@ REGRASP_SLIP, REGRASP_TILT_DEG = 0.003, 1.0  # ... during transport: re-aim the 
 SLIDE_TOL = 0.02  # m, slid footprint centre within this of the space centre
 CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measured
 #: a guarded descent: an upward push on the held object this strong (N, measured from the
-#: joint torques) at the place pose means it landed early; the arm backs up, looks again and
-#: aims anew, at most `PLACE_ATTEMPTS` times
+#: joint torques) at the place pose, and stronger than the object's weight, means it landed
+#: early; the arm backs up, looks again and aims anew, at most `PLACE_ATTEMPTS` times. (A
+#: support may carry up to the whole weight unpressed: a pan held by its handle sags onto it.)
 CONTACT_N = 5.0
 UNCERTAINTY_SIGMAS = 3.0  # the fingers open this many pose-noise deviations wider a side
 PLACE_ATTEMPTS = 3
@@ -447,7 +448,7 @@ def place(st: SimState, act: MacroAction) -> None:
     for attempt in range(1, PLACE_ATTEMPTS + 1):  # a guarded descent
         arm.move_line(up.reversed(), *PLACE)
         push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]
-        if push <= CONTACT_N or attempt == PLACE_ATTEMPTS:
+        if not landed_early(push, -carried.force[2]) or attempt == PLACE_ATTEMPTS:
             break
         # it landed early (on a rim, say): back up, look again, aim anew
         arm.move_line(up, *PLACE)
@@ -462,6 +463,12 @@ def place(st: SimState, act: MacroAction) -> None:
     moved = disturbed(st, before)
     if moved:
         raise SkillFailure(f"placing {name} on {act.support} toppled the stack: {moved}")
+
+
+def landed_early(push: float, weight: float) -> bool:
+    """True if an upward push of `push` N on a held object weighing `weight` N (both measured
+    from the joint torques) at its place pose means it landed early (`CONTACT_N`)."""
+    return push > max(CONTACT_N, weight)
 
 
 def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:

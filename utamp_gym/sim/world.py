@@ -12,14 +12,21 @@ Object bodies are named ``obj/<name>``; their frame is the object frame (origin 
 bottom centre of the main body). z = 0 is the table top; the robot base is the origin.
 Options match the Panda's tuning: implicitfast, elliptic cones, impratio 10. The pose
 queries read `data` as left by `mj_step`/`mj_forward`; `stack_from_poses` forwards a copy.
+
+With ``sleep=True`` (the macro-action backend's choice) MuJoCo's sleeping islands are on:
+objects that have come to rest (every velocity below `SLEEP_TOLERANCE` for 10 steps) are
+frozen and their contacts with each other and the table are skipped until an awake body
+(the robot, a held or falling object) touches them, which wakes the whole island at once.
+Most of an episode's objects stand still most of the time, so this removes most contacts
+from most steps (`docs/physics-speed.md` has the cost per step with and without).
+Sleeping objects keep their poses; their velocities read zero.
 """
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -29,6 +36,7 @@ from utamp_gym.perception.abstraction import TILT_DEG
 from utamp_gym.scene.model import Pose, Scene
 from utamp_gym.sim.appearance import (
     ACCENT_MATERIAL,
+    Appearance,
     add_materials,
     material_name,
     object_appearance,
@@ -46,6 +54,9 @@ from utamp_gym.sim.bodies import (
 from utamp_gym.sim.cameras import add_scene_cameras
 
 TABLE_GEOM = "table"
+#: m/s (MuJoCo's default; rotations count times the body's size): what counts as at rest
+#: for sleeping, 10x stricter than the skills' own "settled" (`measure.settle_objects`)
+SLEEP_TOLERANCE = 1e-3
 FLOOR_Z = -0.75  # m, the floor under the table (objects that fall off land here)
 GRAVITY = 9.81
 
@@ -60,6 +71,7 @@ class WorldInfo:
     geom_names: Mapping[str, tuple[str, ...]]
     slot_positions: Mapping[str, np.ndarray]
     table_geom: str = TABLE_GEOM
+    appearance: Mapping[str, Appearance] = field(default_factory=dict)  # colour and finish
 
 
 @dataclass(frozen=True)
@@ -149,8 +161,16 @@ def build_world_spec(
     pos_noise: float = 0.003,
     yaw_noise_deg: float = 2.0,
     timestep: float = 0.002,
+    sleep: bool = False,
+    poses: Mapping[str, Pose] | None = None,
+    appearance: Mapping[str, Appearance] | None = None,
 ) -> tuple[mujoco.MjSpec, WorldInfo]:
-    """The world as an uncompiled `MjSpec` (attach the robot to it), and its `WorldInfo`."""
+    """The world as an uncompiled `MjSpec` (attach the robot to it), and its `WorldInfo`.
+
+    `sleep` turns on MuJoCo's sleeping islands (module docstring). The objects start at
+    `poses` if given (e.g. a `WorldInfo`'s, to rebuild that world exactly), else at the
+    scene's declared poses with noise drawn from `rng`; likewise each object's colour and
+    finish (`appearance`, else drawn from a child of `rng`: `utamp_gym.sim.appearance`)."""
     if timestep <= 0 or pos_noise < 0 or yaw_noise_deg < 0:
         raise SimulationError(
             f"need timestep > 0 and noise >= 0 (got {timestep}, {pos_noise}, {yaw_noise_deg})"
@@ -162,11 +182,17 @@ def build_world_spec(
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = 10.0
+    if sleep:
+        spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+        spec.option.sleep_tolerance = SLEEP_TOLERANCE
     spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
     _add_environment(spec, scene)
-    poses = initial_poses(scene, rng, pos_noise, yaw_noise_deg)
-    looks = object_appearance(scene, rng)  # a child generator: the draws above are unchanged
-    add_materials(spec, looks)
+    if poses is None:
+        poses = initial_poses(scene, rng, pos_noise, yaw_noise_deg)
+    if appearance is None:  # a child generator: the draws above are unchanged
+        appearance = object_appearance(scene, rng)
+    add_materials(spec, dict(appearance))
+    looks = appearance
     geoms = {
         o.name: add_object_body(
             spec,
@@ -185,6 +211,7 @@ def build_world_spec(
         body_names={o.name: BODY_PREFIX + o.name for o in scene.objects},
         geom_names=geoms,
         slot_positions={s.name: np.array([*s.position, 0.0]) for s in scene.slots},
+        appearance=dict(looks),
     )
     return spec, info
 
@@ -270,6 +297,12 @@ def object_orientation(model: mujoco.MjModel, data: mujoco.MjData, name: str) ->
     return "upright" if up >= limit else "inverted" if up <= -limit else None
 
 
+def sleeping_objects(world: World, data: mujoco.MjData) -> set[str]:
+    """Names of the objects MuJoCo has put to sleep (`build_world_spec`'s `sleep`)."""
+    tree = world.model.body_treeid
+    return {n for n, b in world.body_ids.items() if data.tree_asleep[tree[b]] >= 0}
+
+
 def _extent(world: World, data: mujoco.MjData, name: str) -> tuple[float, float] | None:
     """World z of an object's bounding-box bottom and top; None if it has tipped over."""
     orientation = object_orientation(world.model, data, name)
@@ -345,15 +378,15 @@ def forwarded_copy(
 ) -> mujoco.MjData:
     """A forwarded copy of `data`'s state (contacts and forces current); `data` is untouched.
 
-    `scratch`, an `MjData` of the same model, is overwritten and returned instead of
-    allocating a full copy (about 5x cheaper).
+    `scratch`, an `MjData` of the same model that is never stepped, is overwritten and
+    returned instead of allocating a new one. The copy's bodies are all awake: a copy of
+    `data` itself would keep its sleeping islands asleep, and their contacts uncomputed.
     """
     if scratch is None:
-        scratch = copy.copy(data)
-    else:
-        scratch.time = data.time
-        for name in ("qpos", "qvel", "act", "ctrl", "qacc_warmstart", "xfrc_applied"):
-            getattr(scratch, name)[:] = getattr(data, name)
+        scratch = mujoco.MjData(model)
+    scratch.time = data.time
+    for name in ("qpos", "qvel", "act", "ctrl", "qacc_warmstart", "xfrc_applied"):
+        getattr(scratch, name)[:] = getattr(data, name)
     mujoco.mj_forward(model, scratch)
     return scratch
 
@@ -407,5 +440,6 @@ __all__ = [
     "object_velocity",
     "rests_on_top",
     "settle",
+    "sleeping_objects",
     "stack_from_poses",
 ]

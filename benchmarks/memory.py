@@ -1,0 +1,247 @@
+"""Memory over long runs: RSS of a physics env over resets and full episodes, and of a vector env.
+
+Three measurements, each in a fresh Python process so none inherits another's heap:
+
+* ``resets``: one ``UTampKitchen-v0`` env (physics grounding), ``--resets`` resets (seeds
+  0, 1, ...): RSS every 100, and the growth per 1,000 resets after the first 500 (least-squares
+  slope; target <= 10 MB);
+* ``episodes``: the same env, ``--episodes`` full episodes of the planner policy
+  (`utamp_gym.env.planner_policy.PlannerPolicy`, one episode per seed): RSS after each, and the
+  growth over the last half (target <= 10 MB over the last 100 of 200);
+* ``vector``: a Gymnasium ``AsyncVectorEnv`` of ``--vector-envs`` physics envs, ``--vector-resets``
+  resets: the RSS of the parent plus its workers, and its growth over the last half (target
+  <= 10 MB over the last 50 of 100).
+
+Writes the figures to ``docs/results/memory.json`` and a table to ``docs/results/memory.md``
+(``--out`` changes the folder), which the docs include. Run it nice'd; it takes a while::
+
+    nice -n 10 python benchmarks/memory.py [--resets 2000] [--episodes 200] [--vector-resets 100]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV_ID = "UTampKitchen-v0"
+TARGET_MB = 10.0
+MiB = 2**20
+
+
+def rss_mb(pid: int | str = "self") -> float:
+    """Resident set size of a process in MiB (Linux /proc)."""
+    with open(f"/proc/{pid}/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / MiB
+
+
+# ---------------------------------------------------------------- the measurements (children)
+def measure_resets(n: int, every: int = 100) -> list[tuple[int, float]]:
+    import gymnasium as gym
+
+    import utamp_gym  # noqa: F401  (registers the env ids)
+
+    env = gym.make(ENV_ID)
+    samples = [(0, rss_mb())]
+    for i in range(1, n + 1):
+        env.reset(seed=i)
+        if i % every == 0:
+            samples.append((i, rss_mb()))
+    env.close()
+    return samples
+
+
+def measure_episodes(n: int) -> tuple[list[tuple[int, float]], dict[str, int]]:
+    import gymnasium as gym
+
+    import utamp_gym  # noqa: F401
+    from utamp_gym.env.planner_policy import PlannerPolicy
+
+    env = gym.make(ENV_ID)
+    policy = PlannerPolicy(env.unwrapped)
+    samples, steps, successes = [(0, rss_mb())], 0, 0
+    for i in range(1, n + 1):
+        obs, info = env.reset(seed=i)
+        done = False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(policy(obs, info))
+            steps += 1
+            done = terminated or truncated
+        successes += bool(info["is_success"])
+        samples.append((i, rss_mb()))
+    env.close()
+    return samples, {"macro_actions": steps, "successes": successes}
+
+
+def measure_vector(n_envs: int, n: int) -> list[tuple[int, float]]:
+    import functools
+
+    from gymnasium.vector import AsyncVectorEnv
+
+    from utamp_gym.rl.envs import make_env
+
+    fns = [functools.partial(make_env, ENV_ID, grounding="physics", obs_keys=None)] * n_envs
+    vec = AsyncVectorEnv(fns)
+
+    def total() -> float:
+        return rss_mb() + sum(rss_mb(p.pid) for p in vec.processes)
+
+    samples = [(0, total())]
+    for i in range(1, n + 1):
+        vec.reset(seed=i * n_envs)
+        samples.append((i, total()))
+    vec.close()
+    return samples
+
+
+# ---------------------------------------------------------------- figures
+def slope_per_1000(samples: list[tuple[int, float]], after: int) -> float:
+    """Least-squares RSS growth (MB) per 1,000 iterations over samples past `after`."""
+    pts = [(i, m) for i, m in samples if i >= after]
+    if len(pts) < 2:
+        return float("nan")
+    mx = sum(i for i, _ in pts) / len(pts)
+    my = sum(m for _, m in pts) / len(pts)
+    var = sum((i - mx) ** 2 for i, _ in pts)
+    return 1000 * sum((i - mx) * (m - my) for i, m in pts) / var
+
+
+def growth_over_last_half(samples: list[tuple[int, float]]) -> float:
+    """RSS at the end minus RSS halfway (MB)."""
+    n = samples[-1][0]
+    half = min(samples, key=lambda s: abs(s[0] - n / 2))
+    return samples[-1][1] - half[1]
+
+
+def _child(part: str, args: argparse.Namespace) -> dict[str, Any]:
+    """Run one measurement in a fresh interpreter; its JSON result."""
+    cmd = [sys.executable, __file__, "--part", part]
+    cmd += ["--resets", str(args.resets), "--episodes", str(args.episodes)]
+    cmd += ["--vector-envs", str(args.vector_envs), "--vector-resets", str(args.vector_resets)]
+    start = time.perf_counter()
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise SystemExit(f"the {part} measurement failed:\n{done.stderr}")
+    result = json.loads(done.stdout.splitlines()[-1])
+    result["wall_s"] = round(time.perf_counter() - start, 1)
+    return result
+
+
+def _run_part(args: argparse.Namespace) -> None:
+    if args.part == "resets":
+        out: dict[str, Any] = {"samples": measure_resets(args.resets)}
+    elif args.part == "episodes":
+        samples, counts = measure_episodes(args.episodes)
+        out = {"samples": samples, **counts}
+    else:
+        out = {"samples": measure_vector(args.vector_envs, args.vector_resets)}
+    print(json.dumps(out))
+
+
+def report(args: argparse.Namespace) -> dict[str, Any]:
+    resets = _child("resets", args)
+    per_1000 = slope_per_1000(resets["samples"], after=500)
+    episodes = _child("episodes", args)
+    last_half = growth_over_last_half(episodes["samples"])
+    vector = _child("vector", args)
+    vector_half = growth_over_last_half(vector["samples"])
+    rows = [
+        {
+            "measurement": f"{ENV_ID} physics: {args.resets} resets",
+            "start_mb": resets["samples"][0][1],
+            "end_mb": resets["samples"][-1][1],
+            "growth": f"{per_1000:+.1f} MB per 1,000 resets after the first 500",
+            "growth_mb": per_1000,
+            "target": f"<= {TARGET_MB:g} MB per 1,000 resets",
+            "met": per_1000 <= TARGET_MB,
+            "wall_s": resets["wall_s"],
+        },
+        {
+            "measurement": f"{ENV_ID} physics: {args.episodes} planner-policy episodes "
+            f"({episodes['macro_actions']} macro actions, {episodes['successes']} successes)",
+            "start_mb": episodes["samples"][0][1],
+            "end_mb": episodes["samples"][-1][1],
+            "growth": f"{last_half:+.1f} MB over the last {args.episodes - args.episodes // 2}",
+            "growth_mb": last_half,
+            "target": f"<= {TARGET_MB:g} MB",
+            "met": last_half <= TARGET_MB,
+            "wall_s": episodes["wall_s"],
+        },
+        {
+            "measurement": f"AsyncVectorEnv of {args.vector_envs} physics envs: "
+            f"{args.vector_resets} resets (parent + workers)",
+            "start_mb": vector["samples"][0][1],
+            "end_mb": vector["samples"][-1][1],
+            "growth": f"{vector_half:+.1f} MB over the last "
+            f"{args.vector_resets - args.vector_resets // 2} resets",
+            "growth_mb": vector_half,
+            "target": f"<= {TARGET_MB:g} MB",
+            "met": vector_half <= TARGET_MB,
+            "wall_s": vector["wall_s"],
+        },
+    ]
+    return {
+        "env_id": ENV_ID,
+        "python": platform.python_version(),
+        "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
+        "load_average_at_end": round(os.getloadavg()[0], 2),
+        "rows": rows,
+        "samples": {
+            "resets": resets["samples"],
+            "episodes": episodes["samples"],
+            "vector": vector["samples"],
+        },
+    }
+
+
+def to_markdown(data: dict[str, Any]) -> str:
+    lines = [
+        "| measurement | RSS at start (MB) | RSS at end (MB) | growth | target | met |",
+        "|---|---:|---:|---|---|---|",
+    ]
+    for r in data["rows"]:
+        met = "yes" if r["met"] else "**no**"
+        lines.append(
+            f"| {r['measurement']} | {r['start_mb']:.0f} | {r['end_mb']:.0f} | {r['growth']} "
+            f"| {r['target']} | {met} |"
+        )
+    lines.append("")
+    lines.append(
+        f"Written by `benchmarks/memory.py` (Python {data['python']}, {data['machine']}; "
+        "resident set size from /proc, each measurement in a fresh process)."
+    )
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--resets", type=int, default=2000)
+    ap.add_argument("--episodes", type=int, default=200)
+    ap.add_argument("--vector-envs", type=int, default=4)
+    ap.add_argument("--vector-resets", type=int, default=100)
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
+    ap.add_argument("--part", choices=("resets", "episodes", "vector"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.part:
+        _run_part(args)
+        return
+    data = report(args)
+    table = to_markdown(data)
+    print(table, end="")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "memory.json").write_text(json.dumps(data, indent=1) + "\n")
+    (args.out / "memory.md").write_text(table)
+    print(f"wrote {args.out / 'memory.json'} and {args.out / 'memory.md'}")
+    if not all(r["met"] for r in data["rows"]):
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

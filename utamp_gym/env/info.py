@@ -1,0 +1,112 @@
+"""The ``info`` dict of the kitchen envs: one fixed structure of numbers, bools and strings.
+
+Why: datasets store infos step by step. Minari's `DataCollector(env, record_infos=True)`
+stacks every info entry over an episode (a `jax.tree_util` map) and writes each stack to HDF5,
+so every entry must keep its structure from `reset` to the last step, and every leaf must be a
+number, a bool, a numpy array or a string: never None, never an object, never a dict or list
+whose keys or length change. So:
+
+======================  =================================================================
+key                     value (after ``reset`` / when there is nothing to report)
+======================  =================================================================
+``action``              the action's PDDL string (``""``)
+``action_mask``         bool array over the action space
+``failure_reason``      why the action failed (``""``: it did not fail)
+``timings``             float seconds per `TIMING_KEYS` in physics grounding with
+                        ``record_timings=True`` (zeros where nothing ran); ``{}`` otherwise
+``macro_result``        ``{"executed", "success", "reason", "retries"}``: whether a macro
+                        action reached the simulator, its outcome, its reason, its retries
+                        joined by ``"; "`` (not executed: ``False, False, "", ""``)
+``unexpected_atoms``    ``"+ATOM"`` / ``"-ATOM"`` entries, sorted, joined by one space
+                        (``""``); `split_atoms` gives the list back
+``anomalies``           every object of the episode's scene -> why it has no symbol
+                        (``""``: it has one)
+``fault``               the injected fault (``""``)
+``scene``               the scene's name
+``is_success``          whether the goal holds now (as for the reward): True on the last
+                        step of a solved episode, where SB3 and the RL Zoo read it
+======================  =================================================================
+
+Version history of this structure (the env ids stay v0: observations, actions and rewards are
+unchanged): before, ``action``, ``failure_reason`` and ``fault`` were None when empty,
+``macro_result`` was the `MacroResult` (or None), ``unexpected_atoms`` a list and
+``anomalies`` held only the objects without a symbol. The objects themselves are still there:
+`UTampKitchenEnv.macro_result`, `UTampKitchenEnv.unexpected_atoms` and
+`UTampKitchenEnv.anomalies`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import numpy as np
+
+from utamp_gym.backend import MacroResult
+
+#: the keys of ``info["timings"]`` in physics grounding with ``record_timings=True``: the
+#: macro action's phases (`utamp_gym.sim.control.Timings`), perception and the whole step
+TIMING_KEYS = ("ik_s", "plan_s", "sim_s", "wall_s", "sim_time_s", "perceive_s", "step_s")
+
+
+def macro_info(macro: MacroResult | None) -> dict[str, Any]:
+    """``info["macro_result"]``: a `MacroResult` as a fixed dict (not executed: None)."""
+    if macro is None:
+        return {"executed": False, "success": False, "reason": "", "retries": ""}
+    return {
+        "executed": True,
+        "success": bool(macro.success),
+        "reason": macro.reason or "",
+        "retries": "; ".join(macro.retries),
+    }
+
+
+def timings_info(timings: Mapping[str, float] | None) -> dict[str, float]:
+    """``info["timings"]`` when timings are recorded: every `TIMING_KEYS` entry (0 if absent)."""
+    timings = timings or {}
+    return {k: float(timings.get(k, 0.0)) for k in TIMING_KEYS}
+
+
+def join_atoms(atoms: Iterable[str]) -> str:
+    """``info["unexpected_atoms"]`` from its entries (``"+(oc ...)"``, ``"-(oc ...)"``)."""
+    return " ".join(atoms)
+
+
+def split_atoms(text: str) -> list[str]:
+    """The entries of ``info["unexpected_atoms"]`` (each a sign and one parenthesised atom)."""
+    return [f"{part})" if not part.endswith(")") else part for part in text.split(") ") if part]
+
+
+def anomalies_info(objects: Iterable[str], anomalies: Mapping[str, str]) -> dict[str, str]:
+    """``info["anomalies"]``: every object of the scene -> its anomaly (``""``: none)."""
+    return {name: str(anomalies.get(name, "")) for name in objects}
+
+
+def step_info(
+    *,
+    action: str | None,
+    mask: np.ndarray,
+    failure: str | None,
+    timings: Mapping[str, float] | None,
+    macro: MacroResult | None,
+    unexpected: Iterable[str],
+    objects: Iterable[str],
+    anomalies: Mapping[str, str],
+    fault: str | None,
+    scene: str,
+    success: bool,
+) -> dict[str, Any]:
+    """One step's (or reset's) info in the fixed structure of the module docstring;
+    `timings` None leaves ``info["timings"]`` empty (not recorded)."""
+    return {
+        "action": action or "",
+        "action_mask": mask,
+        "failure_reason": failure or "",
+        "timings": {} if timings is None else timings_info(timings),
+        "macro_result": macro_info(macro),
+        "unexpected_atoms": join_atoms(unexpected),
+        "anomalies": anomalies_info(objects, anomalies),
+        "fault": fault or "",
+        "scene": scene,
+        "is_success": bool(success),
+    }

@@ -1,0 +1,149 @@
+"""The fixed vocabulary of the object-centric interface: slots, action indices, attributes.
+
+What an index or an observation entry *means*, whatever the scene (`utamp_gym.env.objects` maps
+a scene's ground actions and atoms onto it): the limits (`MAX_OBJECTS`, `MAX_MEMBERS`,
+`MAX_REGIONS`, `MAX_SPACES`), the 24 `GRASPS`, `ObjectAction` and its `encode` / `decode`, the
+attribute vector of a type (`encode_type`) and the observation space.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+from gymnasium import spaces
+
+from utamp_gym.scene.catalogue import GEOMS, MEMBER_KINDS, ROBUSTNESS, SHAPES, ObjectType
+from utamp_gym.scene.geometry import PARTS, SIDES, is_adjacent, is_opposite
+from utamp_gym.scene.materials import MATERIALS
+from utamp_gym.scene.model import Scene
+
+#: the env option ``interface``: the suite's ground actions and atoms, or object slots
+INTERFACES = ("grounded", "objects")
+MAX_OBJECTS = 6  # K
+MAX_MEMBERS = 6  # M
+MAX_REGIONS = 8  # R: table slots
+MAX_SPACES = 2  # S: free spaces to slide into
+N_ENTITIES = MAX_OBJECTS + MAX_REGIONS + MAX_SPACES
+#: (palm, finger 1, finger 2): the palm on one side, the fingers on an opposite pair beside it
+GRASPS: tuple[tuple[str, str, str], ...] = tuple(
+    (p, f1, f2)
+    for p in SIDES
+    for f1 in SIDES
+    for f2 in SIDES
+    if is_adjacent(p, f1) and is_opposite(f1, f2)
+)
+OPERATORS = ("pick", "place", "slide")
+_GRASP_INDEX = {g: i for i, g in enumerate(GRASPS)}
+_K, _M, _G, _R, _S = MAX_OBJECTS, MAX_MEMBERS, len(GRASPS), MAX_REGIONS, MAX_SPACES
+_PLACE0 = _K * _M * _G
+_SLIDE0 = _PLACE0 + _K * (_K + _R)
+N_ACTIONS = _SLIDE0 + _K * _M * _G * _S
+_MATERIALS = (*MATERIALS, "other")
+#: per member: present, kind, geom, box min (3) and max (3)
+_MEMBER_WIDTH = 1 + len(MEMBER_KINDS) + len(GEOMS) + 6
+#: per side: shape, usable size (2), surface height, food surface
+_PART_WIDTH = len(SHAPES) + 4
+N_ATTRIBUTES = 1 + len(_MATERIALS) + len(ROBUSTNESS) + 1 + 6 + 6 * _PART_WIDTH + _M * _MEMBER_WIDTH
+TypeSource = Callable[[Scene, str], ObjectType]
+#: bound of the Box entries (metres, kilograms: masses go up to 1000 kg)
+BOUND = 1000.0
+
+
+class ObjectAction(NamedTuple):
+    """One index of the action space; fields an operator does not choose are None."""
+
+    operator: str  # pick | place | slide
+    obj: int  # object slot
+    member: int | None = None  # member index (pick, slide)
+    grasp: int | None = None  # index into GRASPS (pick, slide)
+    support: int | None = None  # place: an object slot < K, or K + region index
+    space: int | None = None  # slide: space index
+
+
+def encode(action: ObjectAction) -> int:
+    """The `Discrete` index of an `ObjectAction`; `ValueError` for a field out of range."""
+    op, i, m, g, j, s = action
+    ranges = {"pick": (_M, _G, None, None), "place": (None, None, _K + _R, None),
+              "slide": (_M, _G, None, _S)}  # fmt: skip
+    if op not in ranges or not 0 <= i < _K:
+        raise ValueError(f"not an object action: {action!r}")
+    for value, n in zip((m, g, j, s), ranges[op], strict=True):
+        if (n is None) != (value is None) or (n is not None and not 0 <= value < n):  # type: ignore[operator]
+            raise ValueError(f"field out of range in {action!r}")
+    if op == "pick":
+        return (i * _M + m) * _G + g  # type: ignore[operator]
+    if op == "place":
+        return _PLACE0 + i * (_K + _R) + j  # type: ignore[operator]
+    return _SLIDE0 + ((i * _M + m) * _G + g) * _S + s  # type: ignore[operator]
+
+
+def decode(index: int) -> ObjectAction:
+    """The `ObjectAction` of a `Discrete` index (the inverse of `encode`)."""
+    if not 0 <= index < N_ACTIONS:
+        raise ValueError(f"action {index} is out of range [0, {N_ACTIONS})")
+    if index < _PLACE0:
+        (i, m), g = divmod(index // _G, _M), index % _G
+        return ObjectAction("pick", i, m, g)
+    if index < _SLIDE0:
+        i, j = divmod(index - _PLACE0, _K + _R)
+        return ObjectAction("place", i, support=j)
+    rest, s = divmod(index - _SLIDE0, _S)
+    (i, m), g = divmod(rest // _G, _M), rest % _G
+    return ObjectAction("slide", i, m, g, space=s)
+
+
+def declared_type(scene: Scene, name: str) -> ObjectType:
+    """The default attribute source: the object's catalogue type as the scene declares it."""
+    return scene.type_of(name)
+
+
+def member_order(t: ObjectType) -> tuple[str, ...]:
+    """Member names in slot order: the body first, then the type's declared order."""
+    return (t.body.name, *(m for m in t.members if m != t.body.name))
+
+
+def encode_type(t: ObjectType) -> np.ndarray:
+    """Fixed-size float32 attributes of a type (`N_ATTRIBUTES`): mass (kg), material,
+    robustness, movable, bounding-box size and centre, per side its shape, usable size,
+    surface height and food flag, per member its kind, geometry and box (object frame, m)."""
+    out: list[float] = [t.mass]
+    out += [float(t.material == m) for m in _MATERIALS[:-1]]
+    out.append(float(t.material not in MATERIALS))
+    out += [float(t.robustness == r) for r in ROBUSTNESS]
+    out.append(float(t.movable))
+    box = t.bbox
+    out += [float(v) for v in box.size] + [float(v) for v in box.center]
+    for side in SIDES:
+        attrs = t.parts[side]
+        out += [float(attrs.shape == s) for s in SHAPES]
+        out += [*map(float, t.surface_size(side)), float(t.surface_height(side))]
+        out.append(float(attrs.food_surface))
+    names = member_order(t)
+    for k in range(_M):
+        if k >= len(names):
+            out += [0.0] * _MEMBER_WIDTH
+            continue
+        m = t.members[names[k]]
+        out += [1.0, *(float(m.kind == kind) for kind in MEMBER_KINDS)]
+        out += [float(m.geom == g) for g in GEOMS] + [*m.box.min, *m.box.max]
+    return np.asarray(out, np.float32)
+
+
+def observation_space() -> spaces.Dict:
+    """The (fixed) observation space of the objects interface."""
+    k, e = MAX_OBJECTS, N_ENTITIES
+    box = lambda *shape: spaces.Box(-BOUND, BOUND, shape, np.float32)  # noqa: E731
+    return spaces.Dict({
+        "present": spaces.MultiBinary(k), "attributes": box(k, N_ATTRIBUTES),
+        "poses": box(k, 7), "up": spaces.MultiBinary((k, len(SIDES))),
+        "regions": box(MAX_REGIONS, 5), "spaces": box(MAX_SPACES, 5),
+        "held": spaces.MultiBinary(k), "contact": spaces.MultiBinary((e, e, len(PARTS))),
+        "free": spaces.MultiBinary((e, len(PARTS))), "in_workspace": spaces.MultiBinary(e),
+        "member_in_workspace": spaces.MultiBinary((k, MAX_MEMBERS)),
+        "grasp": spaces.MultiBinary((k, MAX_MEMBERS, len(GRASPS))),
+    })  # fmt: skip
+
+
+_FLUENT_KEYS = ("held", "contact", "free", "in_workspace", "member_in_workspace", "grasp")

@@ -1,0 +1,386 @@
+"""The object-centric interface (env option ``interface="objects"``): spaces that do not change
+with the object set, so one policy runs on every scene, split and suite.
+
+Why: the grounded interface numbers the ground actions of one suite's universe, so an agent
+trained there cannot even be run on an object it has not seen. Here every object of a scene
+sits in one of `MAX_OBJECTS` *slots*, described by its attributes, pose and relations, and an
+action is a parametrised macro action over slots: one fixed `Discrete` space with an exact
+mask, whatever the scene.
+
+**Slots.** At every reset the scene's objects take a uniformly random set and order of slots
+(drawn from the env's RNG after everything else the reset draws, so scenes, noise and physics
+match the grounded interface's at equal seeds); empty slots are interleaved, so neither the
+order nor the position of the tray can be memorised. Table regions (the scene's table slots,
+in scene order: they are places, not objects) take `MAX_REGIONS` region indices and free
+spaces `MAX_SPACES` space indices. An object's members are indexed body first, then in the
+type's declared order (`MAX_MEMBERS`).
+
+**Observation** (``Dict``; E = objects + regions + spaces = `N_ENTITIES` entities, in that order):
+
+* ``present`` (K), ``attributes`` (K, `N_ATTRIBUTES`: `encode_type` of each object's type),
+  ``poses`` (K, 7: x, y, z, qw, qx, qy, qz), ``up`` (K, 6: the side facing up, `SIDES`);
+* ``regions`` and ``spaces`` (R / S, 5: present, centre x, y, size x, y);
+* the fluent U-TAMP-2 state, lossless: ``held`` (K: ``oc in hand o``), ``contact`` (E, E, 7:
+  ``oc p a b``, part p of entity a touches b, `PARTS`), ``free`` (E, 7: ``oc p a air``),
+  ``in_workspace`` (E) and ``member_in_workspace`` (K, M), ``grasp`` (K, M, 24:
+  ``isGraspFrom``, `GRASPS`).
+
+The attributes come from one function, ``types(scene, name) -> ObjectType`` (default
+`declared_type`: the catalogue's), so a perception mode can hand in perceived types instead.
+
+**Action** – ``Discrete(n)``, `ObjectAction` fields encoded by `encode` / `decode`:
+``pick`` (object, member, grasp: K·M·24), ``place`` (object, support: an object or a
+region, K·(K+R); the member and grasp are the held ones) and ``slide`` (object, member,
+grasp, space: K·M·24·S). What the rest of a ground action's arguments say (the part an object
+rests on, what it is lifted from) follows from the state. `action_masks()` and
+``info["action_mask"]`` show an index when one of its ground actions is shown by the env's
+mask mode (``affordances``, ``geometric``, ``none``: unchanged meaning); stepping it runs that
+ground action (an applicable one first). An index with no ground action in the scene (an
+empty slot, a grasp no object has) fails like an unapplicable action: nothing changes and
+``info["failure_reason"]`` says why.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import lru_cache
+from typing import NamedTuple
+
+import numpy as np
+from gymnasium import spaces
+
+from utamp_gym.env.object_space import (
+    _FLUENT_KEYS,
+    _G,
+    _GRASP_INDEX,
+    _K,
+    _M,
+    _PLACE0,
+    _R,
+    _S,
+    _SLIDE0,
+    BOUND,
+    GRASPS,
+    INTERFACES,
+    MAX_MEMBERS,
+    MAX_OBJECTS,
+    MAX_REGIONS,
+    MAX_SPACES,
+    N_ACTIONS,
+    N_ATTRIBUTES,
+    N_ENTITIES,
+    OPERATORS,
+    ObjectAction,
+    TypeSource,
+    declared_type,
+    decode,
+    encode,
+    encode_type,
+    member_order,
+    observation_space,
+)
+from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.geometry import PARTS, SIDES
+from utamp_gym.scene.model import Scene
+
+__all__ = [
+    "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SPACES",
+    "N_ACTIONS", "N_ATTRIBUTES", "N_ENTITIES", "OPERATORS", "ObjectAction", "ObjectInterface",
+    "TypeSource", "declared_type", "decode", "encode", "encode_type", "member_order",
+    "observation_space",
+]  # fmt: skip
+
+
+class _Tables(NamedTuple):
+    """A universe's actions and fluent atoms, taken apart by symbol (module docstring)."""
+
+    op: np.ndarray  # (n_actions,) operator index
+    obj: np.ndarray  # symbol id of the moved object
+    member: tuple[str, ...]  # member name (pick, slide)
+    grasp: np.ndarray  # grasp index (pick, slide; 0 for place)
+    support: np.ndarray  # symbol id of the target (place)
+    space: np.ndarray  # symbol id of the space (slide)
+    symbols: tuple[str, ...]  # symbol id -> name
+    atoms: tuple[tuple[str, ...], ...]  # fluent atom -> (predicate, *args)
+
+
+@lru_cache(maxsize=16)
+def _tables(key: UniverseKey) -> _Tables:
+    u = ground_universe(key)
+    ids: dict[str, int] = {"": 0}
+    sym = lambda name: ids.setdefault(name, len(ids))  # noqa: E731
+    ops, objs, members, grasps, supports, spaces_ = [], [], [], [], [], []
+    for action in u.actions:
+        name, *args = action[1:-1].split()
+        obj = args[0]
+        ops.append(("pick-support", "place-support", "slide-support").index(name))
+        objs.append(sym(obj))
+        members.append(args[1][len(obj) + 1 :])
+        grasp = _GRASP_INDEX.get((args[2], args[3], args[4]), -1)
+        grasps.append(grasp)
+        supports.append(sym(args[8]) if name == "place-support" else 0)
+        spaces_.append(sym(args[9]) if name == "slide-support" else 0)
+    atoms = tuple(tuple(a[1:-1].split()) for a in u.fluent_atoms)
+    for a in atoms:
+        for name in a[1:]:
+            sym(name)
+    return _Tables(
+        np.array(ops), np.array(objs), tuple(members), np.array(grasps), np.array(supports),
+        np.array(spaces_), tuple(ids), atoms,
+    )  # fmt: skip
+
+
+class _SceneMap(NamedTuple):
+    """A scene's actions and atoms in terms of its objects' local indices (scene order), so
+    that a reset only has to place the objects in their slots (`place`, vectorised)."""
+
+    types: dict[str, ObjectType]
+    attributes: np.ndarray  # (n objects, N_ATTRIBUTES): `encode_type` in scene order
+    op: np.ndarray  # per universe action: operator
+    obj: np.ndarray  # local index of the moved object (-1: not in the scene)
+    member: np.ndarray  # member index (-1: none)
+    grasp: np.ndarray  # grasp index (-1: not one of GRASPS)
+    support_obj: np.ndarray  # place: local index of the supporting object, else -1
+    support_fixed: np.ndarray  # place: K + region index of a table region, else -1
+    space: np.ndarray  # slide: space index, else -1
+    kind: np.ndarray  # per fluent atom: which observation entry (-1: none), see `place`
+    a_obj: np.ndarray  # its first entity: local object index, or -1
+    a_fixed: np.ndarray  # ... or a fixed entity (region, space), or -1
+    b_obj: np.ndarray  # its second entity (or the grasping object)
+    b_fixed: np.ndarray
+    extra: np.ndarray  # part index, member index or grasp index, by kind
+    extra2: np.ndarray  # grasp atoms: the grasp index
+    offsets: Mapping[str, int]
+
+    @staticmethod
+    def of(t: _Tables, scene: Scene, source: TypeSource, offsets: Mapping[str, int]) -> _SceneMap:
+        names = scene.object_names
+        types = {n: source(scene, n) for n in names}
+        for n, typ in types.items():
+            if len(typ.members) > _M:
+                raise ValueError(
+                    f"object '{n}' of scene '{scene.name}' has {len(typ.members)} members; the "
+                    f"objects interface has room for {_M} (utamp_gym.env.objects.MAX_MEMBERS)"
+                )
+        n_sym = len(t.symbols)
+        sid = {s: i for i, s in enumerate(t.symbols)}
+        loc, fixed = np.full(n_sym, -1), np.full(n_sym, -1)
+        member, owner = np.full(n_sym, -1), np.full(n_sym, -1)
+        for i, n in enumerate(names):
+            if n in sid:
+                loc[sid[n]] = i
+            for k, m in enumerate(member_order(types[n])):
+                if f"{n}-{m}" in sid:
+                    member[sid[f"{n}-{m}"]], owner[sid[f"{n}-{m}"]] = k, i
+        for r, region in enumerate(scene.slots):
+            if region.name in sid:
+                fixed[sid[region.name]] = _K + r
+        for s, space in enumerate(scene.spaces):
+            if space.name in sid:
+                fixed[sid[space.name]] = _K + _R + s
+        midx = np.array([
+            member_order(types[t.symbols[o]]).index(m) if loc[o] >= 0
+            and m in types[t.symbols[o]].members else -1
+            for o, m in zip(t.obj, t.member, strict=True)
+        ])  # fmt: skip
+        space = np.where(fixed[t.space] >= _K + _R, fixed[t.space] - _K - _R, -1)
+        part = {p: i for i, p in enumerate(PARTS)}
+        n_atoms = len(t.atoms)
+        kind, a_obj, a_fixed = np.full(n_atoms, -1), np.full(n_atoms, -1), np.full(n_atoms, -1)
+        b_obj, b_fixed = np.full(n_atoms, -1), np.full(n_atoms, -1)
+        extra, extra2 = np.zeros(n_atoms, int), np.zeros(n_atoms, int)
+        for j, (pred, *args) in enumerate(t.atoms):
+            if pred == "isgraspfrom":
+                g = _GRASP_INDEX.get(tuple(args[2:]))
+                o, m = sid[args[0]], sid[args[1]]
+                if loc[o] >= 0 and member[m] >= 0 and g is not None:
+                    kind[j], a_obj[j], extra[j], extra2[j] = 5, loc[o], member[m], g
+                continue
+            p, a, b = args
+            ia, ib = sid[a], sid[b]
+            if a == "hand":
+                kind[j], b_obj[j] = 0, loc[ib]
+            elif a == "workspace" and (loc[ib] >= 0 or fixed[ib] >= 0):
+                kind[j], b_obj[j], b_fixed[j] = 1, loc[ib], fixed[ib]
+            elif a == "workspace" and member[ib] >= 0:
+                kind[j], a_obj[j], extra[j] = 2, owner[ib], member[ib]
+            elif b == "air":
+                kind[j], a_obj[j], a_fixed[j], extra[j] = 3, loc[ia], fixed[ia], part[p]
+            else:
+                kind[j], a_obj[j], a_fixed[j], extra[j] = 4, loc[ia], fixed[ia], part[p]
+                b_obj[j], b_fixed[j] = loc[ib], fixed[ib]
+        attributes = np.array([encode_type(types[n]) for n in names], np.float32)
+        return _SceneMap(
+            types, attributes, t.op, loc[t.obj], midx, t.grasp, loc[t.support],
+            fixed[t.support], space, kind, a_obj, a_fixed, b_obj, b_fixed, extra, extra2,
+            offsets,
+        )  # fmt: skip
+
+    def place(self, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(per universe action its index, per fluent atom its flat observation position; -1
+        for none) with local object i in slot ``slots[i]``."""
+        at = np.append(np.asarray(slots), -1)  # at[-1] = -1: "not in the scene" stays -1
+        slot, m, g = at[self.obj], self.member, self.grasp
+        support = np.where(self.support_obj >= 0, at[self.support_obj], self.support_fixed)
+        pick = (slot * _M + m) * _G + g
+        place = _PLACE0 + slot * (_K + _R) + support
+        slide = _SLIDE0 + ((slot * _M + m) * _G + g) * _S + self.space
+        member_ok = (m >= 0) & (m < _M)
+        valid = (
+            (slot >= 0)
+            & (g >= 0)
+            & np.choose(self.op, [member_ok, support >= 0, member_ok & (self.space >= 0)])
+        )
+        index = np.where(valid, np.choose(self.op, [pick, place, slide]), -1)
+        off, e, n_p = self.offsets, N_ENTITIES, len(PARTS)
+        ea = np.where(self.a_obj >= 0, at[self.a_obj], self.a_fixed)
+        eb = np.where(self.b_obj >= 0, at[self.b_obj], self.b_fixed)
+        x, kind = self.extra, self.kind
+        pos = np.select(
+            [kind == 0, kind == 1, kind == 2, kind == 3, kind == 4, kind == 5],
+            [off["held"] + eb, off["in_workspace"] + eb,
+             off["member_in_workspace"] + ea * _M + x, off["free"] + ea * n_p + x,
+             off["contact"] + (ea * e + eb) * n_p + x,
+             off["grasp"] + (ea * _M + x) * _G + self.extra2],
+            -1,
+        )  # fmt: skip
+        ok = np.select(
+            [kind == 0, kind == 1, kind == 2, kind == 3, kind == 4, kind == 5],
+            [eb >= 0, eb >= 0, ea >= 0, ea >= 0, (ea >= 0) & (eb >= 0), ea >= 0],
+            False,
+        )
+        return index, np.where(ok, pos, -1)
+
+
+class ObjectInterface:
+    """Translates between a kitchen env's ground universe and the fixed object-centric spaces
+    for one episode at a time (`reset`); see the module docstring."""
+
+    def __init__(self, universe: Universe, types: TypeSource = declared_type) -> None:
+        self.universe, self.types = universe, types
+        self.observation_space = observation_space()
+        self.action_space = spaces.Discrete(N_ACTIONS)
+        self._shapes = {k: self.observation_space[k].shape for k in _FLUENT_KEYS}
+        sizes = [int(np.prod(s)) for s in self._shapes.values()]
+        self._offsets = dict(zip(_FLUENT_KEYS, np.cumsum([0, *sizes[:-1]]).tolist(), strict=True))
+        self._size = sum(sizes)
+        self.slots: dict[str, int] = {}  # object name -> slot, this episode
+        self._static: dict[str, np.ndarray] = {}
+        self._maps: dict[str, _SceneMap] = {}  # per scene: what does not depend on the slots
+
+    def __getstate__(self) -> dict[str, object]:
+        state = self.__dict__.copy()
+        state["universe"] = self.universe.key
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
+        self.__dict__.update(state)
+
+    # ------------------------------------------------------------------ episode
+    def reset(self, scene: Scene, rng: np.random.Generator) -> None:
+        """Assign the scene's objects to random slots and map the universe onto them."""
+        names = scene.object_names
+        limits = {"objects": (len(names), _K, "MAX_OBJECTS"),
+                  "table slots": (len(scene.slots), _R, "MAX_REGIONS"),
+                  "free spaces": (len(scene.spaces), _S, "MAX_SPACES")}  # fmt: skip
+        for what, (n, cap, const) in limits.items():
+            if n > cap:
+                raise ValueError(
+                    f"scene '{scene.name}' has {n} {what}; the objects interface has room for "
+                    f"{cap} (utamp_gym.env.objects.{const})"
+                )
+        order = rng.permutation(_K)[: len(names)]
+        self.scene, self.slots = scene, {n: int(s) for n, s in zip(names, order, strict=True)}
+        cached = self._maps.get(scene.name) if self.types is declared_type else None
+        if cached is None:
+            cached = _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
+            if self.types is declared_type:  # declared types are fixed per scene
+                self._maps[scene.name] = cached
+        self._index, self._atom_pos = cached.place(order)
+        order_ = np.argsort(self._index, kind="stable")
+        self._sorted = order_[self._index[order_] >= 0]
+        self._starts = np.searchsorted(self._index[self._sorted], np.arange(N_ACTIONS + 1))
+        self._static_obs(scene, cached.attributes, order)
+
+    def _static_obs(self, scene: Scene, attributes: np.ndarray, slots: np.ndarray) -> None:
+        attrs = np.zeros((_K, N_ATTRIBUTES), np.float32)
+        present = np.zeros(_K, np.int8)
+        attrs[slots], present[slots] = attributes, 1
+        regions = np.zeros((_R, 5), np.float32)
+        for r, region in enumerate(scene.slots):
+            (x0, y0, _), (x1, y1, _) = region.region
+            regions[r] = (1.0, *region.position, x1 - x0, y1 - y0)
+        free = np.zeros((_S, 5), np.float32)
+        for s, space in enumerate(scene.spaces):
+            free[s] = (1.0, *space.position, *space.size)
+        self._static = {"present": present, "attributes": attrs, "regions": regions,
+                        "spaces": free}  # fmt: skip
+
+    # ------------------------------------------------------------------ per step
+    def mask(self, ground_mask: np.ndarray) -> np.ndarray:
+        """The object-centric mask: an index is shown if one of its ground actions is."""
+        out = np.zeros(N_ACTIONS, bool)
+        shown = self._index[ground_mask]
+        out[shown[shown >= 0]] = True
+        return out
+
+    def index_of(self, ground: int) -> int:
+        """The index of universe action `ground` in this episode (-1: not in this scene)."""
+        return int(self._index[ground])
+
+    def ground_actions(self, index: int) -> np.ndarray:
+        """The universe ids of index `index` in this episode (often one; none if absent)."""
+        return self._sorted[self._starts[index] : self._starts[index + 1]]
+
+    def resolve(self, index: int, shown: np.ndarray, applicable: np.ndarray) -> int | None:
+        """The ground action to run for `index`: shown and applicable, else shown, else the
+        first; None if the index has no ground action in this scene."""
+        ids = self.ground_actions(index)
+        if not ids.size:
+            return None
+        for want in (shown[ids] & applicable[ids], shown[ids]):
+            if want.any():
+                return int(ids[np.argmax(want)])
+        return int(ids[0])
+
+    def describe(self, index: int) -> str:
+        """A readable name of an index (for failure reasons)."""
+        a = decode(index)
+        where = {s: n for n, s in self.slots.items()}
+        parts = [f"{a.operator} slot {a.obj} ({where.get(a.obj, 'empty')})"]
+        if a.member is not None:
+            parts.append(f"member {a.member}, grasp {'/'.join(GRASPS[a.grasp or 0])}")
+        if a.support is not None:
+            parts.append(f"onto {'slot' if a.support < _K else 'region'} "
+                         f"{a.support if a.support < _K else a.support - _K}")  # fmt: skip
+        if a.space is not None:
+            parts.append(f"into space {a.space}")
+        return ", ".join(parts)
+
+    def observation(
+        self, fluent: np.ndarray, static_atoms: frozenset[str], poses: Mapping[str, np.ndarray]
+    ) -> dict[str, np.ndarray]:
+        """The observation from the state's fluent vector (over the universe), its static
+        atoms (for the up-facing sides) and the objects' poses by name."""
+        flat = np.zeros(self._size, np.int8)
+        pos = self._atom_pos[fluent.astype(bool)]
+        flat[pos[pos >= 0]] = 1
+        obs = {k: v.copy() for k, v in self._static.items()}
+        for k in _FLUENT_KEYS:
+            n = int(np.prod(self._shapes[k]))
+            obs[k] = flat[self._offsets[k] : self._offsets[k] + n].reshape(self._shapes[k])
+        up = np.zeros((_K, len(SIDES)), np.int8)
+        for atom in static_atoms:
+            if atom.startswith("(force "):
+                _, name, side = atom[1:-1].split()
+                if name in self.slots and side in SIDES:
+                    up[self.slots[name], SIDES.index(side)] = 1
+        obs["up"] = up
+        p = np.zeros((_K, 7), np.float32)
+        for name, slot in self.slots.items():
+            if name in poses:
+                p[slot] = poses[name]
+        obs["poses"] = p
+        return obs

@@ -1,0 +1,93 @@
+"""`KitchenViews`: what a kitchen env's state looks like from outside, read-only.
+
+Why a module of its own: `UTampKitchenEnv` (`utamp_gym.env.kitchen`) is the Gymnasium loop;
+these properties only read what the loop keeps (the scene, the symbolic state, the last
+step's physics), and are what planners, evaluations and tests query between steps.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from utamp_gym.env.atoms import parse_atom
+
+if TYPE_CHECKING:
+    from utamp_gym.backend import MacroResult, PhysicsBackend
+    from utamp_gym.env.objects import ObjectInterface
+    from utamp_gym.env.physics import PhysicalGrounding
+    from utamp_gym.env.state import SymbolicState
+    from utamp_gym.env.universe import Universe
+    from utamp_gym.perception.abstraction import Perception
+    from utamp_gym.scene.model import Scene
+
+
+class KitchenViews:
+    """Read-only views of a kitchen env (mixed into `UTampKitchenEnv`)."""
+
+    universe: Universe
+    _scene: Scene | None
+    _state: SymbolicState
+    _objects: ObjectInterface | None
+    _backend: PhysicsBackend | None
+    _physics: PhysicalGrounding | None
+    _last: tuple[MacroResult | None, tuple[str, ...]]
+
+    @property
+    def scene(self) -> Scene:
+        """The scene of the current episode."""
+        if self._scene is None:
+            raise RuntimeError("no episode yet: call reset() first")
+        return self._scene
+
+    @property
+    def action_strings(self) -> tuple[str, ...]:
+        """The PDDL string of every action id."""
+        return self.universe.actions
+
+    @property
+    def symbolic_atoms(self) -> tuple[str, ...]:
+        """The fluent atom of every ``symbolic`` observation entry (predicates as declared)."""
+        return tuple(self.universe.domain.show(parse_atom(a)) for a in self.universe.fluent_atoms)
+
+    @property
+    def static_atoms(self) -> frozenset[str]:
+        """The current episode's static atoms (affordances, geometry), lower-case PDDL."""
+        return self._state.static_atoms
+
+    def true_atoms(self) -> list[str]:
+        """The fluent atoms that hold now, lower-case PDDL."""
+        return self._state.true_atoms()
+
+    @property
+    def objects(self) -> ObjectInterface | None:
+        """The object-centric interface (``interface="objects"``; None otherwise)."""
+        return self._objects
+
+    @property
+    def backend(self) -> PhysicsBackend | None:
+        """The physics backend (None in symbolic grounding), e.g. to read measured towers."""
+        return self._backend
+
+    @property
+    def macro_result(self) -> MacroResult | None:
+        """The last step's `MacroResult` (None: no macro action reached the simulator)."""
+        return self._last[0]
+
+    @property
+    def unexpected_atoms(self) -> list[str]:
+        """The last step's unexpected atoms (``"+ATOM"`` / ``"-ATOM"``, sorted)."""
+        return list(self._last[1])
+
+    @property
+    def anomalies(self) -> dict[str, str]:
+        """The objects without a symbol now, with the reason (physics grounding)."""
+        return self._anomalies()
+
+    @property
+    def perception(self) -> Perception | None:
+        """The last perceived state (physics grounding; None in symbolic grounding)."""
+        return None if self._physics is None else self._physics.perception
+
+    def _anomalies(self) -> dict[str, str]:
+        perception = self.perception
+        return {} if perception is None else dict(perception.anomalies)

@@ -1,0 +1,183 @@
+"""An object-centric policy for the objects interface: a relational transformer over slots.
+
+Why: an agent that must act on objects it has not seen, in numbers it has not seen, needs a
+network that treats every object slot alike. `SlotEncoder` (an SB3 features extractor) turns
+each object, table region and free space into a token from its own attributes, pose and
+relations, and runs `N_LAYERS` of self-attention whose scores get a learned bias from the
+pair's contact relations (``contact[i, j]`` and ``contact[j, i]``), with absent slots masked
+out. `SlotActionHead` scores every index of the objects interface from the tokens it names:
+a pick from the object's token, a place from the (object, support) pair, a slide from the
+(object, space) pair; the value comes from the mean of the present tokens. So the network is
+equivariant to slot order and its size does not depend on the scene.
+
+`SlotPolicy` is MaskablePPO's policy with this extractor and these heads (SB3 saves it by
+reference, so `MaskablePPO.load` finds it wherever `utamp_gym` is installed); behaviour
+cloning (`utamp_gym.rl.bc`) trains the same class.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from sb3_contrib.common.maskable.policies import MaskableMultiInputActorCriticPolicy
+from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
+from torch import nn
+
+from utamp_gym.env.objects import (
+    GRASPS,
+    MAX_MEMBERS,
+    MAX_OBJECTS,
+    MAX_REGIONS,
+    MAX_SPACES,
+    N_ACTIONS,
+    N_ATTRIBUTES,
+    N_ENTITIES,
+)
+from utamp_gym.rl.policies import _TrainedKeys
+from utamp_gym.scene.geometry import PARTS, SIDES
+
+D_MODEL = 64
+N_HEADS = 4
+N_LAYERS = 2
+_K, _R, _S, _M, _G = MAX_OBJECTS, MAX_REGIONS, MAX_SPACES, MAX_MEMBERS, len(GRASPS)
+_P = len(PARTS)
+#: per object: attributes, pose, up side, held, free parts, in workspace, members there, grasp
+OBJECT_WIDTH = N_ATTRIBUTES + 7 + len(SIDES) + 1 + _P + 1 + _M + _M * _G
+PLACE_WIDTH = 5 + _P + 1  # regions and spaces: geometry, free parts, in workspace
+
+
+class _Block(nn.Module):
+    """Pre-norm self-attention with a per-head bias from pair features, then an MLP."""
+
+    def __init__(self, d: int, heads: int, pair_width: int) -> None:
+        super().__init__()
+        self.heads, self.dh = heads, d // heads
+        self.norm1, self.norm2 = nn.LayerNorm(d), nn.LayerNorm(d)
+        self.qkv, self.out = nn.Linear(d, 3 * d), nn.Linear(d, d)
+        self.bias = nn.Linear(pair_width, heads)
+        self.mlp = nn.Sequential(nn.Linear(d, 2 * d), nn.ReLU(), nn.Linear(2 * d, d))
+
+    def forward(self, x: th.Tensor, pairs: th.Tensor, keep: th.Tensor) -> th.Tensor:
+        b, n, d = x.shape
+        q, k, v = self.qkv(self.norm1(x)).view(b, n, 3, self.heads, self.dh).unbind(2)
+        scores = th.einsum("bihd,bjhd->bhij", q, k) / math.sqrt(self.dh)
+        scores = scores + self.bias(pairs).permute(0, 3, 1, 2)
+        scores = scores.masked_fill(~keep[:, None, None, :], -1e9)
+        att = th.einsum("bhij,bjhd->bihd", scores.softmax(-1), v).reshape(b, n, d)
+        x = x + self.out(att)
+        return x + self.mlp(self.norm2(x))
+
+
+class SlotEncoder(BaseFeaturesExtractor):
+    """Tokens of the objects interface's observation, encoded (module docstring).
+
+    Features: the `N_ENTITIES` tokens (objects, regions, spaces) of width `d_model`, flat,
+    followed by the mean of the present tokens.
+    """
+
+    def __init__(
+        self, observation_space: spaces.Dict, d_model: int = D_MODEL, n_layers: int = N_LAYERS
+    ) -> None:
+        super().__init__(observation_space, features_dim=(N_ENTITIES + 1) * d_model)
+        self.d_model = d_model
+        self.objects = nn.Sequential(nn.Linear(OBJECT_WIDTH, d_model), nn.ReLU())
+        self.places = nn.Sequential(nn.Linear(PLACE_WIDTH, d_model), nn.ReLU())
+        self.kind = nn.Parameter(th.zeros(3, d_model))  # object, region, space
+        self.blocks = nn.ModuleList(_Block(d_model, N_HEADS, 2 * _P) for _ in range(n_layers))
+        self.norm = nn.LayerNorm(d_model)
+
+    def forward(self, obs: dict[str, th.Tensor]) -> th.Tensor:
+        b = obs["present"].shape[0]
+        free, ws = obs["free"], obs["in_workspace"][..., None]
+        objects = th.cat([
+            obs["attributes"], obs["poses"], obs["up"], obs["held"][..., None], free[:, :_K],
+            ws[:, :_K], obs["member_in_workspace"], obs["grasp"].reshape(b, _K, -1),
+        ], -1)  # fmt: skip
+        places = th.cat([th.cat([obs["regions"], obs["spaces"]], 1), free[:, _K:], ws[:, _K:]], -1)
+        x = th.cat([self.objects(objects), self.places(places)], 1)
+        kind = th.cat([self.kind[0].expand(_K, -1), self.kind[1].expand(_R, -1),
+                       self.kind[2].expand(_S, -1)])  # fmt: skip
+        x = x + kind
+        keep = th.cat([obs["present"], obs["regions"][..., 0], obs["spaces"][..., 0]], 1) > 0.5
+        contact = obs["contact"]
+        pairs = th.cat([contact, contact.transpose(1, 2)], -1)
+        for block in self.blocks:
+            x = block(x, pairs, keep)
+        x = self.norm(x) * keep[..., None]
+        pooled = x.sum(1) / keep.sum(1, keepdim=True).clamp(min=1)
+        return th.cat([x.reshape(b, -1), pooled], 1)
+
+
+def _split(features: th.Tensor, d: int) -> tuple[th.Tensor, th.Tensor]:
+    b = features.shape[0]
+    return features[:, : N_ENTITIES * d].reshape(b, N_ENTITIES, d), features[:, N_ENTITIES * d :]
+
+
+class SlotActionHead(nn.Module):
+    """Logits of every objects-interface index from the tokens it names (module docstring)."""
+
+    def __init__(self, d: int) -> None:
+        super().__init__()
+        self.d = d
+        self.pick = nn.Sequential(nn.Linear(2 * d, d), nn.ReLU(), nn.Linear(d, _M * _G))
+        self.place = nn.Sequential(nn.Linear(4 * d, d), nn.ReLU(), nn.Linear(d, 1))
+        self.slide = nn.Sequential(nn.Linear(3 * d, d), nn.ReLU(), nn.Linear(d, _M * _G))
+
+    def forward(self, features: th.Tensor) -> th.Tensor:
+        x, g = _split(features, self.d)
+        b, d = x.shape[0], self.d
+        obj, supports, space = x[:, :_K], x[:, : _K + _R], x[:, _K + _R :]
+        ctx = g[:, None].expand(b, _K, d)
+        pick = self.pick(th.cat([obj, ctx], -1)).reshape(b, -1)  # (i, m, g)
+        oi = obj[:, :, None].expand(b, _K, _K + _R, d)
+        sj = supports[:, None].expand(b, _K, _K + _R, d)
+        gp = g[:, None, None].expand(b, _K, _K + _R, d)
+        place = self.place(th.cat([oi, sj, oi * sj, gp], -1)).reshape(b, -1)  # (i, j)
+        oi = obj[:, :, None].expand(b, _K, _S, d)
+        sp = space[:, None].expand(b, _K, _S, d)
+        gs = g[:, None, None].expand(b, _K, _S, d)
+        slide = self.slide(th.cat([oi, sp, gs], -1))  # (i, s, m*g) -> (i, m, g, s)
+        slide = slide.permute(0, 1, 3, 2).reshape(b, -1)
+        logits = th.cat([pick, place, slide], 1)
+        assert logits.shape[1] == N_ACTIONS
+        return logits
+
+
+class _Value(nn.Module):
+    def __init__(self, d: int) -> None:
+        super().__init__()
+        self.d = d
+        self.net = nn.Sequential(nn.Linear(d, d), nn.ReLU(), nn.Linear(d, 1))
+
+    def forward(self, features: th.Tensor) -> th.Tensor:
+        return self.net(_split(features, self.d)[1])
+
+
+class SlotPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
+    """MaskablePPO's policy over the objects interface: `SlotEncoder` and the slot heads."""
+
+    utamp_algo = "maskable-ppo"
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("features_extractor_class", SlotEncoder)
+        kwargs["net_arch"] = []  # the heads read the tokens themselves
+        super().__init__(*args, **kwargs)
+
+    def _build(self, lr_schedule: Any) -> None:
+        super()._build(lr_schedule)
+        d = self.features_extractor.d_model
+        self.action_net = SlotActionHead(d)
+        self.value_net = _Value(d)
+        for module in (*self.action_net.modules(), *self.value_net.modules()):
+            self.init_weights(module, gain=np.sqrt(2))  # orthogonal, as SB3 does
+        head = self.action_net
+        for last in (head.pick[-1], head.place[-1], head.slide[-1]):
+            self.init_weights(last, gain=0.01)  # near-uniform first policy
+        self.init_weights(self.value_net.net[-1], gain=1.0)
+        self.optimizer = self.optimizer_class(
+            self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs
+        )
