@@ -224,3 +224,26 @@ def test_utamp2_perceived_closed_loop_in_symbolic_grounding() -> None:
     out = run_closed_loop("kitchen-demo", "utamp2-perceived", grounding="symbolic")
     assert out.success, out.failure
     assert out.actions and all("seen" not in a for a in out.actions)
+
+
+def test_an_rgbd_env_pickles_mid_episode() -> None:
+    """The cameras' renderers are not pickled; the clone makes its own and sees the same."""
+    import pickle
+
+    import gymnasium as gym
+
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()
+    env = gym.make("UTampKitchen-v0", num_objects=3, perception="rgbd")
+    _, info = env.reset(seed=0)
+    env.step(int(np.flatnonzero(info["action_mask"])[0]))
+    clone = pickle.loads(pickle.dumps(env))
+    rng = np.random.default_rng(0)
+    for _ in range(2):
+        action = rng.choice(np.flatnonzero(env.unwrapped.action_masks()))
+        one, two = env.step(action), clone.step(action)
+        assert one[1] == two[1] and one[4]["macro_result"] == two[4]["macro_result"]
+        assert np.allclose(one[0]["object_poses"], two[0]["object_poses"], atol=1e-6)
+    env.close()
+    clone.close()
