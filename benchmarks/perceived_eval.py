@@ -15,11 +15,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 from pathlib import Path
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 from utamp_gym.eval.intervals import wilson_interval
 from utamp_gym.eval.records import ResultRow

@@ -27,8 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-
 from utamp_gym.perception.objects import perceive_objects
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.seeding import run_seed

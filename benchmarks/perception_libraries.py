@@ -45,9 +45,6 @@ def _median_ms(f, repeats: int = REPEATS) -> tuple[float, object]:
 
 def dump(path: Path) -> None:
     """Render the survey of pick-place/072 and the acting look; keep what both sides need."""
-    import os
-
-    os.environ.setdefault("MUJOCO_GL", "egl")
     from utamp_gym.perception.cloud import fuse
     from utamp_gym.perception.poses import icp_pose
     from utamp_gym.seeding import run_seed
