@@ -56,10 +56,13 @@ def noise_sweep(args: argparse.Namespace) -> None:
     from utamp_gym.eval.sweep import SweepConfig, run_sweep
 
     out = Path(args.out)
+    levels = (
+        NOISE_LEVELS if args.levels is None else tuple(float(v) for v in args.levels.split(","))
+    )
     table: dict[tuple[str, float], list[bool]] = collections.defaultdict(list)
     reasons: dict[float, collections.Counter[str]] = collections.defaultdict(collections.Counter)
     for suite in args.suites.split(","):
-        for noise in NOISE_LEVELS:
+        for noise in levels:
             seeds = args.seeds if noise == DEFAULT_POSE_NOISE else 1
             cfg = SweepConfig(
                 suite, (args.method,), seeds=seeds, pose_noise=noise, explain=False,
@@ -72,15 +75,27 @@ def noise_sweep(args: argparse.Namespace) -> None:
                     reasons[noise][_reason(r.failure_reason)] += 1
             ok = table[(suite, noise)]
             print(f"{suite} noise {noise * 1000:g} mm: {sum(ok)}/{len(ok)}", flush=True)
-    print(f"\n## Physics success vs pose-estimation noise, {args.method}")
-    print("| suite | noise (mm) | seeds | episodes | success |\n|---|---|---|---|---|")
+    lines = [
+        f"## Physics success vs pose-estimation noise, {args.method} (with the wrist re-look)",
+        "",
+        "| suite | noise (mm) | seeds | episodes | success |",
+        "|---|---|---|---|---|",
+    ]
     for (suite, noise), ok in sorted(table.items()):
         seeds = args.seeds if noise == DEFAULT_POSE_NOISE else 1
-        print(f"| {suite} | {noise * 1000:g} | {seeds} | {len(ok)} | {sum(ok) / len(ok):.3f} |")
+        lines.append(
+            f"| {suite} | {noise * 1000:g} | {seeds} | {len(ok)} | {sum(ok)}/{len(ok)} "
+            f"({sum(ok) / len(ok):.3f}) |"
+        )
     for noise, counts in sorted(reasons.items()):
-        print(f"\nfailures at {noise * 1000:g} mm:")
-        for reason, count in counts.most_common():
-            print(f"- {reason}: {count}")
+        lines += ["", f"Failures at {noise * 1000:g} mm:", ""]
+        lines += [f"* {reason}: {count}" for reason, count in counts.most_common()]
+    print("\n" + "\n".join(lines))
+    if args.results is not None:
+        args.results.mkdir(parents=True, exist_ok=True)
+        path = args.results / "pose_noise_relook.md"
+        path.write_text("\n".join(lines) + "\n")
+        print(f"wrote {path}")
     _plot_noise(table, out / "success_vs_pose_noise.png")
 
 
@@ -124,6 +139,8 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--limit", type=int, default=None, help="noise sweep: first N scenes")
     ap.add_argument("--out", default="out/bench/pose_noise", help="noise sweep: rows here")
+    ap.add_argument("--levels", help="noise sweep: these levels (m, comma-separated)")
+    ap.add_argument("--results", type=Path, help="noise sweep: also write the table here")
     args = ap.parse_args()
     if args.pose_noise:
         noise_sweep(args)

@@ -107,9 +107,8 @@ def test_timeout_is_reported_and_no_planner_survives() -> None:
 
 
 def test_unknown_method_lists_valid_ones() -> None:
-    with pytest.raises(
-        UnknownNameError, match="valid: utamp1, utamp2-gt, utamp2-noisy, utamp2-rules"
-    ):
+    valid = "valid: utamp1, utamp2-gt, utamp2-noisy, utamp2-perceived, utamp2-rules"
+    with pytest.raises(UnknownNameError, match=valid):
         plan_scene(resolve_scene("kitchen-demo"), "magic")
 
 

@@ -302,11 +302,14 @@ PICK_MUG = "(pick-support mug mug-body under left right back under slot4 on on)"
 
 
 @physics
-def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, demo):
-    """The robot believes the inverted mug 2 cm off along the finger axis: a finger lands on
-    its rim and holds the hand centimetres short of the grasp pose, the hand backs off,
-    looks again and grasps the mug it left standing; with the true belief no retry is
-    needed."""
+def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, demo, monkeypatch):
+    """The robot believes the inverted mug 2 cm off along the finger axis: with the wrist
+    camera's re-aim switched off, a finger lands on its rim and holds the hand centimetres
+    short of the grasp pose, the hand backs off, looks again and grasps the mug it left
+    standing; with the true belief no retry is needed."""
+    from utamp_gym.sim import relook
+
+    monkeypatch.setattr(relook, "aim_grasp", lambda st, obj, plan, replan: plan)
     backend.reset(demo, np.random.default_rng(0))
     assert backend.execute(PICK_MUG).retries == ()
     backend.reset(demo, np.random.default_rng(0))
@@ -316,6 +319,46 @@ def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, de
     assert len(res.retries) == 1
     assert "the hand stopped short of the body of mug" in res.retries[0]
     assert backend.state.held is not None and backend.state.held.obj == "mug"
+
+
+@physics
+def test_the_wrist_camera_re_aims_a_grasp_before_the_descent(backend, demo):
+    """The same wrong belief, with the wrist camera: its close look at the pre-grasp pose
+    corrects the aim, and the grasp succeeds at once (no finger lands on the rim)."""
+    backend.reset(demo, np.random.default_rng(0))
+    backend.state.estimator.offset("mug", np.array([0.0, 0.02, 0.0]), 0.0)
+    res = backend.execute(PICK_MUG)
+    assert res.success, res.reason
+    assert res.retries == ()
+    assert "mug" not in backend.state.estimator.offsets  # the close look ended the belief
+
+
+@physics
+def test_the_wrist_camera_aborts_a_grasp_whose_object_moved(backend, demo, monkeypatch):
+    """The shaker is pushed 2.5 cm aside while the hand descends onto it (as a finger would
+    push a light shaker): the wrist camera's look before closing sees it outside the open
+    fingers, the hand backs off, and the pick retries after a new look."""
+    from utamp_gym.sim import relook
+
+    original = relook.grasp_offset
+    calls = []
+
+    def pushed(st, sym, g):
+        if not calls:  # the first check: move the shaker before the camera looks
+            adr = st.world.qpos_adr["salt"]
+            st.data.qpos[adr + 1] += 0.025
+            import mujoco
+
+            mujoco.mj_forward(st.world.model, st.data)
+        calls.append(1)
+        return original(st, sym, g)
+
+    monkeypatch.setattr(relook, "grasp_offset", pushed)
+    backend.reset(demo, np.random.default_rng(0))
+    res = backend.execute(PICK_SALT)
+    assert res.success, res.reason
+    assert len(res.retries) == 1 and "wrist camera saw the body of salt" in res.retries[0]
+    assert backend.state.held is not None and backend.state.held.obj == "salt"
 
 
 def test_a_line_path_splits_at_a_waypoint():

@@ -28,6 +28,11 @@ DEFAULT_BACKEND = "utamp_gym.sim.backend:MujocoBackend"
 #: the yaw estimate's standard deviation scales with it (`yaw_noise_deg`).
 DEFAULT_POSE_NOISE = 0.002
 MAX_POSE_NOISE = 0.05
+#: where the robot's object poses come from (env option ``perception``): ``gaussian``, the
+#: true pose plus `pose_noise` (`utamp_gym.sim.estimate`), or ``rgbd``, the rendered cameras
+#: (`utamp_gym.sim.rgbd`)
+PERCEPTION_MODES = ("gaussian", "rgbd")
+DEFAULT_PERCEPTION = "gaussian"
 
 
 def yaw_noise_deg(pose_noise: float) -> float:

@@ -66,14 +66,19 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
     out = None if args.out is None else output_dir(args.out, "--out")
-    outcome = plan_scene(
-        scene,
-        args.method,
-        seed=args.seed,
-        search=args.search,
-        noise=args.noise,
-        deadline=deadline,
-    )
+    if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
+        from utamp_gym.eval.perceived import plan_perceived
+
+        outcome = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)[0]
+    else:
+        outcome = plan_scene(
+            scene,
+            args.method,
+            seed=args.seed,
+            search=args.search,
+            noise=args.noise,
+            deadline=deadline,
+        )
     if out is not None:
         (out / "domain.pddl").write_text(outcome.domain)
         (out / "problem.pddl").write_text(outcome.problem)
@@ -142,6 +147,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         closed_loop=args.closed_loop,
         disturbance=args.disturbance,
         pose_noise=args.pose_noise,
+        perception=args.perception,
         seed_offset=args.seed_offset,
         scenes=args.scenes,
         shard=None if args.shard is None else parse_shard(args.shard),
@@ -300,14 +306,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return _run_closed_loop(args)
     if args.video:
         output_file(args.video, "--video")
-    result = run_episode(
-        resolve_scene(args.scene),
-        args.method,
-        seed=args.seed,
-        video=args.video,
-        pose_noise=args.pose_noise,
-        disturbance=args.disturbance,
-    )
+    physics = {
+        "seed": args.seed,
+        "video": args.video,
+        "pose_noise": args.pose_noise,
+        "disturbance": args.disturbance,
+        "perception": args.perception,
+    }
+    scene = resolve_scene(args.scene)
+    if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
+        from utamp_gym.eval.perceived import run_perceived_episode
+
+        result = run_perceived_episode(scene, **physics)
+    else:
+        result = run_episode(scene, args.method, **physics)
     data = result.to_dict()
     if args.json:
         data.pop("steps", None)
@@ -338,6 +350,7 @@ def _run_closed_loop(args: argparse.Namespace) -> int:
         seed=args.seed,
         disturbance=args.disturbance,
         pose_noise=args.pose_noise,
+        perception=args.perception,
     )
     if args.json:
         print(json.dumps({"scene": name, "method": args.method, **asdict(result)}, indent=2))
@@ -496,6 +509,13 @@ def _add_physics_options(parser: argparse.ArgumentParser) -> None:
         default=0.0,
         metavar="P",
         help="probability of an injected fault (push, drop, wrong belief) per macro action",
+    )
+    parser.add_argument(
+        "--perception",
+        choices=("gaussian", "rgbd"),
+        default="gaussian",
+        help="where the robot's object poses come from: the true pose plus --pose-noise "
+        "(gaussian, default) or rendered RGB-D cameras (rgbd; --pose-noise then unused)",
     )
 
 

@@ -159,6 +159,14 @@ CONSTANTS = {
     "procedural_unachievable_pct": ("utamp_gym.suites.procedural", "UNACHIEVABLE_SHARE", 100),
     "procedural_free_pct": ("utamp_gym.suites.procedural", "FREE_SHARE", 100),
     "procedural_min_carry_cm": ("utamp_gym.suites.procedural", "MIN_CARRY", 100),
+    "voxel_mm": ("utamp_gym.perception.cloud", "VOXEL", 1000),
+    "cell_mm": ("utamp_gym.perception.grid", "CELL", 1000),
+    "open_fraction": ("utamp_gym.perception.shape", "OPEN_FRACTION", 1),
+    "food_surface_cm": ("utamp_gym.perception.objects", "FOOD_SURFACE", 100),
+    "thin_top_cm": ("utamp_gym.perception.objects", "THIN_TOP", 100),
+    "thin_side_cm": ("utamp_gym.perception.objects", "THIN_SIDE", 100),
+    "close_fraction": ("utamp_gym.sim.estimate", "CLOSE_FRACTION", 1),
+    "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }
 
 

@@ -17,6 +17,7 @@ from gymnasium import spaces
 
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
+    DEFAULT_PERCEPTION,
     DEFAULT_POSE_NOISE,
     MacroResult,
     PhysicsBackend,
@@ -131,8 +132,11 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     * physics only: ``backend`` ("module:Class" or a callable, built as
       ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
       wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per
-      macro step, default 0) and ``pose_noise`` (m, standard deviation of the robot's
-      object-position estimates; `utamp_gym.backend`).
+      macro step, default 0), ``pose_noise`` (m, standard deviation of the robot's
+      object-position estimates; `utamp_gym.backend`) and ``perception`` ("gaussian": the
+      true pose plus ``pose_noise``; "rgbd": the poses and the perceived state's poses come
+      from rendered RGB-D cameras, `utamp_gym.sim.rgbd`; passed to the backend as
+      ``perception=`` when not "gaussian").
 
     **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
     and after every executed step (success or failure) it is *perceived* from the simulator
@@ -187,6 +191,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         disturbance: float = 0.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
         split: str | None = None,
+        perception: str = DEFAULT_PERCEPTION,
         interface: str = "grounded",
     ) -> None:
         kwargs: dict[str, Any] = {
@@ -198,6 +203,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             "backend_kwargs": dict(backend_kwargs or {}), "record_timings": record_timings,
             "masks": masks, "disturbance": disturbance, "pose_noise": pose_noise,
             "split": split,
+            "perception": perception,
             "interface": interface,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option
@@ -233,7 +239,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._physics: PhysicalGrounding | None = None
         if opts.grounding == "physics":
             factory = backend_factory(opts.backend)
-            self._backend = factory(pose_noise=opts.pose_noise, **opts.backend_kwargs)
+            extra = {} if opts.perception == DEFAULT_PERCEPTION else {"perception": opts.perception}
+            self._backend = factory(pose_noise=opts.pose_noise, **extra, **opts.backend_kwargs)
             self._physics = PhysicalGrounding(self._backend, opts.disturbance)
         self._labels = LabelledSchematic(opts.objects)
         self._rendering = Rendering(

@@ -12,7 +12,13 @@ from typing import Any
 
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, MAX_POSE_NOISE
+from utamp_gym.backend import (
+    DEFAULT_BACKEND,
+    DEFAULT_PERCEPTION,
+    DEFAULT_POSE_NOISE,
+    MAX_POSE_NOISE,
+    PERCEPTION_MODES,
+)
 from utamp_gym.env.object_space import INTERFACES
 from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
@@ -93,6 +99,7 @@ class EnvOptions:
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE
     split: str | None = None
+    perception: str = DEFAULT_PERCEPTION
     interface: str = "grounded"
 
     def __post_init__(self) -> None:
@@ -137,6 +144,7 @@ class EnvOptions:
         object.__setattr__(
             self, "pose_noise", _unit("pose_noise (m)", self.pose_noise, MAX_POSE_NOISE)
         )
+        _choice("perception", self.perception, PERCEPTION_MODES)
         if self.num_objects is not None and (
             isinstance(self.num_objects, bool)
             or not isinstance(self.num_objects, int)

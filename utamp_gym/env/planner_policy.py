@@ -107,6 +107,11 @@ class PlannerPolicy:
         self._expected: int | None = None
         self._last: tuple[_State, int] | None = None
 
+    def believe(self, scene: str, facts: Iterable[Fact]) -> None:
+        """Plan scene `scene` with these affordance facts (e.g. perceived ones) instead of
+        the method's own source."""
+        self._facts[scene] = frozenset(facts)
+
     def reset(self) -> None:
         """Start a new episode: forget the plan, the bans and the replan count."""
         self._plan, self._expected, self._last = [], None, None
@@ -147,7 +152,7 @@ class PlannerPolicy:
         opts = self.env.options
         own = "none" if opts.domain == "utamp1" else opts.affordances
         mine = "none" if self.spec.domain == "utamp1" else self.spec.affordances
-        if (opts.domain, own) == (self.spec.domain, mine):
+        if (opts.domain, own) == (self.spec.domain, mine) and scene.name not in self._facts:
             return self.env.static_atoms
         if scene.name not in self._facts:
             self._facts[scene.name] = affordances_for(

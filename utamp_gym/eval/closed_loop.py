@@ -15,6 +15,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+from utamp_gym.backend import DEFAULT_PERCEPTION
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.errors import PlanningError
@@ -50,13 +51,17 @@ def run_closed_loop(
     noise: float = DEFAULT_NOISE,
     timeout: float = 30.0,
     max_steps: int = MAX_STEPS,
+    perception: str = DEFAULT_PERCEPTION,
 ) -> ClosedLoopResult:
-    """Run `method`'s planner policy on `scene` in the env until the episode ends."""
+    """Run `method`'s planner policy on `scene` in the env until the episode ends
+    (`perception`: the env option, where the robot's poses come from in physics)."""
     spec = method_spec(method)
     suite = scene.split("/", 1)[0] if scene.split("/", 1)[0] in SUITES else None
     names = resolve_scene(scene).object_names  # a procedural scene: the universe of its own
     objects = DEFAULT_OBJECTS if set(names) <= set(DEFAULT_OBJECTS) else names
-    physics: dict[str, float] = {} if pose_noise is None else {"pose_noise": pose_noise}
+    physics: dict[str, object] = {} if pose_noise is None else {"pose_noise": pose_noise}
+    if grounding == "physics":
+        physics["perception"] = perception
     env = UTampKitchenEnv(
         suite=suite,
         objects=objects,
@@ -76,6 +81,8 @@ def run_closed_loop(
         # counted as execution, as in `execute_plan`; seeded per (scene, seed) as it is
         obs, info = env.reset(seed=run_seed(resolve_scene(scene).name, seed))
         execution += time.perf_counter() - start
+        if spec.affordances == "perceived":  # look at the episode's world first
+            policy.believe(env.scene.name, _perceived_facts(env, seed))
         for _ in range(max_steps):
             try:
                 action = policy(obs, info)
@@ -106,6 +113,20 @@ def run_closed_loop(
         planning_time_s=planning,
         execution_time_s=execution,
     )
+
+
+def _perceived_facts(env: UTampKitchenEnv, seed: int) -> frozenset:
+    """`utamp2-perceived`'s affordances of the env's scene, perceived in its world (physics)
+    or in the episode's world built for a look (symbolic), in the env's names."""
+    from utamp_gym.eval.perceived import perceive_live, perceive_scene
+    from utamp_gym.planning.methods import plan_affordances
+
+    seen = (
+        perceive_scene(env.scene, seed)
+        if env.backend is None
+        else perceive_live(env.scene, env.backend)
+    )
+    return seen.usable_facts(plan_affordances(seen.planning))
 
 
 def _why_ended(info: dict[str, object]) -> str:

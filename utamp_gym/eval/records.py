@@ -17,13 +17,15 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS
+
 GROUNDINGS = ("physics", "symbolic")
 PLAN_SEPARATOR = " ; "
 #: measured with a clock: they differ between two runs of one task, nothing else may
 TIMING_COLUMNS = ("planning_time_s", "execution_time_s", "wall_time_s")
 
-#: scene, method, seed, grounding, noise, closed_loop, disturbance, pose_noise
-Key = tuple[str, str, int, str, str, bool, str, str]
+#: scene, method, seed, grounding, noise, closed_loop, disturbance, pose_noise, perception
+Key = tuple[str, str, int, str, str, bool, str, str, str]
 KEY_FIELDS = (
     "scene",
     "method",
@@ -33,7 +35,12 @@ KEY_FIELDS = (
     "closed_loop",
     "disturbance",
     "pose_noise",
+    "perception",
 )
+#: how the robot estimates object poses in physics (env option ``perception``; the same as
+#: `utamp_gym.backend.PERCEPTION_MODES`, kept here so that reading results needs no numpy)
+PERCEPTION_MODES = ("gaussian", "rgbd")
+DEFAULT_PERCEPTION = "gaussian"
 
 
 def noise_label(noise: float | None) -> str:
@@ -50,8 +57,10 @@ def row_key(
     closed_loop: bool,
     disturbance: float,
     pose_noise: float | None,
+    perception: str = DEFAULT_PERCEPTION,
 ) -> Key:
-    """The identity of one run: two rows with equal keys are the same run."""
+    """The identity of one run: two rows with equal keys are the same run (the default
+    perception is written as ``""``, so rows from before the option keep their keys)."""
     return (
         scene,
         method,
@@ -61,6 +70,7 @@ def row_key(
         closed_loop,
         noise_label(disturbance),
         noise_label(pose_noise),
+        "" if perception == DEFAULT_PERCEPTION else perception,
     )
 
 
@@ -70,8 +80,10 @@ def key_text(key: Key) -> str:
 
 
 def key_shard(key: Key, n: int) -> int:
-    """The shard (0..n-1) of a run: a stable hash of its key (SHA-256, not the salted hash())."""
-    text = "\x1f".join(_fmt(v) for v in key)
+    """The shard (0..n-1) of a run: a stable hash of its key (SHA-256, not the salted hash());
+    a default (empty) perception is left out, so older sweeps keep their shards."""
+    values = key[:-1] if key[-1] == "" else key
+    text = "\x1f".join(_fmt(v) for v in values)
     return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big") % n
 
 
@@ -86,6 +98,7 @@ class RunIdentity:
     closed_loop: bool
     disturbance: float
     pose_noise: float | None
+    perception: str
 
     @property
     def key(self) -> Key:
@@ -98,6 +111,7 @@ class RunIdentity:
             self.closed_loop,
             self.disturbance,
             self.pose_noise,
+            self.perception,
         )
 
 
@@ -110,7 +124,12 @@ class ResultRow(RunIdentity):
     process died. `closed_loop`: the planner policy acted in the env and replanned from the
     perceived state (`n_replans` times) instead of executing one plan open-loop;
     `disturbance`: the probability of an injected fault per macro step (`n_faults` happened);
-    `pose_noise`: the robot's pose-estimation noise (m; None in symbolic grounding).
+    `pose_noise`: the robot's pose-estimation noise (m; None in symbolic grounding);
+    `perception`: where the robot's object poses come from in physics (``gaussian``: the
+    true pose plus `pose_noise`; ``rgbd``: the cameras). Stage-wise scoring
+    (`utamp_gym.eval.stages`): `failure_stage` names the stage that lost a failed run, the
+    ``acc_*`` columns give the per-attribute accuracy of detected attributes (None for
+    methods that detect none).
     """
 
     scene: str
@@ -138,6 +157,18 @@ class ResultRow(RunIdentity):
     pose_noise: float | None = None
     n_faults: int = 0
     n_replans: int = 0
+    perception: str = DEFAULT_PERCEPTION
+    failure_stage: str = ""
+    acc_body: float | None = None
+    acc_members: float | None = None
+    acc_member_size: float | None = None
+    acc_shape: float | None = None
+    acc_surface: float | None = None
+    acc_height: float | None = None
+    acc_food: float | None = None
+    acc_material: float | None = None
+    acc_mass: float | None = None
+    acc_robustness: float | None = None
 
     def to_csv(self) -> dict[str, str]:
         return {k: _fmt(v) for k, v in asdict(self).items()}
@@ -179,6 +210,9 @@ class ResultRow(RunIdentity):
             pose_noise=_opt_float(d.get("pose_noise", "")),
             n_faults=int(d.get("n_faults") or 0),
             n_replans=int(d.get("n_replans") or 0),
+            perception=d.get("perception") or DEFAULT_PERCEPTION,
+            failure_stage=d.get("failure_stage", ""),
+            **{c: _opt_float(d.get(c, "")) for c in ATTRIBUTE_COLUMNS},
         )
 
 
@@ -269,6 +303,7 @@ def _order(r: ResultRow) -> tuple[Any, ...]:
         r.closed_loop,
         r.disturbance,
         r.pose_noise or 0.0,
+        r.perception,
         r.scene,
         r.seed,
     )

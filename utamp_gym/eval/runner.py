@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import time
 import traceback
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError, UnknownNameError
 from utamp_gym.eval.explain import explain_unsolvable
-from utamp_gym.eval.records import PLAN_SEPARATOR, ResultRow, RunIdentity
+from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
+from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
 from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import (
@@ -62,6 +64,7 @@ class EvalTask(RunIdentity):
     closed_loop: bool = False
     disturbance: float = 0.0
     pose_noise: float | None = None  # physics only
+    perception: str = DEFAULT_PERCEPTION  # physics only: gaussian | rgbd
 
     def settings(self) -> dict[str, object]:
         """The row columns that repeat the task's settings."""
@@ -69,6 +72,7 @@ class EvalTask(RunIdentity):
             "closed_loop": self.closed_loop,
             "disturbance": self.disturbance,
             "pose_noise": self.pose_noise,
+            "perception": self.perception,
         }
 
 
@@ -80,6 +84,7 @@ class _Planned:
     reason: str | None
     scores: Scores | None
     facts: frozenset[Fact] | None  # detected U-TAMP-2 affordances, for explanations
+    accuracy: Mapping[str, float] | None = None  # per attribute (detected attributes)
 
 
 def _suite_of(name: str) -> str:
@@ -100,11 +105,37 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
         return _Planned(
             out.solved, out.plan, out.planning_time_s, out.reason, out.scores, out.facts
         )
+    if task.method == "utamp2-perceived":
+        from utamp_gym.eval.perceived import plan_perceived
+
+        o, seen = plan_perceived(scene, task.seed, timeout=task.timeout)
+        accuracy = None if seen is None else seen.accuracy
+        return _Planned(
+            o.solved, o.plan, o.planning_time_s, o.reason, o.affordance_scores, o.facts, accuracy
+        )
     noise = DEFAULT_NOISE if task.noise is None else task.noise
     o = plan_scene(scene, task.method, seed=task.seed, timeout=task.timeout, noise=noise)
     facts = o.facts if method_spec(task.method).domain == "utamp2" else None
     scores = o.affordance_scores if task.method != "utamp1" else None
-    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts)
+    accuracy = _noisy_accuracy(scene, task.seed, noise) if task.method == "utamp2-noisy" else None
+    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts, accuracy)
+
+
+def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
+    """Per-attribute accuracy of the noisy detector's attributes (the same draws as the
+    detection: `detection_rng`, types in `scene_types` order)."""
+    from utamp_gym.affordances.noisy import corrupt_type
+    from utamp_gym.eval.perceived import attribute_accuracy, mean_accuracy
+    from utamp_gym.planning.methods import detection_rng, scene_types
+
+    rng = detection_rng(seed, scene.name)
+    noisy = {t.name: corrupt_type(t, noise, rng) for t in scene_types(scene)}
+    rows = []
+    for o in scene.objects:
+        declared = scene.type_of(o.name)
+        same = {m: m for m in declared.members}
+        rows.append(attribute_accuracy(noisy[declared.name], declared, same))
+    return mean_accuracy(rows)
 
 
 def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
@@ -149,6 +180,7 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
         pose_noise=task.pose_noise,
         noise=noise,
         timeout=task.timeout,
+        perception=task.perception,
     )
     return _row(
         task,
@@ -179,8 +211,9 @@ def _run(task: EvalTask, start: float) -> ResultRow:
     planned = _plan(scene, task)
     success, failure = False, ""
     valid_gt = None
+    plan = planned.plan
     if planned.solved:
-        check = check_against_ground_truth(scene, planned.plan)
+        check = check_against_ground_truth(scene, plan)
         valid_gt = check.valid
         if task.grounding == "symbolic":
             success = check.valid
@@ -191,10 +224,11 @@ def _run(task: EvalTask, start: float) -> ResultRow:
             assert task.pose_noise is not None
             ex = execute_plan(
                 scene,
-                planned.plan,
+                plan,
                 task.seed,
                 pose_noise=task.pose_noise,
                 disturbance=task.disturbance,
+                perception=task.perception,
             )
             success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
             n_faults = ex.n_faults
@@ -218,9 +252,16 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         affordance_recall=None if s is None else s.recall,
         affordance_f1=None if s is None else s.f1,
         valid_gt=valid_gt,
-        plan=PLAN_SEPARATOR.join(planned.plan),
+        plan=PLAN_SEPARATOR.join(plan),
         n_faults=n_faults,
+        **_accuracy_columns(planned.accuracy),
     )
+
+
+def _accuracy_columns(accuracy: Mapping[str, float] | None) -> dict[str, float | None]:
+    if accuracy is None:
+        return {}
+    return {f"acc_{a}": float(accuracy[a]) for a in ATTRIBUTES}
 
 
 def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> ResultRow:
@@ -260,6 +301,18 @@ def _row(
     if start is not None:
         columns["wall_time_s"] = time.perf_counter() - start
     columns.update(outcome)
+    columns.setdefault(
+        "failure_stage",
+        failure_stage(
+            task.method,
+            success=bool(columns.get("success")),
+            crashed=bool(columns.get("crashed")),
+            solved=bool(columns.get("solved")),
+            valid_gt=columns.get("valid_gt"),
+            affordance_f1=columns.get("affordance_f1"),
+            grounding=task.grounding,
+        ),
+    )
     return ResultRow(
         scene=scene,
         suite=_suite_of(scene),

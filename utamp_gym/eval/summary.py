@@ -27,12 +27,14 @@ from utamp_gym.eval.intervals import (
 )
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.runner import EVAL_METHODS
+from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS, ATTRIBUTES, STAGES
 
 _PRECONDITION = re.compile(r"precondition \((\S+)")
 
 
 def group_label(row: ResultRow) -> str:
-    return row.method if row.noise is None else f"{row.method} (p={row.noise:g})"
+    label = row.method if row.noise is None else f"{row.method} (p={row.noise:g})"
+    return label if row.perception == "gaussian" else f"{label} [{row.perception}]"
 
 
 def _mean_std(xs: Sequence[float]) -> tuple[float | None, float | None]:
@@ -88,6 +90,16 @@ def stats(rows: Sequence[ResultRow]) -> dict[str, Any]:
     }
 
 
+def _attributes(rows: Sequence[ResultRow]) -> dict[str, float] | None:
+    """Mean per-attribute accuracy over the rows that have it (None: no detected attributes)."""
+    out = {}
+    for a, col in zip(ATTRIBUTES, ATTRIBUTE_COLUMNS, strict=True):
+        vals = [getattr(r, col) for r in rows if getattr(r, col) is not None]
+        if vals:
+            out[a] = statistics.fmean(vals)
+    return out or None
+
+
 def _order(label: str) -> tuple[int, str]:
     method = label.split(" ", 1)[0]
     return (EVAL_METHODS.index(method) if method in EVAL_METHODS else 99, label)
@@ -109,6 +121,7 @@ def summarize(
             for n in sorted({r.n_objects for r in g})
         }
         failures = Counter(failure_category(r.failure_reason) for r in g if not r.success)
+        stages = Counter(r.failure_stage or "unknown" for r in g if not r.success)
         methods.append(
             {
                 "label": label,
@@ -117,6 +130,8 @@ def summarize(
                 **stats(g),
                 "by_objects": by_n,
                 "failures": dict(failures.most_common()),
+                "failure_stages": {st: stages[st] for st in (*STAGES, "unknown") if stages[st]},
+                "attribute_accuracy": _attributes(g),
             }
         )
     noisy = sorted({r.noise for r in rows if r.method == "utamp2-noisy" and r.noise is not None})
@@ -242,6 +257,31 @@ def to_markdown(summary: dict[str, Any]) -> str:
                 f"{_f(s['affordance_recall_mean'], '.3f')} | {_f(s['success_rate'])} | "
                 f"{_ci(s.get('success_rate_ci95'))} |"
             )
+    detected = [m for m in summary["methods"] if m.get("attribute_accuracy")]
+    if detected:
+        out += ["", "## Per-attribute accuracy (detected attributes)", ""]
+        out += ["| method | " + " | ".join(ATTRIBUTES) + " |"]
+        out.append("|---|" + "---|" * len(ATTRIBUTES))
+        for m in detected:
+            acc = m["attribute_accuracy"]
+            cells = [_f(acc.get(a), ".3f") for a in ATTRIBUTES]
+            out.append(f"| {m['label']} | " + " | ".join(cells) + " |")
+    out += ["", "## Failures by stage", ""]
+    out += [
+        "A failed run is charged to the first stage that went wrong: `perception` (detected "
+        "attributes gave wrong affordances that lost the plan), `affordances` (the rules did), "
+        "`plan` (no valid plan with right affordances), `physics` (a valid plan failed in "
+        "execution), `crash`.",
+        "",
+        "| method | failed | " + " | ".join(STAGES) + " |",
+        "|---|---|" + "---|" * len(STAGES),
+    ]
+    for m in summary["methods"]:
+        st = m.get("failure_stages", {})
+        failed = m["runs"] - m["successes"]
+        out.append(
+            f"| {m['label']} | {failed} | " + " | ".join(str(st.get(k, 0)) for k in STAGES) + " |"
+        )
     out += ["", "## Failures", ""]
     for m in summary["methods"]:
         if m["failures"]:

@@ -19,7 +19,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
+from utamp_gym.backend import (
+    DEFAULT_PERCEPTION,
+    DEFAULT_POSE_NOISE,
+    MAX_POSE_NOISE,
+    PERCEPTION_MODES,
+)
 from utamp_gym.distributed import Executor, LocalExecutor
 from utamp_gym.errors import UnknownNameError, UtampError
 from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile, key_shard
@@ -54,6 +59,7 @@ class SweepConfig:
     closed_loop: bool = False
     disturbance: float = 0.0
     pose_noise: float = DEFAULT_POSE_NOISE  # physics only (symbolic rows record None)
+    perception: str = DEFAULT_PERCEPTION  # physics only: where the robot's poses come from
     seed_offset: int = 0
     scenes: str | None = None
     shard: tuple[int, int] | None = None
@@ -81,6 +87,10 @@ class SweepConfig:
                 "--closed-loop runs the planner policy; it does not support "
                 + ", ".join(m for m in self.methods if m in VLM_METHODS)
             )
+        if self.perception not in PERCEPTION_MODES:
+            raise UnknownNameError("perception", self.perception, PERCEPTION_MODES)
+        if self.perception != DEFAULT_PERCEPTION and self.grounding != "physics":
+            raise UtampError("--perception rgbd needs --grounding physics (poses are physical)")
         if not 0.0 <= self.pose_noise <= MAX_POSE_NOISE:
             raise UtampError(
                 f"--pose-noise must be in [0, {MAX_POSE_NOISE}] m, got {self.pose_noise}"
@@ -159,10 +169,12 @@ def plan_tasks(cfg: SweepConfig) -> tuple[list[EvalTask], list[str]]:
                         closed_loop=cfg.closed_loop,
                         disturbance=cfg.disturbance,
                         pose_noise=cfg.pose_noise if cfg.grounding == "physics" else None,
+                        perception=cfg.perception,
                     )
                     if cfg.shard and key_shard(task.key, cfg.shard[1]) != cfg.shard[0] - 1:
                         continue
                     cost = scene.n_objects * (20 if method == "utamp1" else 1)
+                    cost *= 3 if method == "utamp2-perceived" else 1
                     cost *= 50 if method in VLM_METHODS else 1
                     tasks.append((cost, task))
     tasks.sort(key=lambda ct: -ct[0])  # longest first: better load balance
@@ -239,6 +251,7 @@ def write_outputs(report: SweepReport) -> dict[str, Any]:
         "closed_loop": cfg.closed_loop,
         "disturbance": cfg.disturbance,
         "pose_noise_m": cfg.pose_noise if cfg.grounding == "physics" else None,
+        "perception": cfg.perception,
         "methods_requested": list(cfg.methods),
         "seeds": cfg.seeds,
         "seed_offset": cfg.seed_offset,

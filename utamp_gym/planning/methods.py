@@ -4,6 +4,9 @@
 * ``utamp2-rules`` – U-TAMP-2 with affordances parsed from the true attributes
 * ``utamp2-noisy`` – U-TAMP-2 with affordances parsed from noisily detected attributes
                      (the offline stand-in for the paper's VLM detector)
+* ``utamp2-perceived`` – U-TAMP-2 with affordances parsed from attributes perceived in
+                     rendered RGB-D views (`utamp_gym.eval.perceived` looks at the scene
+                     and plans its *planning scene*, whose types are the perceived ones)
 * ``utamp1``       – the original U-TAMP domain, no affordances
 """
 
@@ -25,21 +28,27 @@ from utamp_gym.symbolic.problem import build_problem, domain_text
 if TYPE_CHECKING:  # numpy, the rule parser and the noisy detector load only when used
     import numpy as np
 
-METHODS = ("utamp2-gt", "utamp2-rules", "utamp2-noisy", "utamp1")
+METHODS = ("utamp2-gt", "utamp2-rules", "utamp2-noisy", "utamp2-perceived", "utamp1")
+#: where an env's affordances come from (env option ``affordances``)
 AFFORDANCE_SOURCES = ("gt", "rules", "noisy")
+#: ... and a method's: ``perceived`` are the rules on a planning scene's perceived types
+METHOD_SOURCES = (*AFFORDANCE_SOURCES, "perceived")
+#: suffix of the perceived types of a planning scene (``mug-seen``)
+SEEN_SUFFIX = "-seen"
 DEFAULT_NOISE = 0.01
 
 
 class MethodSpec(NamedTuple):
     name: str
     domain: str
-    affordances: str  # gt | rules | noisy
+    affordances: str  # gt | rules | noisy | perceived
 
 
 SPECS = {
     "utamp2-gt": MethodSpec("utamp2-gt", "utamp2", "gt"),
     "utamp2-rules": MethodSpec("utamp2-rules", "utamp2", "rules"),
     "utamp2-noisy": MethodSpec("utamp2-noisy", "utamp2", "noisy"),
+    "utamp2-perceived": MethodSpec("utamp2-perceived", "utamp2", "perceived"),
     "utamp1": MethodSpec("utamp1", "utamp1", "gt"),
 }
 
@@ -99,9 +108,24 @@ def affordances_for(
 ) -> tuple[frozenset[Fact], Scores]:
     """Affordance facts of `source` for the scene, with their scores against the ground truth.
 
-    `rng` drives the noisy detection (required for ``noisy``, unused otherwise)."""
-    if source not in AFFORDANCE_SOURCES:
-        raise UnknownNameError("affordance source", source, AFFORDANCE_SOURCES)
+    `rng` drives the noisy detection (required for ``noisy``, unused otherwise). Source
+    ``perceived`` needs a planning scene of perceived types (`utamp_gym.eval.perceived`);
+    its scores here are against the rules on those types (1.0): the declared scene's
+    ground truth is scored by `PerceivedScene.scores`."""
+    if source not in METHOD_SOURCES:
+        raise UnknownNameError("affordance source", source, METHOD_SOURCES)
+    if source == "perceived":
+        from utamp_gym.affordances.rules import derive_affordances
+
+        unseen = [o.name for o in scene.objects if not o.type.endswith(SEEN_SUFFIX)]
+        if unseen:
+            raise ValueError(
+                f"utamp2-perceived plans a perceived scene, but the types of {', '.join(unseen)} "
+                f"in '{scene.name}' are declared ones: perceive it first "
+                "(utamp_gym.eval.perceived.perceive_scene or plan_perceived)"
+            )
+        facts = derive_affordances(scene_types(scene))
+        return facts, score(facts, facts)
     gt = ground_truth_for(scene)
     if source == "gt":
         return gt, score(gt, gt)
@@ -116,6 +140,11 @@ def affordances_for(
 
     det = detect_affordances(scene_types(scene), noise, rng, gt)
     return det.facts, det.scores
+
+
+def plan_affordances(planning: Scene) -> frozenset[Fact]:
+    """The ``perceived`` source's facts of a planning scene (the rules on its types)."""
+    return affordances_for(planning, "perceived", None)[0]
 
 
 class PlanOutcome(NamedTuple):
@@ -175,6 +204,7 @@ def plan_scene(
     rng: np.random.Generator | None = None,
     planner: StatePlanner | None = None,
     deadline: Deadline | None = None,
+    affordances: tuple[frozenset[Fact], Scores] | None = None,
 ) -> PlanOutcome:
     """Abstract the scene, plan with Fast Downward, and report.
 
@@ -184,7 +214,9 @@ def plan_scene(
     `detection_rng(seed, scene.name)`. `planner` (a `StatePlanner` of the method's domain)
     re-uses its cached groundings; `search` defaults to its configuration, else
     `DEFAULT_SEARCH`. An unsolvable task or a time-out comes back with ``solved=False`` and
-    a reason (a time-out also with the phase that ran out of time).
+    a reason (a time-out also with the phase that ran out of time). `affordances` (facts and
+    their scores) replaces the method's own source: ``utamp2-perceived`` plans the declared
+    scene with the facts perceived in it (`utamp_gym.eval.perceived.plan_perceived`).
     """
     spec = method_spec(method)
     start = time.perf_counter()
@@ -201,7 +233,10 @@ def plan_scene(
         rng = detection_rng(seed, scene.name)
     timed_out, phase = False, None
     late = deadline.expired()  # already out of time when called: the caller's phase
-    facts, scores = affordances_for(scene, spec.affordances, rng, noise)
+    if affordances is None:
+        facts, scores = affordances_for(scene, spec.affordances, rng, noise)
+    else:
+        facts, scores = affordances
     domain = domain_text(spec.domain)
     problem = build_problem(scene, facts, spec.domain)
     fluent = planner.domain.fluent_predicates()

@@ -21,6 +21,12 @@ Sources (bulk densities of the solid material, room temperature):
   containers and boards);
 * cardboard: folding boxboard 0.6-0.8 g/cm^3 (as a solid sheet).
 
+Wall thicknesses (`Material.wall`) are those of typical pieces: drinking glass and
+glassware 2.5-4 mm, glazed stoneware and porcelain 4-6 mm, stainless cookware 0.6-3 mm
+(single-ply pots to tri-ply pans), cast iron 4-5 mm, aluminium cookware 2-4 mm, injection-
+moulded PP/PE containers 1.5-2.5 mm, folding boxboard 0.4-1 mm; wooden boards, trays and
+utensils are cut or carved solid.
+
 Friction coefficients are the simulator's sliding friction against the table and the
 Panda's fingers (dry contact, the order of published static coefficients: wood on wood
 0.25-0.5, glass on glass 0.4-0.9, steel on steel 0.5-0.8 dry, lower once polished). Each
@@ -55,6 +61,9 @@ class Material(NamedTuple):
     palette: tuple[str, ...]  # hex RGBA colours
     finish: Finish
     translucent: bool = False
+    #: typical wall or sheet thickness (m) of kitchenware made of it; None: solid pieces
+    #: (carved or cut wood). Perception estimates a mass from it (`perception.material`).
+    wall: float | None = None
 
 
 MATERIALS: MappingProxyType[str, Material] = MappingProxyType(
@@ -69,37 +78,37 @@ MATERIALS: MappingProxyType[str, Material] = MappingProxyType(
             Material(
                 "glass", 2500.0, (2230.0, 2530.0), 0.45, "fragile",
                 ("9ed1f2cc", "b8f2cccc", "e6f2f2b3", "a6bfa6cc"),
-                Finish(0.9, 0.9, 0.15), translucent=True,
+                Finish(0.9, 0.9, 0.15), translucent=True, wall=0.003,
             ),
             Material(
                 "ceramic", 2350.0, (2200.0, 2500.0), 0.45, "fragile",
                 ("f2efe6ff", "e6e1d1ff", "3d5a8cff", "b85c38ff", "7a9e7eff"),
-                Finish(0.6, 0.7, 0.05),
+                Finish(0.6, 0.7, 0.05), wall=0.005,
             ),
             Material(
                 "steel", 7900.0, (7850.0, 8000.0), 0.4, "sturdy",
                 ("38383fff", "9e9eadff", "c4c6ccff", "7d7f86ff"),
-                Finish(1.0, 0.8, 0.3),
+                Finish(1.0, 0.8, 0.3), wall=0.0015,
             ),
             Material(
                 "cast-iron", 7200.0, (6900.0, 7350.0), 0.45, "solid",
                 ("26262bff", "33302eff", "1c1c1fff"),
-                Finish(0.3, 0.3, 0.02),
+                Finish(0.3, 0.3, 0.02), wall=0.004,
             ),
             Material(
                 "aluminium", 2700.0, (2700.0, 2730.0), 0.4, "sturdy",
                 ("b4b8bfff", "d2d5daff", "8f949cff"),
-                Finish(0.7, 0.6, 0.15),
+                Finish(0.7, 0.6, 0.15), wall=0.0025,
             ),
             Material(
                 "plastic", 930.0, (900.0, 1500.0), 0.4, "sturdy",
                 ("f2f2f0ff", "d94040ff", "408cd9ff", "f2bf33ff", "4db366ff", "9e9eadff"),
-                Finish(0.3, 0.4, 0.0),
+                Finish(0.3, 0.4, 0.0), wall=0.002,
             ),
             Material(
                 "cardboard", 700.0, (600.0, 800.0), 0.55, "fragile",
                 ("b08a5cff", "c9a678ff", "e8e0d0ff", "d94040ff", "3d5a8cff"),
-                Finish(0.05, 0.05, 0.0),
+                Finish(0.05, 0.05, 0.0), wall=0.0008,
             ),
         )
     }
@@ -108,7 +117,7 @@ MATERIALS: MappingProxyType[str, Material] = MappingProxyType(
 DEFAULT = Material(
     "default", 1000.0, (500.0, 8000.0), 0.5, "sturdy",
     ("d94040ff", "408cd9ff", "f2bf33ff", "804db3ff", "4db366ff", "e680b3ff"),
-    Finish(0.5, 0.5, 0.0),
+    Finish(0.5, 0.5, 0.0), wall=0.003,
 )  # fmt: skip
 
 

@@ -22,29 +22,43 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_POSE_NOISE, Fault, MacroResult
+from utamp_gym.backend import DEFAULT_POSE_NOISE, PERCEPTION_MODES, Fault, MacroResult
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
+from utamp_gym.perception.poses import PoseModel
 from utamp_gym.perception.state import Grasp, PhysicalState
+from utamp_gym.perception.views import RobotState, ViewBundle
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.scene.model import Scene
+from utamp_gym.sim.cameras import (
+    ACTING_SIZE,
+    ACTING_VIEWS,
+    SURVEY_SIZE,
+    SURVEY_VIEWS,
+    WRIST,
+    WRIST_SIZE,
+    CameraRig,
+)
 from utamp_gym.sim.control import Timings
-from utamp_gym.sim.decode import parse_action
+from utamp_gym.sim.decode import parse_action, pose_of
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.faults import disturb
 from utamp_gym.sim.gl import new_renderer
 from utamp_gym.sim.heap import release_free_memory
 from utamp_gym.sim.measure import SimState, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
+from utamp_gym.sim.rgbd import RgbdPoseEstimator, surface_points
 from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.snapshot import build_state, freeze, thaw
 from utamp_gym.sim.world import build_world_spec, rests_on_top
 
 CAMERA = "overview"
+TIPPED_BELOW = 0.02  # m (see `MujocoBackend._camera_poses`)
 #: receives one RGB frame (height, width, 3) of the overview camera
 FrameSink = Callable[[np.ndarray], None]
 __all__ = ["CAMERA", "FLOOR_BELOW", "FrameSink", "MujocoBackend"]
@@ -56,7 +70,9 @@ class MujocoBackend:
     `pos_noise` (m) and `yaw_noise_deg` randomise where the scene's objects start (uniform,
     per episode). `pose_noise` (m) is the robot's pose-estimation error: grasp, place and
     slide targets are decoded from estimates (`utamp_gym.sim.estimate`), never from the
-    simulator's truth. `frame_sink` (settable at any time; None: off) receives an RGB frame
+    simulator's truth. With ``perception="rgbd"`` the estimates come from the rendered
+    cameras instead (`utamp_gym.sim.rgbd`; `pose_noise` is then unused), and so do the
+    poses of `physical_state`. `frame_sink` (settable at any time; None: off) receives an RGB frame
     (`frame_size` = width, height) every `frame_period` s of simulated time while actions
     run (for videos); `watch` registers any per-period callback (module docstring).
     """
@@ -67,6 +83,7 @@ class MujocoBackend:
         pos_noise: float = 0.003,
         yaw_noise_deg: float = 2.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
+        perception: str = "gaussian",
         settle_s: float = 0.5,
         frame_sink: FrameSink | None = None,
         frame_period: float = 0.1,
@@ -74,11 +91,15 @@ class MujocoBackend:
     ):
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
         self.pose_noise = pose_noise
+        if perception not in PERCEPTION_MODES:
+            raise UnknownNameError("perception", str(perception), PERCEPTION_MODES)
+        self.perception = perception
         if frame_period <= 0:
             raise ValueError(f"frame_period must be > 0 s, got {frame_period!r}")
         self.frame_period, self.frame_size = frame_period, frame_size
         self._kin: PandaKinematics | None = None
         self._state: SimState | None = None
+        self._rig: CameraRig | None = None
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._steps = 0
         self._watchers: dict[int, tuple[Callable[[], None], float]] = {}
@@ -102,6 +123,8 @@ class MujocoBackend:
         )
         estimator = PoseEstimator(self.pose_noise, rng)
         self._state = build_state(spec, info, self._kin, rng, estimator)
+        if self.perception == "rgbd":
+            self._state.estimator = self._rgbd_estimator(scene)
         self._steps = 0
         self._hook()
         settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
@@ -110,15 +133,53 @@ class MujocoBackend:
         release_free_memory()  # keeps a long run's resident size flat (`utamp_gym.sim.heap`)
 
     def execute(self, action: str) -> MacroResult:
-        """Run one grounded PDDL macro action; a failure comes back with a reason."""
+        """Run one grounded PDDL macro action; a failure comes back with a reason. With
+        ``perception="rgbd"`` its timings include ``perception_s`` (wall) and
+        ``perception_cpu_s`` (this process's CPU time): rendering and fitting."""
         st = self._require()
         try:
             act = parse_action(action, st.world.scene)
         except (GroundingError, UnknownNameError) as exc:
             return MacroResult(False, f"invalid action {action}: {exc}", Timings().as_dict(0.0))
+        est = st.estimator
+        before = self._perception_seconds()
+        cpu = est.cpu_seconds if isinstance(est, RgbdPoseEstimator) else 0.0
         result = run_skill(st, act)
         self._rest()
+        if isinstance(est, RgbdPoseEstimator):
+            timings = {
+                **result.timings,
+                "perception_s": self._perception_seconds() - before,
+                "perception_cpu_s": est.cpu_seconds - cpu,
+            }
+            result = replace(result, timings=timings)
         return result
+
+    # ------------------------------------------------------------ perception="rgbd"
+    def _rgbd_estimator(self, scene: Scene) -> RgbdPoseEstimator:
+        st = self._require()
+        ids = {name: i for i, name in self.cameras.instances.items()}
+        models = {
+            n: PoseModel.of(t).with_surface(*surface_points(t))
+            for n, t in ((n, scene.type_of(n)) for n in st.world.body_ids)
+        }
+        declared = {n: pose_of(p.position, p.quat) for n, p in scene.poses.items()}
+        self._pose_look(False)  # the cameras' renderers, made before the first action
+        return RgbdPoseEstimator(self._pose_look, ids, models, declared)
+
+    def _pose_look(self, wrist_only: bool) -> ViewBundle:
+        """The views of one look while acting: the wrist camera, and unless `wrist_only`
+        the acting scene cameras (depth and instance masks only)."""
+        st, rig = self._require(), self.cameras
+        wrist = rig.look(st.data, (WRIST,), WRIST_SIZE, rgb=False).views
+        if wrist_only:
+            return ViewBundle(wrist, self.robot_state())
+        scene = rig.look(st.data, ACTING_VIEWS, ACTING_SIZE, rgb=False).views
+        return ViewBundle(scene + wrist, self.robot_state())
+
+    def _perception_seconds(self) -> float:
+        est = self._require().estimator
+        return float(sum(est.seconds)) if isinstance(est, RgbdPoseEstimator) else 0.0
 
     def physical_state(self) -> PhysicalState:
         """Poses, what carries each object (contact forces), containment and the grasp
@@ -129,9 +190,32 @@ class MujocoBackend:
         if st.held is not None and st.arm.holds_something():
             sym = st.held.symbols
             held = Grasp(sym.obj, sym.member, sym.palm, sym.finger1, sym.finger2)
-        return measure_state(
+        state = measure_state(
             st.world, st.data, held=held, gripper_gap=st.arm.gap(), scratch=st.scratch
         )
+        if isinstance(st.estimator, RgbdPoseEstimator):
+            state = replace(state, poses=self._camera_poses())
+        return state
+
+    def _camera_poses(self) -> dict[str, tuple[float, ...]]:
+        """Every object's pose as the cameras see it now (a new look). An object whose
+        estimated bottom lies more than `TIPPED_BELOW` under the table has tipped over (a
+        level pose cannot explain it): it is reported turned on its side."""
+        st = self._require()
+        est = st.estimator
+        assert isinstance(est, RgbdPoseEstimator)
+        est.new_look()
+        quat = np.zeros(4)
+        out = {}
+        for name in st.world.body_ids:
+            pose = est.estimate(name, np.eye(4))
+            box = st.world.scene.type_of(name).bbox
+            bottom = pose[2, 3] + (box.min[2] if pose[2, 2] > 0 else -box.max[2])
+            if bottom < -TIPPED_BELOW:
+                pose = pose @ pose_of(np.zeros(3), np.array([0.7071, 0.7071, 0.0, 0.0]))
+            mujoco.mju_mat2Quat(quat, pose[:3, :3].ravel())
+            out[name] = (*(float(v) for v in pose[:3, 3]), *(float(v) for v in quat))
+        return out
 
     def disturb(self, rng: np.random.Generator) -> Fault | None:
         """Inject one fault (`utamp_gym.sim.faults`), chosen with `rng`."""
@@ -189,6 +273,28 @@ class MujocoBackend:
         self._close_renderers()
         self._state = None
 
+    # ------------------------------------------------------------ cameras
+    @property
+    def cameras(self) -> CameraRig:
+        """The world's RGB-D cameras (`utamp_gym.sim.cameras`), made on first use."""
+        st = self._require()
+        if self._rig is None or self._rig.model is not st.world.model:
+            if self._rig is not None:
+                self._rig.close()
+            self._rig = CameraRig(st.world.model, st.world.body_ids, st.arm.ids.body_ids)
+        return self._rig
+
+    def survey(self) -> ViewBundle:
+        """The first, careful look at the table: every scene camera, colour, depth and
+        instance masks at `cameras.SURVEY_SIZE` (what `utamp2-perceived` perceives)."""
+        st = self._require()
+        return self.cameras.look(st.data, SURVEY_VIEWS, SURVEY_SIZE, robot=self.robot_state())
+
+    def robot_state(self) -> RobotState:
+        """The robot's own state (joints, finger gap, TCP pose)."""
+        st = self._require()
+        return RobotState(st.arm.q(), st.arm.gap(), st.arm.tcp())
+
     # ------------------------------------------------------------ pickling
     def __getstate__(self) -> dict[str, Any]:
         """The simulation as a `SimSnapshot` (`utamp_gym.sim.snapshot`): the world is rebuilt
@@ -206,6 +312,9 @@ class MujocoBackend:
         if snapshot is not None and self._kin is None:
             self._kin = PandaKinematics()
         self._state = None if snapshot is None else thaw(snapshot, self._kin)
+        self._rig = None
+        if self._state is not None and isinstance(self._state.estimator, RgbdPoseEstimator):
+            self._state.estimator.attach(self._pose_look)  # its cameras are this backend's
         self._hook()
 
     # ------------------------------------------------------------ frames
@@ -286,10 +395,13 @@ class MujocoBackend:
         for r in self._renderers.values():
             r.close()
         self._renderers.clear()
+        if self._rig is not None:
+            self._rig.close()
+            self._rig = None
 
 
 #: live objects a pickled backend leaves behind (`MujocoBackend.__getstate__`)
-_NOT_PICKLED = ("_renderers", "_watchers", "_tokens", "_frame_sink")
+_NOT_PICKLED = ("_renderers", "_watchers", "_tokens", "_frame_sink", "_rig")
 
 
 def _every(period: float, dt: float) -> int:

@@ -239,9 +239,19 @@ def object_colours(scene: Scene) -> dict[str, tuple[float, ...]]:
 
 
 def add_object_body(
-    spec: mujoco.MjSpec, scene: Scene, name: str, pose: Pose, rgba: tuple[float, ...]
+    spec: mujoco.MjSpec,
+    scene: Scene,
+    name: str,
+    pose: Pose,
+    rgba: tuple[float, ...],
+    *,
+    material: str | None = None,
+    accent_material: str | None = None,
 ) -> tuple[str, ...]:
-    """Add object `name` as one free body ``obj/<name>`` at `pose`; return its geom names."""
+    """Add object `name` as one free body ``obj/<name>`` at `pose`; return its geom names.
+
+    `material` / `accent_material` name MuJoCo materials (their finish) for the object's
+    geoms and its accent-coloured ones (`utamp_gym.sim.appearance`)."""
     t = scene.type_of(name)
     prims = object_prims(t)
     volume = sum(p.volume for p in prims)
@@ -259,6 +269,7 @@ def add_object_body(
             pos=list(p.pos),
             quat=list(p.quat),
             rgba=list(hex_rgba(ACCENT) if p.accent else rgba),
+            material=(accent_material if p.accent else material) or "",
             friction=friction,
             condim=3 if t.members[p.member].kind == "body" else 4,  # see TORSIONAL
             solref=list(SOLREF),

@@ -24,6 +24,9 @@ import numpy as np
 
 from utamp_gym.backend import yaw_noise_deg
 
+#: a close look's noise, as a fraction of the scene cameras' (module docstring)
+CLOSE_FRACTION = 0.25
+
 
 def _rot_z(yaw: float) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
@@ -63,6 +66,19 @@ class PoseEstimator:
         out[:3, :3] = _rot_z(yaw) @ true_pose[:3, :3]
         out[:3, 3] = true_pose[:3, 3] + shift
         return out
+
+    def close_look(self, name: str, true_pose: np.ndarray) -> np.ndarray:
+        """A look at `name` with the wrist camera: a fresh, closer estimate (module
+        docstring) that the rest of this look uses; any belief offset is gone."""
+        self.offsets.pop(name, None)
+        out = true_pose.copy()
+        if self.noise > 0:
+            shift = np.array([*self.rng.normal(0.0, CLOSE_FRACTION * self.noise, 2), 0.0])
+            yaw = float(self.rng.normal(0.0, CLOSE_FRACTION * self.yaw_noise))
+            out[:3, :3] = _rot_z(yaw) @ true_pose[:3, :3]
+            out[:3, 3] = true_pose[:3, 3] + shift
+        self._look[name] = out
+        return out.copy()
 
     def offset(self, name: str, shift: np.ndarray, yaw: float = 0.0) -> None:
         """Make the robot believe `name` is `shift` (m, world) and `yaw` (rad) off."""

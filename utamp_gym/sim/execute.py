@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_POSE_NOISE
-from utamp_gym.planning.methods import plan_scene
+from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE
+from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.model import Scene
 from utamp_gym.seeding import run_seed
 from utamp_gym.sim.backend import FrameSink, MujocoBackend
@@ -96,12 +96,14 @@ def execute_plan(
     backend: MujocoBackend | None = None,
     pose_noise: float = DEFAULT_POSE_NOISE,
     disturbance: float = 0.0,
+    perception: str = DEFAULT_PERCEPTION,
 ) -> Execution:
     """Execute `plan` on `scene` in MuJoCo, stopping at the first failed step (open loop).
 
     `seed`, mixed with the scene's name (`utamp_gym.seeding.run_seed`), feeds one generator
     for initial pose noise, pose estimates, IK restarts and OMPL; `pose_noise` is the
-    robot's pose-estimation noise (m; ignored when `backend` is given: its own applies).
+    robot's pose-estimation noise (m; ignored when `backend` is given: its own applies),
+    `perception` where its pose estimates come from (``gaussian`` or ``rgbd``: the cameras).
     With `disturbance` p, each executed step is followed with probability p by an injected
     fault (drawn from a second generator of that seed).
     `success` means every step succeeded and all objects stand in one tower on the tray,
@@ -112,7 +114,7 @@ def execute_plan(
     faults = np.random.default_rng([base, FAULT_STREAM]) if disturbance > 0 else None
     with _video(video) as sink:
         own = backend is None
-        sim = backend or MujocoBackend(pose_noise=pose_noise)
+        sim = backend or MujocoBackend(pose_noise=pose_noise, perception=perception)
         sim.frame_sink = sink
         try:
             start = time.perf_counter()
@@ -148,12 +150,15 @@ def run_episode(
     backend: MujocoBackend | None = None,
     pose_noise: float = DEFAULT_POSE_NOISE,
     disturbance: float = 0.0,
+    perception: str = DEFAULT_PERCEPTION,
 ) -> EpisodeResult:
     """Plan `scene` with `method`, execute it in MuJoCo (`execute_plan`) and measure.
 
     `seed` drives the planner's randomness and the physics generator: the same seed
     gives the same rollout. An unsolved scene is not executed (its poses are measured
-    after reset). `pose_noise` and `disturbance` as in `execute_plan`.
+    after reset). `pose_noise`, `disturbance` and `perception` as in `execute_plan`.
+    Method ``utamp2-perceived`` looks at the scene first: use
+    `utamp_gym.eval.perceived.run_perceived_episode`.
     """
     if isinstance(scene, str):
         from utamp_gym.suites import resolve_scene
@@ -161,24 +166,43 @@ def run_episode(
         scene = resolve_scene(scene)
     t0 = time.perf_counter()
     outcome = plan_scene(scene, method, seed=seed)
+    return episode_result(
+        scene, outcome, outcome.plan, seed, video, t0, backend, pose_noise, disturbance, perception
+    )
+
+
+def episode_result(
+    scene: Scene,
+    outcome: PlanOutcome,
+    plan: Sequence[str],
+    seed: int,
+    video: str | Path | None,
+    t0: float,
+    backend: MujocoBackend | None,
+    pose_noise: float,
+    disturbance: float,
+    perception: str,
+) -> EpisodeResult:
+    """Execute `plan` (the world's names of `outcome`'s plan) and report the episode."""
     ex = execute_plan(
         scene,
-        outcome.plan if outcome.solved else (),
+        plan if outcome.solved else (),
         seed,
         video,
         backend=backend,
         pose_noise=pose_noise,
         disturbance=disturbance,
+        perception=perception,
     )
     failure = ex.failure
     if not outcome.solved:
         failure = {"step": None, "action": None, "reason": f"not planned: {outcome.reason}"}
     return EpisodeResult(
         scene=scene.name,
-        method=method,
+        method=outcome.method,
         seed=seed,
         solved=outcome.solved,
-        plan=list(outcome.plan),
+        plan=list(plan),
         success=outcome.solved and failure is None,
         failure=failure,
         final_stack=ex.final_stack,

@@ -23,6 +23,7 @@ import numpy as np
 from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
 from utamp_gym.robot.collision import CollisionChecker
+from utamp_gym.sim import relook
 from utamp_gym.sim.bodies import BODY_PREFIX
 from utamp_gym.sim.control import ArmDriver, LinePath, Timings, allowing, ignoring
 from utamp_gym.sim.decode import (
@@ -182,10 +183,12 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     Returns the grasp, the planned lift path and what is held. Sets `st.held` as soon as
     the fingers close, so a later failure lets go.
     """
-    g, approach, up = _plan_grasp(st, sym, lift)
     arm = st.arm
-    arm.set_gripper(g.opening)
-    arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
+    g, approach, up = _to_pregrasp(st, sym, lift)
+    # the wrist camera looks closely before the descent (re-aims) and before closing (aborts)
+    g, approach, up = relook.aim_grasp(
+        st, sym.obj, (g, approach, up), lambda: _to_pregrasp(st, sym, lift)
+    )
     arm.open_gripper(g.opening)
     arm.move_line(approach, *APPROACH)
     short = float(np.linalg.norm(arm.tcp()[:3, 3] - g.tcp[:3, 3]))
@@ -195,12 +198,17 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
             f"the hand stopped short of the {sym.member} of {sym.obj} "
             f"({short * 1000:.0f} mm: a finger landed on something)"
         )
+    off = relook.grasp_offset(st, sym, g)
+    if off is not None:
+        arm.move_line(approach.reversed(), *APPROACH)
+        raise MissedGrasp(
+            f"the wrist camera saw the {sym.member} of {sym.obj} {relook.describe(off)} "
+            "before the fingers closed"
+        )
     gap = arm.close_gripper()
-    if st.estimator is not None:
-        st.estimator.forget(sym.obj)  # in the hand, it is looked at again
     hand_t_world = np.linalg.inv(arm.tcp())
     tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)
-    belief = hand_t_world @ st.estimate(sym.obj)
+    belief = hand_t_world @ relook.in_hand(st, sym.obj)  # in the hand: the wrist camera
     body = st.world.body_ids[sym.obj]
     st.held = Held(sym.obj, sym.member, body, tcp_t_obj, g.opening, sym, belief)
     if not arm.holds_something():
@@ -209,6 +217,16 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
             f"(gap {gap * 1000:.1f} mm)"
         )
     return g, up, st.held
+
+
+def _to_pregrasp(
+    st: SimState, sym: GraspSymbols, lift: float
+) -> tuple[GraspPose, LinePath, LinePath]:
+    """Plan the grasp (`_plan_grasp`) and move the hand to its pre-grasp pose."""
+    g, approach, up = _plan_grasp(st, sym, lift)
+    st.arm.set_gripper(g.opening)
+    st.arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
+    return g, approach, up
 
 
 def _release_and_retreat(st: SimState, obj: str, opening: float) -> None:
@@ -378,9 +396,7 @@ def _verify_lift(
         raise SkillFailure(f"picking {obj} disturbed the scene: {moved}")
     hand_t_world = np.linalg.inv(arm.tcp())  # as carried: measured, and looked at again
     held.tcp_t_obj = hand_t_world @ obj_pose(st, obj)
-    if st.estimator is not None:
-        st.estimator.forget(obj)
-    held.belief = hand_t_world @ st.estimate(obj)
+    held.belief = hand_t_world @ relook.in_hand(st, obj)
 
 
 def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
@@ -422,6 +438,13 @@ def place(st: SimState, act: MacroAction) -> None:
     if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
         up = _plan_place(st, held, act)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
+
+    def aim_again() -> LinePath:
+        path = _plan_place(st, held, act)
+        arm.transfer(path.end, held=(held.body, held.belief), what=what)
+        return path
+
+    up = relook.aim_place(st, act.support, up, aim_again)  # the wrist camera on the support
     for attempt in range(1, PLACE_ATTEMPTS + 1):  # a guarded descent
         arm.move_line(up.reversed(), *PLACE)
         push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]
@@ -453,9 +476,7 @@ def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
     estimate if it differs from the belief by more than `REGRASP_SLIP` / `REGRASP_TILT_DEG`
     beyond what estimation noise explains (3 standard deviations of a difference), or
     `always`."""
-    if st.estimator is not None:
-        st.estimator.forget(held.obj)
-    new = np.linalg.inv(st.arm.tcp()) @ st.estimate(held.obj)
+    new = np.linalg.inv(st.arm.tcp()) @ relook.in_hand(st, held.obj)
     shift, angle = pose_change(held.belief, new)
     noise = 0.0 if st.estimator is None else st.estimator.noise
     explained = 3 * math.sqrt(2)
@@ -472,7 +493,8 @@ def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
 def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     """Path from the place configuration up to the pre-place one, or `GroundingError`.
 
-    The object keeps its current yaw; if that does not fit, it turns to its support's.
+    The object turns square to its support (its yaw); if that does not fit, it keeps its
+    current yaw.
     """
     name, arm = held.obj, st.arm
     t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
@@ -484,10 +506,12 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     world = st.world
     support = world.geom_ids.get(act.support, [world.table_geom_id])
     # lowering into a snug support (a board into a rimmed tray) may graze it: touching is
-    # allowed there, penetrating (in the robot's belief) is not
+    # allowed there, and penetrating (in the robot's belief) as far as the estimates' error
+    # allows (`relook.PLACE_ROOM_SIGMAS`); the guarded descent and the close look at the
+    # support (`relook.aim_place`) take care of the rest
     try:
-        with allowing(near, world.geom_ids[name], support, 0.0):
-            for yaw in (None, base_yaw):
+        with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
+            for yaw in (base_yaw, None):  # square to the support first, else as held
                 tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
                     try:

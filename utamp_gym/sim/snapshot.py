@@ -22,6 +22,7 @@ import numpy as np
 
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
+from utamp_gym.sim.cameras import add_wrist_camera
 from utamp_gym.sim.control import ArmDriver, Timings
 from utamp_gym.sim.estimate import PoseEstimator
 from utamp_gym.sim.measure import Held, SimState, believed_qpos
@@ -66,6 +67,7 @@ def build_state(
 ) -> SimState:
     """The world of `spec` (from `build_world_spec`) with the Panda at its ready pose."""
     handles = add_panda(spec)
+    add_wrist_camera(spec, handles.prefix)
     world = compile_world(spec, info)
     data = mujoco.MjData(world.model)
     ids = handles.bind(world.model)
@@ -114,7 +116,11 @@ def freeze(st: SimState) -> SimSnapshot:
 def thaw(snap: SimSnapshot, kin: PandaKinematics) -> SimState:
     """A live simulation in the state of `snap` (the world rebuilt from its scene and poses)."""
     spec, _ = build_world_spec(
-        snap.info.scene, poses=snap.info.poses, timestep=snap.timestep, sleep=snap.sleep
+        snap.info.scene,
+        poses=snap.info.poses,
+        appearance=snap.info.appearance or None,
+        timestep=snap.timestep,
+        sleep=snap.sleep,
     )
     st = build_state(spec, snap.info, kin, snap.rng, snap.estimator)
     mujoco.mj_setState(st.world.model, st.data, snap.physics, FULL_STATE)

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -34,6 +34,13 @@ import numpy as np
 from utamp_gym.errors import SimulationError, UnknownNameError
 from utamp_gym.perception.abstraction import TILT_DEG
 from utamp_gym.scene.model import Pose, Scene
+from utamp_gym.sim.appearance import (
+    ACCENT_MATERIAL,
+    Appearance,
+    add_materials,
+    material_name,
+    object_appearance,
+)
 from utamp_gym.sim.bodies import (
     BODY_PREFIX,
     ROLLING,
@@ -43,8 +50,8 @@ from utamp_gym.sim.bodies import (
     add_object_body,
     friction_of,
     initial_poses,
-    object_colours,
 )
+from utamp_gym.sim.cameras import add_scene_cameras
 
 TABLE_GEOM = "table"
 #: m/s (MuJoCo's default; rotations count times the body's size): what counts as at rest
@@ -64,6 +71,7 @@ class WorldInfo:
     geom_names: Mapping[str, tuple[str, ...]]
     slot_positions: Mapping[str, np.ndarray]
     table_geom: str = TABLE_GEOM
+    appearance: Mapping[str, Appearance] = field(default_factory=dict)  # colour and finish
 
 
 @dataclass(frozen=True)
@@ -143,6 +151,7 @@ def _add_environment(spec: mujoco.MjSpec, scene: Scene) -> None:
         quat, np.array([[0.0, -0.6, 0.8], [1.0, 0.0, 0.0], [0.0, 0.8, 0.6]]).ravel()
     )
     spec.worldbody.add_camera(name="overview", pos=[1.55, 0.0, 1.05], quat=quat.tolist())
+    add_scene_cameras(spec)
 
 
 def build_world_spec(
@@ -154,12 +163,14 @@ def build_world_spec(
     timestep: float = 0.002,
     sleep: bool = False,
     poses: Mapping[str, Pose] | None = None,
+    appearance: Mapping[str, Appearance] | None = None,
 ) -> tuple[mujoco.MjSpec, WorldInfo]:
     """The world as an uncompiled `MjSpec` (attach the robot to it), and its `WorldInfo`.
 
     `sleep` turns on MuJoCo's sleeping islands (module docstring). The objects start at
     `poses` if given (e.g. a `WorldInfo`'s, to rebuild that world exactly), else at the
-    scene's declared poses with noise drawn from `rng`."""
+    scene's declared poses with noise drawn from `rng`; likewise each object's colour and
+    finish (`appearance`, else drawn from a child of `rng`: `utamp_gym.sim.appearance`)."""
     if timestep <= 0 or pos_noise < 0 or yaw_noise_deg < 0:
         raise SimulationError(
             f"need timestep > 0 and noise >= 0 (got {timestep}, {pos_noise}, {yaw_noise_deg})"
@@ -178,9 +189,20 @@ def build_world_spec(
     _add_environment(spec, scene)
     if poses is None:
         poses = initial_poses(scene, rng, pos_noise, yaw_noise_deg)
-    colours = object_colours(scene)
+    if appearance is None:  # a child generator: the draws above are unchanged
+        appearance = object_appearance(scene, rng)
+    add_materials(spec, dict(appearance))
+    looks = appearance
     geoms = {
-        o.name: add_object_body(spec, scene, o.name, poses[o.name], colours[o.name])
+        o.name: add_object_body(
+            spec,
+            scene,
+            o.name,
+            poses[o.name],
+            looks[o.name].rgba,
+            material=material_name(o.name),
+            accent_material=ACCENT_MATERIAL,
+        )
         for o in scene.objects
     }
     info = WorldInfo(
@@ -189,6 +211,7 @@ def build_world_spec(
         body_names={o.name: BODY_PREFIX + o.name for o in scene.objects},
         geom_names=geoms,
         slot_positions={s.name: np.array([*s.position, 0.0]) for s in scene.slots},
+        appearance=dict(looks),
     )
     return spec, info
 

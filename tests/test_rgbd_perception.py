@@ -1,0 +1,249 @@
+"""Perception from rendered RGB-D: cameras, attributes, poses, `utamp2-perceived`.
+
+Tolerances stated here are the contract of `utamp_gym.perception` on the paper's objects:
+body sizes within `SIZE_TOL`, poses within `POSE_TOL` (position) and `YAW_TOL_DEG`, part
+shapes exact. Rendering is headless (MuJoCo's EGL or OSMesa backend).
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+import utamp_gym
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.perception.objects import perceive_objects
+from utamp_gym.perception.views import BACKGROUND, ROBOT, ViewBundle
+from utamp_gym.robot.panda_mjcf import add_panda, set_home
+from utamp_gym.scene.catalogue import Catalogue
+from utamp_gym.scene.io import scene_from_dict
+from utamp_gym.sim.cameras import (
+    ACTING_SIZE,
+    ACTING_VIEWS,
+    SURVEY_SIZE,
+    SURVEY_VIEWS,
+    WRIST,
+    CameraRig,
+    add_wrist_camera,
+)
+from utamp_gym.sim.world import build_world_spec, compile_world
+
+pytestmark = pytest.mark.physics
+
+SIZE_TOL = 0.005  # m, body extents
+POSE_TOL = 0.004  # m, body centre
+YAW_TOL_DEG = 3.0
+HANDLE_TOL = 0.015  # m, a handle's centre
+
+
+def _world(data: dict, *, yaw: dict[str, float] | None = None, seed: int = 0):
+    scene = scene_from_dict(data)
+    spec, info = build_world_spec(
+        scene, rng=np.random.default_rng(seed), pos_noise=0.0, yaw_noise_deg=0.0
+    )
+    for name, angle in (yaw or {}).items():
+        body = spec.body(f"obj/{name}")
+        body.quat = [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
+    handles = add_panda(spec)
+    add_wrist_camera(spec, handles.prefix)
+    world = compile_world(spec, info)
+    data_ = mujoco.MjData(world.model)
+    ids = handles.bind(world.model)
+    set_home(world.model, data_, ids)
+    mujoco.mj_forward(world.model, data_)
+    rig = CameraRig(world.model, world.body_ids, ids.body_ids)
+    return scene, world, data_, rig
+
+
+@pytest.fixture(scope="module")
+def single():
+    """The cutting board and the glass mug (upright), apart, at known poses."""
+    data = {
+        "name": "perception-single",
+        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "table": {"type": "kitchen-table"},
+        "slots": [
+            {"name": "slot1", "position": [0.55, -0.1], "min": [0.3, -0.3], "max": [0.8, 0.1]},
+            {"name": "slot2", "position": [0.45, 0.3], "min": [0.3, 0.15], "max": [0.6, 0.45]},
+        ],
+        "objects": [
+            {"name": "board", "type": "cutting-board", "on": "slot1"},
+            {"name": "mug", "type": "glass-mug", "on": "slot2"},
+        ],
+        "goal_base": "board",
+    }
+    scene, world, d, rig = _world(data)
+    bundle = rig.look(d, SURVEY_VIEWS, SURVEY_SIZE)
+    yield scene, world, d, rig, bundle
+    rig.close()
+
+
+def test_cameras_render_depth_and_object_level_masks_headless(single):
+    _, world, _, _, bundle = single
+    assert [v.camera for v in bundle.views] == list(SURVEY_VIEWS)
+    for v in bundle.views:
+        assert v.rgb is not None and v.rgb.shape == (SURVEY_SIZE[1], SURVEY_SIZE[0], 3)
+        assert v.depth.shape == v.instances.shape == (SURVEY_SIZE[1], SURVEY_SIZE[0])
+        # one id per object, never per geom or member: the ids are the instances 1..N
+        ids = set(np.unique(v.instances).tolist())
+        assert ids <= {BACKGROUND, ROBOT, 1, 2}
+        # metric depth: the table seen is at z = 0 in the world
+        table = v.points((v.instances == BACKGROUND) & (v.depth < 3.0))
+        on_table = np.all(np.abs(table[:, :2] - [0.5, 0.0]) < [0.7, 0.8], axis=1)
+        near = table[on_table & (np.abs(table[:, 2]) < 0.05)]
+        assert len(near) > 100 and np.abs(near[:, 2]).max() < 1e-4
+    seen = bundle.instance_ids()
+    assert seen == [1, 2]
+    # the mug's handle and body share one id: its geoms all map to instance 2
+    mug_geoms = world.geom_ids["mug"]
+    assert len(mug_geoms) > 3
+
+
+def test_a_known_object_is_perceived_within_tolerance(single):
+    scene, world, d, rig, bundle = single
+    perceived = perceive_objects(bundle)
+    names = rig.instances
+    for i, p in perceived.items():
+        name = names[i]
+        declared = scene.type_of(name)
+        t = p.as_type(name, "upright")
+        assert t.body.geom == declared.body.geom, name
+        assert np.all(np.abs(t.body.box.size - declared.body.box.size) <= SIZE_TOL), name
+        for side in ("on", "under", "left", "right", "front", "back"):
+            assert t.parts[side].shape == declared.parts[side].shape, (name, side)
+        true = d.xpos[world.body_ids[name]]
+        assert np.linalg.norm(p.pose[:2, 3] - true[:2]) <= POSE_TOL, name
+        assert abs(p.pose[2, 3] - true[2]) <= POSE_TOL, name
+        assert abs(math.degrees(p.shape.yaw)) <= YAW_TOL_DEG, name
+        handles = [m for m in t.members.values() if m.kind == "handle"]
+        assert len(handles) == 1, name
+        # (material from appearance errs now and then: measured in benchmarks/material_model.py)
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 37.0, 90.0, 160.0, 215.0, 300.0])
+def test_a_mugs_handle_is_found_at_any_yaw(yaw_deg: float) -> None:
+    data = {
+        "name": "perception-mug",
+        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "table": {"type": "kitchen-table"},
+        "slots": [
+            {"name": "slot1", "position": [0.55, 0.0], "min": [0.3, -0.2], "max": [0.8, 0.2]}
+        ],
+        "objects": [{"name": "mug", "type": "glass-mug", "on": "slot1"}],
+        "goal_base": "mug",
+    }
+    yaw = math.radians(yaw_deg)
+    scene, world, d, rig = _world(data, yaw={"mug": yaw})
+    try:
+        (p,) = perceive_objects(rig.look(d, SURVEY_VIEWS, SURVEY_SIZE)).values()
+    finally:
+        rig.close()
+    handles = [m for m in p.shape.members if m.kind == "handle"]
+    assert len(handles) == 1
+    h = handles[0].box
+    centre = p.shape.to_world(((np.asarray(h.lo) + np.asarray(h.hi)) / 2)[None, :])[0]
+    true_pose = d.xpos[world.body_ids["mug"]]
+    declared = scene.type_of("mug").members["handle"].box.center  # object frame
+    c, s = math.cos(yaw), math.sin(yaw)
+    true_centre = true_pose[:2] + np.array([[c, -s], [s, c]]) @ declared[:2]
+    assert np.linalg.norm(centre[:2] - true_centre) <= HANDLE_TOL
+    assert np.linalg.norm(p.shape.origin[:2] - true_pose[:2]) <= POSE_TOL
+
+
+def test_the_perceiver_needs_no_type_table(single):
+    """The perceiver's only input is the bundle: with the scene's type table emptied (and
+    the world's scene with it), it perceives the same objects."""
+    scene, world, _, _, bundle = single
+    before = {i: p.as_type("x").members.keys() for i, p in perceive_objects(bundle).items()}
+    emptied = scene._replace(catalogue=Catalogue({}), custom_types={})
+    info = world.info.__class__(**{**world.info.__dict__, "scene": emptied})
+    object.__setattr__(world, "info", info)
+    with pytest.raises(UnknownNameError):
+        world.scene.type_of("mug")  # the table is gone
+    views = ViewBundle(bundle.views, bundle.robot)  # images, intrinsics and poses only
+    after = {i: p.as_type("x").members.keys() for i, p in perceive_objects(views).items()}
+    assert after == before
+
+
+def test_perception_never_imports_the_simulator() -> None:
+    root = Path(utamp_gym.__file__).parent / "perception"
+    for path in root.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                assert not node.module.startswith("utamp_gym.sim"), path.name
+                assert not node.module.startswith("mujoco"), path.name
+            if isinstance(node, ast.Import):
+                assert all(not a.name.startswith(("utamp_gym.sim", "mujoco")) for a in node.names)
+
+
+def test_utamp2_perceived_plans_the_demo_scene() -> None:
+    from utamp_gym.eval.perceived import plan_perceived
+    from utamp_gym.planning.crosscheck import check_against_ground_truth
+    from utamp_gym.suites import resolve_scene
+
+    demo = resolve_scene("kitchen-demo")
+    outcome, seen = plan_perceived(demo, 0)
+    assert outcome.solved, outcome.reason
+    assert seen is not None
+    assert outcome.affordance_scores.f1 >= 0.95
+    assert check_against_ground_truth(demo, outcome.plan).valid
+    assert seen.accuracy["body"] == 1.0 and seen.accuracy["shape"] >= 0.95
+
+
+def test_rgbd_pose_estimates_at_reset() -> None:
+    from utamp_gym.seeding import run_seed
+    from utamp_gym.sim.backend import MujocoBackend
+    from utamp_gym.sim.measure import obj_pose, pose_change
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene("pick-place/072")
+    backend = MujocoBackend(perception="rgbd")
+    try:
+        backend.reset(scene, np.random.default_rng(run_seed(scene.name, 0)))
+        st = backend.state
+        for name in st.world.body_ids:
+            shift, turn = pose_change(obj_pose(st, name), st.estimate(name))
+            assert shift <= 0.006 and turn <= 3.0, (name, shift, turn)
+        views = backend.cameras.look(st.data, (*ACTING_VIEWS, WRIST), ACTING_SIZE, rgb=False)
+        assert all(v.rgb is None for v in views.views)
+    finally:
+        backend.close()
+
+
+def test_utamp2_perceived_closed_loop_in_symbolic_grounding() -> None:
+    """The planner policy believes the perceived affordances (renamed to the env's
+    members) and reaches the goal of the demo scene."""
+    from utamp_gym.eval.closed_loop import run_closed_loop
+
+    out = run_closed_loop("kitchen-demo", "utamp2-perceived", grounding="symbolic")
+    assert out.success, out.failure
+    assert out.actions and all("seen" not in a for a in out.actions)
+
+
+def test_an_rgbd_env_pickles_mid_episode() -> None:
+    """The cameras' renderers are not pickled; the clone makes its own and sees the same."""
+    import pickle
+
+    import gymnasium as gym
+
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()
+    env = gym.make("UTampKitchen-v0", num_objects=3, perception="rgbd")
+    _, info = env.reset(seed=0)
+    env.step(int(np.flatnonzero(info["action_mask"])[0]))
+    clone = pickle.loads(pickle.dumps(env))
+    rng = np.random.default_rng(0)
+    for _ in range(2):
+        action = rng.choice(np.flatnonzero(env.unwrapped.action_masks()))
+        one, two = env.step(action), clone.step(action)
+        assert one[1] == two[1] and one[4]["macro_result"] == two[4]["macro_result"]
+        assert np.allclose(one[0]["object_poses"], two[0]["object_poses"], atol=1e-6)
+    env.close()
+    clone.close()
