@@ -233,6 +233,20 @@ def test_pickled_and_deep_copied_physics_envs_step_as_the_original(env_id: str) 
         e.close()
 
 
+def _solvable_seeds(env: gym.Env, n: int) -> list[int]:
+    """The first `n` reset seeds whose scene's goal the planner reaches (in the rules)."""
+    from utamp_gym.planning.methods import plan_scene
+
+    seeds = []
+    for seed in range(50):
+        env.reset(seed=seed)
+        if plan_scene(env.unwrapped.scene, "utamp2-gt").solved:
+            seeds.append(seed)
+        if len(seeds) == n:
+            return seeds
+    raise AssertionError(f"fewer than {n} solvable scenes in 50 seeds")
+
+
 def _episode(env: gym.Env, policy: Any, seed: int) -> list[dict[str, Any]]:
     obs, info = env.reset(seed=seed)
     infos = [info]
@@ -253,7 +267,7 @@ def test_is_success_on_every_step_and_last(env_id: str, grounding: str) -> None:
     end) both end with it."""
     env = make(env_id, grounding, max_episode_steps=12)
     ends = []
-    for seed in range(2):
+    for seed in _solvable_seeds(env, 2):  # a procedural split also holds unachievable goals
         policy = PlannerPolicy(env.unwrapped)
         infos = _episode(env, policy, seed)
         assert all(type(i["is_success"]) is bool for i in infos)

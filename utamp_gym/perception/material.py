@@ -22,9 +22,14 @@ decides.
 **Mass** (`estimate_mass`) is volume x density: solid pieces (carved wood: `Material.wall`
 is None) fill their visible envelope less what is seen to be hollow; the others are shells
 of their material's typical wall thickness over their outer surface. The density is the
-*upper* end of the material's range: the rules use mass only to ask whether the robot can
-carry an object and whether a support bears it, and a perceiver should not promise either
-for what may be too heavy. **Robustness** is the material's.
+material's nominal one (`Material.density`), the middle of what real pieces span: the rules
+ask of mass whether the robot can carry an object, whether a support bears it and whether
+the fingers hold the moment of its weight about a grasp (`affordances.hand`), and the upper
+end of the range made a 0.6 kg wooden board with a handle weigh 1.2 kg, too heavy to be held
+by its handle, so that no plan moved it. The lightest and heaviest plausible masses are
+kept beside it (the heaviest decides whether a rimmed object with handles may be too heavy
+to lift, so that its rims are offered as grips, `objects._edges`).
+**Robustness** is the material's.
 """
 
 from __future__ import annotations
@@ -309,13 +314,16 @@ def shape_prior(types: list[ObjectType], alpha: float = PRIOR_ALPHA) -> dict[str
     return {c: {m: v / sum(ms.values()) for m, v in ms.items()} for c, ms in counts.items()}
 
 
-def estimate_mass(material_name: str, solid_volume: float, area: float) -> tuple[float, float]:
-    """(mass, lightest plausible mass) in kg of a piece of `material_name` (module docstring):
-    the heaviest plausible mass is what the perceived type reports."""
+def estimate_mass(
+    material_name: str, solid_volume: float, area: float
+) -> tuple[float, float, float]:
+    """(mass, lightest, heaviest plausible mass) in kg of a piece of `material_name` (module
+    docstring): the mass at the material's nominal density is what the perceived type
+    reports."""
     m = material(material_name)
     volume = solid_volume if m.wall is None else min(solid_volume, area * m.wall)
     lo, hi = m.density_range
-    return float(volume * hi), float(volume * lo)
+    return float(volume * m.density), float(volume * lo), float(volume * hi)
 
 
 __all__ = [

@@ -66,8 +66,9 @@ class PerceivedObject:
     instance: int
     shape: SeenShape
     material: MaterialEstimate
-    mass: float  # kg, the heaviest plausible (see `material.estimate_mass`)
+    mass: float  # kg, at the material's nominal density (see `material.estimate_mass`)
     mass_low: float  # kg, the lightest plausible
+    mass_high: float  # kg, the heaviest plausible
     edges: tuple[SeenMember, ...]
 
     @property
@@ -283,10 +284,10 @@ def perceive_instance(
     cloud = scene.objects[instance]
     shape = fit_shape(cloud, scene, instance, prior_yaw=prior_yaw)
     provisional = MaterialEstimate("default", {"default": 1.0})
-    looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, ())
+    looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     mat = classify_material(colours, looks.shape_class())
-    mass, low = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
-    return PerceivedObject(instance, shape, mat, mass, low, _edges(shape, mass))
+    mass, low, high = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
+    return PerceivedObject(instance, shape, mat, mass, low, high, _edges(shape, high))
 
 
 __all__ = ["PerceivedObject", "perceive_instance", "perceive_objects"]
