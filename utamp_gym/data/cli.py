@@ -1,5 +1,7 @@
 """`utamp demos`: planner demonstrations as Minari datasets (wired into `utamp_gym.cli`).
 
+Usage::
+
     utamp demos --suite SUITE --episodes N --out DIR [--track macro|low-level]
         [--method utamp2-gt] [--seed S] [--grounding symbolic|physics]
         [--masks affordances|geometric|none] [--interface objects|grounded]

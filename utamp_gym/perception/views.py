@@ -1,12 +1,12 @@
 """What the perceiver is given: rendered RGB-D views, camera parameters, the robot's state.
 
-Why plain data: the perceiver (`utamp_gym.perception.objects`, `.poses`) must never read the
-scene, its object types or the simulator's geoms and bodies. Its whole input is a
-`ViewBundle`: per camera the colour image, the metric depth, an **object-level** instance
-mask (one id per object; 0 for the background, -1 for the robot's own body), the pinhole
-intrinsics and the camera's pose in the world; plus the robot's own state (joint positions,
-finger gap, hand pose). Any renderer or real RGB-D driver can fill it in; the MuJoCo one is
-`utamp_gym.sim.cameras.CameraRig`.
+Why plain data: the perceiver (`utamp_gym.perception.objects`, `utamp_gym.perception.poses`)
+must never read the scene, its object types or the simulator's geoms and bodies. Its whole
+input is a `ViewBundle`: per camera the colour image, the metric depth, an **object-level**
+instance mask (one id per object; 0 for the background, -1 for the robot's own body), the
+pinhole intrinsics and the camera's pose in the world; plus the robot's own state (joint
+positions, finger gap, hand pose). Any renderer or real RGB-D driver can fill it in; the
+MuJoCo one is `utamp_gym.sim.cameras.CameraRig`.
 
 Conventions: camera frames are the computer-vision ones (x right, y down, z forward); depth
 is the distance along the optical axis in metres; `Intrinsics.cx`, `cy` are in pixel-index

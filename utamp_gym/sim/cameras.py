@@ -119,7 +119,7 @@ def intrinsics(fovy_deg: float, width: int, height: int) -> Intrinsics:
 
 
 class CameraRig:
-    """Renders the world's cameras into `ViewBundle`s with object-level instance masks.
+    """Renders the world's cameras into `ViewBundle` objects with object-level instance masks.
 
     `objects` maps each object name to its body id (instance ids follow this order, from 1);
     `robot_bodies` are the robot's bodies (instance -1). One offscreen renderer per image
