@@ -448,10 +448,13 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
             covered_gap = (gap & (other_top > 0.003)).sum() > 0.3 * max(1, int(gap.sum()))
             if covered_gap or not (see_through & gap).any():
                 bar, trimmed = piece, False
-        mlo, mhi = grid.bounds(bar)
-        mz = local[_cells_of(grid, local, bar), 2]
-        if len(mz) < 3:
+        in_bar = local[_cells_of(grid, local, bar)]
+        if len(in_bar) < 3:
             continue
+        # the bar's extent is its points' (a cell's edge lies up to a cell beyond them: a
+        # tray's 2 cm handle measured by cells came out 2.6 cm, too thick for the fingers)
+        mlo, mhi = in_bar[:, :2].min(axis=0), in_bar[:, :2].max(axis=0)
+        mz = in_bar[:, 2]
         zlo, zhi = float(np.percentile(mz, 1)), float(np.percentile(mz, 99))
         if not trimmed:  # an attached handle reaches the body's box
             ax = 0 if side in ("front", "back") else 1
