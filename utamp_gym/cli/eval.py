@@ -109,7 +109,7 @@ def _cmd_eval_merge(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub: Any) -> None:
-    """``utamp eval --suite ... --out DIR`` (a sweep) and ``utamp eval merge OUT DIR...``.
+    """``utamp eval --suite SUITE --out DIR`` (a sweep) and ``utamp eval merge OUT DIR...``.
 
     argparse has no optional sub-command next to required options, so ``merge`` is an
     optional sub-command and the sweep's required options are checked in `_cmd_eval`.

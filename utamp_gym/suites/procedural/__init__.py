@@ -5,32 +5,32 @@ an instance of a kitchenware family, `utamp_gym.kitchenware`), their orientation
 stacks and table layout are drawn from one generator seeded by a SHA-256 of the split and the
 seed. The goal is the paper's: everything in one tower on the scene's base (``goal_base =
 "base"``). A split is a fixed list of scene seeds kept in ``assets/procedural/procedural-v1.toml``
-with the SHA-256 of its scene files (`split_digest`, and of every 20th scene for quick
-checks); scene ``procedural-v1/<split>/NNNN`` is
-the NNNN-th seed of the list. The lists were chosen by `select_seeds` (run
+with the SHA-256 of its scene files (`~seeds.split_digest`, and of every 20th scene for
+quick checks); scene ``procedural-v1/<split>/NNNN`` is
+the NNNN-th seed of the list. The lists were chosen by `~selection.select_seeds` (run
 ``python -m utamp_gym.suites.procedural select``): the first seeds whose goal the rules call
-achievable, plus a share (`UNACHIEVABLE_SHARE`) of seeds whose goal they call unachievable,
+achievable, plus a share (`~spec.UNACHIEVABLE_SHARE`) of seeds whose goal they call unachievable,
 which planners must report unsolvable.
 
-Splits (`SPLITS`):
+Splits (`~spec.SPLITS`):
 
-* ``train``: 2-5 objects of the training families (`TRAIN_FAMILIES`), instances drawn from
-  the training pool of instance seeds;
+* ``train``: 2-5 objects of the training families (`~spec.TRAIN_FAMILIES`), instances drawn
+  from the training pool of instance seeds;
 * ``test-instances``: the same families and counts, new instances (the test pool);
-* ``test-families``: at least one object of a family never in train (`HELD_OUT`), new
+* ``test-families``: at least one object of a family never in train (`~spec.HELD_OUT`), new
   instances;
 * ``test-count``: 6 objects (more than any train scene) of the training families.
 
 Layouts: the base stands in slot1 of the suites' table (`assets/scenes/layout.toml`), every
-other stack in its own slot 2-5, shifted by up to `JITTER` from the slot's position; every
-object lies inside its slot, the workspace and `REACH` of the robot's base, and the heights
-of all objects add up to at most `MAX_TOTAL_HEIGHT` (a tower of them leaves the hand room
-under the workspace's ceiling).
+other stack in its own slot 2-5, shifted by up to `~spec.JITTER` from the slot's position;
+every object lies inside its slot, the workspace and `~spec.REACH` of the robot's base, and
+the heights of all objects add up to at most `~spec.MAX_TOTAL_HEIGHT` (a tower of them leaves
+the hand room under the workspace's ceiling).
 
 The package, by responsibility: `spec` (what the splits are: families, sizes, pools, the
 generator's limits), `objects` (which objects a scene holds, and whether its goal is
 achievable), `layout` (initial stacks, table positions, the assembled scene:
-`generate_scene`), `seeds` (the kept seed lists, their scenes, cache files, names and
+`~layout.generate_scene`), `seeds` (the kept seed lists, their scenes, cache files, names and
 digests), `selection` (choosing the seeds; ``python -m utamp_gym.suites.procedural``).
 """
 
