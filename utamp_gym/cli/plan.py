@@ -1,0 +1,109 @@
+"""`utamp plan`: plan a scene with Fast Downward (imports neither Gymnasium nor the physics
+stack)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import TYPE_CHECKING, Any
+
+from utamp_gym.cli import help_line
+from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, timeout_seconds
+from utamp_gym.outputs import output_dir
+
+if TYPE_CHECKING:
+    from utamp_gym.planning.methods import PlanOutcome
+    from utamp_gym.scene.model import Scene
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    from utamp_gym.deadline import Deadline
+    from utamp_gym.planning.methods import plan_scene
+    from utamp_gym.suites import resolve_scene
+
+    # Bounds the whole command: counted from `main`'s start (argument parsing and the
+    # planner's imports included), not from when planning begins.
+    deadline = Deadline.after(args.timeout, args.started)
+    scene = resolve_scene(args.scene)
+    out = None if args.out is None else output_dir(args.out, "--out")
+    if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
+        from utamp_gym.eval.perceived import plan_perceived
+
+        outcome = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)[0]
+    else:
+        outcome = plan_scene(
+            scene,
+            args.method,
+            seed=args.seed,
+            search=args.search,
+            noise=args.noise,
+            deadline=deadline,
+        )
+    if out is not None:
+        (out / "domain.pddl").write_text(outcome.domain)
+        (out / "problem.pddl").write_text(outcome.problem)
+        (out / "plan.txt").write_text("".join(f"{a}\n" for a in outcome.plan))
+    explanation = _explain(scene, outcome) if args.explain and not outcome.solved else None
+    if args.json:
+        data = outcome.to_json()
+        if args.explain:
+            data["explanation"] = explanation
+        print(json.dumps(data, indent=2))
+    elif outcome.timed_out:
+        print(f"{scene.name} [{args.method}]: timed out during {outcome.phase}: {outcome.reason}")
+    elif outcome.solved:
+        print(
+            f"{scene.name} [{args.method}]: {outcome.plan_length} steps, "
+            f"{outcome.planning_time_s * 1000:.1f} ms"
+        )
+        for step in outcome.plan:
+            print(f"  {step}")
+    else:
+        print(f"{scene.name} [{args.method}]: not solved: {outcome.reason}")
+        if explanation is not None:
+            print(f"  why not: {explanation['message']}")
+    return 0
+
+
+def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
+    """Why-not explanation of an unsolved outcome (U-TAMP-2 methods only)."""
+    from utamp_gym.eval.explain import explain_unsolvable
+    from utamp_gym.planning.methods import method_spec
+
+    if method_spec(outcome.method).domain != "utamp2":
+        return {"found": False, "message": "explanations need U-TAMP-2 affordances (not utamp1)"}
+    return explain_unsolvable(scene, outcome.facts).to_json()
+
+
+def add_parser(sub: Any) -> None:
+    """``utamp plan SCENE``."""
+    from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
+    from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
+
+    plan = sub.add_parser("plan", help=help_line("plan"))
+    plan.add_argument("scene", help=SCENE_HELP)
+    plan.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)
+    plan.add_argument("--seed", type=int, default=0, help="seed of utamp2-noisy's detection")
+    plan.add_argument(
+        "--timeout",
+        type=timeout_seconds,
+        default=30.0,
+        help="time limit of the whole command (s, at most one day)",
+    )
+    plan.add_argument(
+        "--search",
+        choices=SEARCH_CONFIGS,
+        default=DEFAULT_SEARCH,
+        help="Fast Downward search (astar-*: optimal plans)",
+    )
+    plan.add_argument(
+        "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
+    )
+    plan.add_argument("--json", action="store_true", help="print one JSON object")
+    plan.add_argument("--out", help="write domain.pddl, problem.pddl and plan.txt here")
+    plan.add_argument(
+        "--explain",
+        action="store_true",
+        help="if unsolved, name the missing affordance facts that block the scene",
+    )
+    plan.set_defaults(func=_cmd_plan)

@@ -1,0 +1,57 @@
+"""`utamp scenes list|show`: the benchmark's scene names, or one scene as TOML."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from utamp_gym.cli import help_line
+from utamp_gym.cli.common import SCENE_HELP
+
+
+def _cmd_scenes(args: argparse.Namespace) -> int:
+    from utamp_gym.scene.io import scene_to_toml
+    from utamp_gym.suites import (
+        ALL_SUITES,
+        all_scene_names,
+        packaged_scene_names,
+        resolve_scene,
+        scene_summary,
+    )
+
+    if args.scenes_cmd == "list":
+        if not args.suite and not args.json:  # packaged scenes (kitchen-demo), then suites
+            for name in packaged_scene_names():
+                print(name)
+        for suite in (args.suite,) if args.suite else ALL_SUITES:
+            if args.json:  # one JSON object per line and scene
+                for record in scene_summary(suite):
+                    print(json.dumps(record))
+            else:
+                for name in all_scene_names(suite):
+                    print(name)
+        return 0
+    sys.stdout.write(scene_to_toml(resolve_scene(args.name)))
+    return 0
+
+
+def add_parser(sub: Any) -> None:
+    """``utamp scenes list`` and ``utamp scenes show NAME``."""
+    from utamp_gym.suites import ALL_SUITES as SUITES
+
+    scenes = sub.add_parser("scenes", help=help_line("scenes"))
+    ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
+    lst = ssub.add_parser(
+        "list", help="scene names, one per line: the packaged scenes, then every suite's"
+    )
+    lst.add_argument("--suite", choices=SUITES, help="only this suite's scenes")
+    lst.add_argument(
+        "--json",
+        action="store_true",
+        help="one JSON object per scene and line: name, n_objects, families, achievable",
+    )
+    show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
+    show.add_argument("name", help=SCENE_HELP)
+    scenes.set_defaults(func=_cmd_scenes)
