@@ -139,7 +139,7 @@ def main() -> None:
                 )
     table = summarise(rows, levels)
     lines = [
-        f"UTAMP-2-GT in physics, perception `{args.perception}`, seed(s) {args.seeds}, "
+        f"UTAMP-2-GT in physics, perception `{args.perception}`, {args.seeds} seed(s), "
         f"`benchmarks/closed_loop.py --perception {args.perception}`.",
         "",
         "| suite | p | n | open-loop | closed-loop | recovery (faulty eps) | replans |"
@@ -149,9 +149,12 @@ def main() -> None:
     for (suite, p), t in sorted(table.items()):
         rec = "–" if t["recovery"] is None else f"{t['recovery']:.2f} ({t['faulty']})"
         closed_n = round(t["closed"] * t["n"])
+        ran_open = t["open"] == t["open"]  # NaN: the open loop was not run (--modes closed)
+        opened = f"{t['open']:.2f}" if ran_open else "–"
+        wall_open = f"{t['wall_open']:.2f} s" if ran_open else "–"
         lines.append(
-            f"| {suite} | {p:g} | {t['n']} | {t['open']:.2f} | {t['closed']:.3f} ({closed_n}) | "
-            f"{rec} | {t['replans']:.2f} | {t['wall_open']:.2f} s | {t['wall_closed']:.2f} s |"
+            f"| {suite} | {p:g} | {t['n']} | {opened} | {t['closed']:.3f} ({closed_n}) | "
+            f"{rec} | {t['replans']:.2f} | {wall_open} | {t['wall_closed']:.2f} s |"
         )
     targets = RGBD_TARGETS if args.perception == "rgbd" else {0.1: TARGET}
     lines.append("")
