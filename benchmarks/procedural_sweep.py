@@ -60,6 +60,7 @@ def summarize_split(split: str, folder: Path) -> dict[str, Any]:
             by_family[fam]["ok"] += r["success"] == "true"
     return {
         "split": split,
+        "seeds": sorted({int(r["seed"]) for r in rows}),
         "scenes": len(labels),
         "achievable_scenes": sum(g.achievable for g in labels.values()),
         "runs": len(rows),
@@ -86,16 +87,18 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
         "<!-- written by benchmarks/procedural_sweep.py from utamp eval's results.csv -->",
         "",
         f"`utamp eval --suite procedural-v1/<split> --methods utamp2-rules --grounding physics "
-        f"--seeds {args.seeds}` (default pose noise), per split:",
+        f"--seeds {args.seeds}` (default pose noise), per split (the seeds column lists the "
+        "seeds whose runs the table counts):",
         "",
-        "| split | scenes | achievable (rules) | runs | planned | succeeded in physics | "
+        "| split | seeds | scenes | achievable (rules) | runs | planned | succeeded in physics | "
         "unachievable runs reported unsolvable | achievable but not planned |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for s in summaries:
         rate = s["success_rate_of_planned"]
+        seeds = ", ".join(map(str, s["seeds"]))
         out.append(
-            f"| {s['split']} | {s['scenes']} | {s['achievable_scenes']} | {s['runs']} | "
+            f"| {s['split']} | {seeds} | {s['scenes']} | {s['achievable_scenes']} | {s['runs']} | "
             f"{s['planned']} | **{s['planned_success']}/{s['planned']}"
             f"{f' ({rate:.1%})' if rate is not None else ''}** | "
             f"{s['unachievable_reported_unsolvable']}/{s['unachievable_runs']} | "
