@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import re
 import subprocess
 import sys
 from collections import Counter, defaultdict
@@ -82,6 +83,14 @@ def summarize_split(split: str, folder: Path) -> dict[str, Any]:
     }
 
 
+def reason_kind(reason: str) -> str:
+    """A failure reason without its step, action, names and numbers: its kind."""
+    text = reason.split("): ", 1)[-1]  # drop "step N (action)"
+    text = re.sub(r"\bobj\d\b|\bbase\b", "X", text)
+    text = re.sub(r"\(.*\)", "", text)  # details such as the contacts or the IK's notes
+    return re.sub(r"-?\d+(\.\d+)?", "#", text).strip()
+
+
 def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> str:
     out = [
         "<!-- written by benchmarks/procedural_sweep.py from utamp eval's results.csv -->",
@@ -119,8 +128,22 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
             c = s["by_family"].get(fam)
             cells.append(f"{c['ok']}/{c['runs']}" if c else "–")
         out.append(f"| {fam} | " + " | ".join(cells) + " |")
-    out += ["", "Every planned run that failed in physics, with the simulator's reason:", ""]
     failures = [f for s in summaries for f in s["failures"]]
+    out += [
+        "",
+        "Planned runs that failed in physics, by the kind of the simulator's reason:",
+        "",
+        "| reason | " + " | ".join(s["split"] for s in summaries) + " |",
+        "|---|" + "---|" * len(summaries),
+    ]
+    kinds = [Counter(reason_kind(f["reason"]) for f in s["failures"]) for s in summaries]
+    for kind in sorted({k for c in kinds for k in c}, key=lambda k: -sum(c[k] for c in kinds)):
+        out.append(
+            f"| {kind} | " + " | ".join(str(c[kind]) if c[kind] else "–" for c in kinds) + " |"
+        )
+    if not failures:
+        out.append("| none |" + " |" * len(summaries))
+    out += ["", "Every planned run that failed in physics, with the simulator's reason:", ""]
     if not failures:
         out.append("none")
     for f in failures:
