@@ -38,6 +38,8 @@ from outcome_model import _physics_class, consistent
 
 from utamp_gym.suites import procedural
 
+TARGET = 0.98  # physics must succeed on this share of the actions the rules allow, per family
+
 
 @dataclass(frozen=True)
 class Pair:
@@ -185,15 +187,26 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         f"the rules allow**, and on {_rate(s['forbidden_physics_ok'], s['forbidden'])} of those "
         "they forbid.",
         "",
-        "| family (object acted on) | rules allow: physics succeeds | rules forbid: physics "
-        "succeeds |",
-        "|---|---|---|",
+        "| family (object acted on) | rules allow: physics succeeds | "
+        f"≥ {TARGET:.0%} | rules forbid: physics succeeds |",
+        "|---|---|---|---|",
     ]
+    below = []
     for fam, c in s["by_family"].items():
+        n, ok = c.get("allowed", 0), c.get("allowed_ok", 0)
+        meets = "–" if not n else ("yes" if ok >= TARGET * n else "**no**")
+        if n and ok < TARGET * n:
+            below.append(fam)
         out.append(
-            f"| {fam} | {_rate(c.get('allowed_ok', 0), c.get('allowed', 0))} | "
+            f"| {fam} | {_rate(ok, n)} | {meets} | "
             f"{_rate(c.get('forbidden_ok', 0), c.get('forbidden', 0))} |"
         )
+    out += [
+        "",
+        f"Families below {TARGET:.0%} where the rules allow: "
+        + (", ".join(below) if below else "none")
+        + ".",
+    ]
     out += [
         "",
         "| family (support of a placement) | rules allow: physics succeeds | rules forbid: "
@@ -209,6 +222,9 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
     if not s["allowed_failures"]:
         out.append("none")
     out += [f"* {k}: {n}" for k, n in s["allowed_failures"].items()]
+    out += ["", "Each of them, with the simulator's reason:", ""]
+    for fam, examples in sorted(s["failure_examples"].items()):
+        out += [f"* {fam}: `{e['scene']}` `{e['action']}`: {e['reason']}" for e in examples]
     return "\n".join(out) + "\n"
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import re
 import subprocess
 import sys
 from collections import Counter, defaultdict
@@ -60,6 +61,7 @@ def summarize_split(split: str, folder: Path) -> dict[str, Any]:
             by_family[fam]["ok"] += r["success"] == "true"
     return {
         "split": split,
+        "seeds": sorted({int(r["seed"]) for r in rows}),
         "scenes": len(labels),
         "achievable_scenes": sum(g.achievable for g in labels.values()),
         "runs": len(rows),
@@ -81,21 +83,31 @@ def summarize_split(split: str, folder: Path) -> dict[str, Any]:
     }
 
 
+def reason_kind(reason: str) -> str:
+    """A failure reason without its step, action, names and numbers: its kind."""
+    text = reason.split("): ", 1)[-1]  # drop "step N (action)"
+    text = re.sub(r"\bobj\d\b|\bbase\b", "X", text)
+    text = re.sub(r"\(.*\)", "", text)  # details such as the contacts or the IK's notes
+    return re.sub(r"-?\d+(\.\d+)?", "#", text).strip()
+
+
 def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> str:
     out = [
         "<!-- written by benchmarks/procedural_sweep.py from utamp eval's results.csv -->",
         "",
         f"`utamp eval --suite procedural-v1/<split> --methods utamp2-rules --grounding physics "
-        f"--seeds {args.seeds}` (default pose noise), per split:",
+        f"--seeds {args.seeds}` (default pose noise), per split (the seeds column lists the "
+        "seeds whose runs the table counts):",
         "",
-        "| split | scenes | achievable (rules) | runs | planned | succeeded in physics | "
+        "| split | seeds | scenes | achievable (rules) | runs | planned | succeeded in physics | "
         "unachievable runs reported unsolvable | achievable but not planned |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for s in summaries:
         rate = s["success_rate_of_planned"]
+        seeds = ", ".join(map(str, s["seeds"]))
         out.append(
-            f"| {s['split']} | {s['scenes']} | {s['achievable_scenes']} | {s['runs']} | "
+            f"| {s['split']} | {seeds} | {s['scenes']} | {s['achievable_scenes']} | {s['runs']} | "
             f"{s['planned']} | **{s['planned_success']}/{s['planned']}"
             f"{f' ({rate:.1%})' if rate is not None else ''}** | "
             f"{s['unachievable_reported_unsolvable']}/{s['unachievable_runs']} | "
@@ -116,8 +128,22 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
             c = s["by_family"].get(fam)
             cells.append(f"{c['ok']}/{c['runs']}" if c else "–")
         out.append(f"| {fam} | " + " | ".join(cells) + " |")
-    out += ["", "Every planned run that failed in physics, with the simulator's reason:", ""]
     failures = [f for s in summaries for f in s["failures"]]
+    out += [
+        "",
+        "Planned runs that failed in physics, by the kind of the simulator's reason:",
+        "",
+        "| reason | " + " | ".join(s["split"] for s in summaries) + " |",
+        "|---|" + "---|" * len(summaries),
+    ]
+    kinds = [Counter(reason_kind(f["reason"]) for f in s["failures"]) for s in summaries]
+    for kind in sorted({k for c in kinds for k in c}, key=lambda k: -sum(c[k] for c in kinds)):
+        out.append(
+            f"| {kind} | " + " | ".join(str(c[kind]) if c[kind] else "–" for c in kinds) + " |"
+        )
+    if not failures:
+        out.append("| none |" + " |" * len(summaries))
+    out += ["", "Every planned run that failed in physics, with the simulator's reason:", ""]
     if not failures:
         out.append("none")
     for f in failures:

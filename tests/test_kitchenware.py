@@ -70,6 +70,24 @@ def test_generated_types_are_valid_catalogue_types(name: str) -> None:
         assert round(t.mass, 3) == t.mass and t.mass > 0
 
 
+@pytest.mark.parametrize("name", sorted(FAMILIES))
+def test_an_upside_down_instance_carries_over_its_own_bottom(name: str) -> None:
+    """What stands on an upside-down instance is centred on the surface its bottom offers:
+    that centre must lie over a member that reaches the bottom, not over a handle's share of
+    the bounding box (a jar set on an upside-down saucepan's bounding-box centre stood
+    beyond the pan's floor, over a handle 7 cm above the table, and fell)."""
+    fam = family(name)
+    types = [generate(name, "v1", seed) for seed in range(20)]
+    types += [extreme_type(name, mat, high) for mat, _ in fam.materials for high in (False, True)]
+    for t in types:
+        if t.parts["under"].shape != "flat":
+            continue
+        cx, cy = t.surface_center("under")
+        bottom = t.bbox.min[2]
+        feet = [m.box for m in t.members.values() if m.box.min[2] <= bottom + 1e-9]
+        assert any(b.min[0] <= cx <= b.max[0] and b.min[1] <= cy <= b.max[1] for b in feet), t.name
+
+
 def test_mass_is_density_times_volume() -> None:
     """Same geometry, denser material: heavier in proportion (the plate has no contents)."""
     fam = family("plate")

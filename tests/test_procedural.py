@@ -105,6 +105,16 @@ def test_scenes_list_json(capsys: pytest.CaptureFixture[str]) -> None:
     )
     assert main(["scenes", "list", "--suite", "procedural-v1/train"]) == 0
     assert capsys.readouterr().out.splitlines() == all_scene_names("procedural-v1/train")
+    # the issue's own command: the training split as JSON
+    assert main(["scenes", "list", "--suite", "procedural-v1/train", "--json"]) == 0
+    records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["name"] for r in records] == all_scene_names("procedural-v1/train")
+    for i, r in enumerate(records):
+        g = pv.split_scene("train", i)
+        assert set(r) == {"name", "n_objects", "families", "achievable"}
+        assert r["n_objects"] == g.scene.n_objects == len(r["families"])
+        assert r["families"] == list(g.families) and r["achievable"] is g.achievable
+        assert not set(r["families"]) & set(pv.HELD_OUT)
 
 
 def test_show_prints_a_file_plan_accepts_unchanged(tmp_path, capsys) -> None:

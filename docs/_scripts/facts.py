@@ -166,6 +166,8 @@ CONSTANTS = {
     "thin_top_cm": ("utamp_gym.perception.objects", "THIN_TOP", 100),
     "thin_side_cm": ("utamp_gym.perception.objects", "THIN_SIDE", 100),
     "close_fraction": ("utamp_gym.sim.estimate", "CLOSE_FRACTION", 1),
+    "check_margin_mm": ("utamp_gym.sim.relook", "CHECK_MARGIN", 1000),
+    "aim_shift_mm": ("utamp_gym.sim.relook", "AIM_SHIFT", 1000),
     "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }
 

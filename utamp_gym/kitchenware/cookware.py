@@ -85,8 +85,10 @@ def _saucepan(i: Instance) -> Built:
     table = {
         "description": f"{i.material} saucepan: open, upright walls, a long handle on its back",
         "members": {"body": {"kind": "body", **cylinder(r, 0.0, h)}, "handle": handle},
+        # the flat bottom is the body's: without a size the bounding box (the handle
+        # included) would centre what stands on the upside-down pan beyond its body
         "parts": {"on": {"shape": "open", **centred(2 * r - 2 * wall)},
-                  "under": {"shape": "flat"}, **sides("round")},
+                  "under": {"shape": "flat", **centred(2 * r)}, **sides("round")},
     }  # fmt: skip
     return Built(table, cup(r, h, wall, 2 * wall) + handle_volume)
 
