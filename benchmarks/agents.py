@@ -102,6 +102,13 @@ def main() -> None:
     p.add_argument("--out", default="runs/agents")
     p.add_argument("--docs", default="docs/results")
     p.add_argument(
+        "--only",
+        choices=("ppo", "imitation"),
+        default=None,
+        help="only train these rows (MaskablePPO; or demos, BC and fine-tuning) and stop: two "
+        "processes can train the two families at once, a later full run reuses both",
+    )
+    p.add_argument(
         "--rewrite", action="store_true", help="only rewrite the docs from the measured agents.json"
     )
     args = p.parse_args()
@@ -109,7 +116,7 @@ def main() -> None:
         write(json.loads((Path(args.docs) / "agents.json").read_text()), Path(args.docs))
         return
 
-    from utamp_gym.data.record import dataset_id, record_demos
+    from utamp_gym.data.record import dataset_id
     from utamp_gym.distributed import LocalExecutor
     from utamp_gym.rl.train import train_seeds
 
@@ -124,17 +131,16 @@ def main() -> None:
     runs: dict[str, dict[str, Any]] = {}
 
     start = time.perf_counter()
-    ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo", steps=args.ppo_steps,
-                      eval_every=args.eval_every, **common)  # fmt: skip
-    runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
-    demos_root = out / "demos"
-    demo = record_demos(train_suite, args.demos, demos_root, seed=100_000,
-                        env_options={"grounding": "symbolic", "masks": "geometric",
-                                     "interface": "objects"})  # fmt: skip
-    demos = demo.path
-    bc = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=str(demos),
+    if args.only in (None, "ppo"):
+        ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
+                          steps=args.ppo_steps, eval_every=args.eval_every, **common)  # fmt: skip
+        runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
+        if args.only:
+            return
+    demo = record_or_reuse_demos(train_suite, args.demos, out / "demos")
+    bc = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=demo["path"],
                      hyperparams={"epochs": args.bc_epochs}, **common)  # fmt: skip
-    runs[f"BC from {demo.episodes} planner episodes"] = {"dir": out / "bc", "agg": bc}
+    runs[f"BC from {demo['episodes']} planner episodes"] = {"dir": out / "bc", "agg": bc}
     ft_aggs = []
     ft_common = {k: v for k, v in common.items() if k != "executor"}
     for s in range(args.seeds):  # each fine-tuning seed starts from the BC seed of its number
@@ -143,6 +149,8 @@ def main() -> None:
                                    algo="maskable-ppo", steps=args.ft_steps, init_from=str(init),
                                    eval_every=max(1, args.ft_steps // 3), **ft_common))  # fmt: skip
     runs["BC, then MaskablePPO fine-tuning"] = {"dir": out / "ft", "aggs": ft_aggs}
+    if args.only:
+        return
     train_wall = time.perf_counter() - start
 
     table: dict[str, Any] = {
@@ -151,8 +159,9 @@ def main() -> None:
         "methods": {},
         "demos": {
             "dataset": dataset_id(train_suite, "macro", "utamp2-gt"),
-            "episodes": demo.episodes,
-            "steps": demo.steps,
+            "episodes": demo["episodes"],
+            "steps": demo["steps"],
+            "left_out": len(demo.get("left_out", {})),
         },
     }
     for label, run in runs.items():
@@ -191,6 +200,26 @@ def main() -> None:
     table["total_wall_time_s"] = round(time.perf_counter() - start, 1)
     table["training_wall_time_s"] = round(train_wall, 1)
     write(table, docs)
+
+
+def record_or_reuse_demos(suite: str, episodes: int, root: Path) -> dict[str, Any]:
+    """`utamp demos`' recording of `episodes` planner episodes of `suite` (reset seeds from
+    100,000, symbolic grounding, objects interface), or the one already under `root`."""
+    from utamp_gym.data.record import record_demos
+
+    marker = root / "demos.json"
+    want = {"suite": suite, "requested": episodes, "seed": 100_000}
+    if marker.is_file():
+        done = json.loads(marker.read_text())
+        if {k: done.get(k) for k in want} == want and Path(done["path"]).is_dir():
+            return done
+    demo = record_demos(suite, episodes, root, seed=100_000,
+                        env_options={"grounding": "symbolic", "masks": "geometric",
+                                     "interface": "objects"})  # fmt: skip
+    done = {**want, "path": str(demo.path), "episodes": demo.episodes, "steps": demo.steps,
+            "left_out": {**demo.failed, **demo.unsolvable}}  # fmt: skip
+    marker.write_text(json.dumps(done, indent=2) + "\n")
+    return done
 
 
 def write(table: dict[str, Any], docs: Path) -> None:
@@ -243,7 +272,8 @@ def write(table: dict[str, Any], docs: Path) -> None:
         curves[label] = [p["curve"] for p in seeds]
     lines += ["", budgets(table), ""]
     lines += [
-        f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes, "
+        f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes "
+        f"({table['demos'].get('left_out', 0)} more left out: no plan, the goal unreachable), "
         f"{table['demos']['steps']} steps, of the training split (`{table['demos']['dataset']}`); "
         "BC's steps are those demonstration steps (its curve counts samples seen). Training "
         f"took {table['training_wall_time_s']:.0f} s and everything "
