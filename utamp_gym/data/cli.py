@@ -4,6 +4,7 @@
         [--method utamp2-gt] [--seed S] [--grounding symbolic|physics]
         [--masks affordances|geometric|none] [--interface objects|grounded]
         [--image-size H W] [--executor local|ray] [--workers N] [--ray-address A]
+
     utamp demos export-lerobot --root DIR --dataset ID --out DIR [--repo-id NAME]
 
 The dataset is ``utamp/<suite>-<track>-<method>-v0`` under DIR: read it with

@@ -95,7 +95,7 @@ def tasks(
     env_id: str, episodes: int, *, seed: int = 0, method: str = "utamp2-gt",
     env_options: Mapping[str, Any] | None = None,
 ) -> list[MacroTask]:  # fmt: skip
-    """`episodes` tasks with reset seeds ``seed .. seed + episodes - 1``."""
+    """`episodes` tasks, one per reset seed from ``seed`` up (``seed + episodes - 1`` last)."""
     opts = dict(env_options or {})
     return [MacroTask(env_id, i, seed + i, method, opts) for i in range(episodes)]
 
