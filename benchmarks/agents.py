@@ -75,8 +75,11 @@ def t_interval(values: list[float]) -> tuple[float, float]:
 def evaluate(
     method: str, suite: str, out: Path, workers: int, limit: int | None = None
 ) -> list[Any]:
-    """`utamp eval` rows of one method on one suite (symbolic grounding, seed 0)."""
+    """`utamp eval` rows of one method on one suite (symbolic grounding, seed 0), in the
+    suite's own folder under `out` (so the splits can be evaluated by separate processes)."""
     from utamp_gym.eval.sweep import SweepConfig, run_sweep
+
+    out = out / suite.rsplit("/", 1)[-1]
 
     cfg = SweepConfig(suite=suite, methods=(method,), grounding="symbolic", explain=False,
                       limit=limit)  # fmt: skip
