@@ -273,18 +273,19 @@ def write(table: dict[str, Any], docs: Path) -> None:
         lines.append(f"| {label} | {len(seeds)} | " + " | ".join(cells)
                      + f" | {statistics.fmean(gaps):+.2f} | {steps} | {wall} |")  # fmt: skip
         curves[label] = [p["curve"] for p in seeds]
+    train_wall = sum(p["wall_time_s"] for m in table["methods"].values()
+                     for p in m.get("per_seed", []))  # fmt: skip
     lines += ["", budgets(table), ""]
     lines += [
         f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes "
         f"({table['demos'].get('left_out', 0)} more left out: no plan, the goal unreachable), "
         f"{table['demos']['steps']} steps, of the training split (`{table['demos']['dataset']}`); "
         "BC's steps are those demonstration steps (its curve counts samples seen). Training "
-        f"took {table['training_wall_time_s']:.0f} s and everything "
-        f"{table['total_wall_time_s']:.0f} s of wall time on a shared 2-core machine (runs "
-        "niced; times are indicative only)"
+        f"wall time summed over every seed of every learned row: {train_wall:.0f} s, on a shared "
+        "2-core machine (runs niced; times are indicative only)"
         + (
-            f"; load average (1, 5, 15 min) {table['load_average']['start']} at the start, "
-            f"{table['load_average']['end']} at the end."
+            f"; load average (1, 5, 15 min) {table['load_average']['start']} at the start and "
+            f"{table['load_average']['end']} at the end of the run that wrote this table."
             if "load_average" in table
             else "."
         ),
