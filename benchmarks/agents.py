@@ -19,8 +19,11 @@ train on ``train``; ``test-instances`` has new instances of the training familie
 ``test-families`` objects of held-out families, ``test-count`` six objects (more than any
 training scene).
 
-    python benchmarks/agents.py [--seeds 3] [--ppo-steps 40000] [--ft-steps 15000]
-        [--demos 200] [--bc-epochs 30] [--out runs/agents] [--docs docs/results]
+    python benchmarks/agents.py [--seeds 3] [--ppo-steps 24576] [--ft-steps 4096]
+        [--demos 300] [--bc-epochs 30] [--eval-every 4096] [--out runs/agents]
+        [--docs docs/results] [--only ppo|imitation] [--workers N]
+
+The defaults are the budgets of docs/results/agents.md.
 
 Runs resume: a finished seed (same configuration) and finished evaluation rows are reused.
 """
@@ -94,11 +97,11 @@ def evaluate(
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--ppo-steps", type=int, default=40_000)
-    p.add_argument("--ft-steps", type=int, default=15_000)
-    p.add_argument("--demos", type=int, default=200, help="planner episodes for BC")
+    p.add_argument("--ppo-steps", type=int, default=24_576)
+    p.add_argument("--ft-steps", type=int, default=4_096)
+    p.add_argument("--demos", type=int, default=300, help="planner episodes for BC")
     p.add_argument("--bc-epochs", type=int, default=30)
-    p.add_argument("--eval-every", type=int, default=10_000)
+    p.add_argument("--eval-every", type=int, default=4_096)
     p.add_argument("--workers", type=int, default=0, help="evaluation worker processes")
     p.add_argument("--limit", type=int, default=None, help="scenes per split (smoke runs)")
     p.add_argument("--train-workers", type=int, default=0, help="seeds trained in parallel")
