@@ -7,18 +7,23 @@ ground-truth affordances on the same scenes, and writes
 
 * ``docs/results/agents.md``: methods x splits, success mean +- 95 % interval over the seeds
   (t interval: 4.30 x sd / sqrt(3)), the generalisation gap (train - test), steps and wall time
-  per seed, the budget;
+  per seed, the budgets, the share of each split's scenes whose goal is achievable (the
+  ceiling: ~10 % are unachievable on purpose) and the machine's load average;
 * ``docs/results/agents.json``: every number behind it (per seed, per split, pooled Wilson
   intervals over episodes);
 * ``docs/results/agents_learning_curves.png``: evaluation success on the training split during
   training (mean and min-max band over seeds).
 
-The splits are #22's procedural splits (``procedural-v1/<split>``) when this checkout has them;
-otherwise the paper's suites stand in (train ``pick-place``; ``sliding``: the same objects,
-another layout; ``extra``: objects of new families) and the output says so.
+The splits are #22's procedural splits (``procedural-v1/<split>``, `UTampKitchenProcedural-v0`):
+train on ``train``; ``test-instances`` has new instances of the training families,
+``test-families`` objects of held-out families, ``test-count`` six objects (more than any
+training scene).
 
-    python benchmarks/agents.py [--seeds 3] [--ppo-steps 40000] [--ft-steps 15000]
-        [--demos 200] [--bc-epochs 30] [--out runs/agents] [--docs docs/results]
+    python benchmarks/agents.py [--seeds 3] [--ppo-steps 24576] [--ft-steps 4096]
+        [--demos 300] [--bc-epochs 30] [--eval-every 4096] [--out runs/agents]
+        [--docs docs/results] [--only ppo|imitation] [--workers N]
+
+The defaults are the budgets of docs/results/agents.md.
 
 Runs resume: a finished seed (same configuration) and finished evaluation rows are reused.
 """
@@ -28,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import statistics
 import time
 from pathlib import Path
@@ -38,17 +44,27 @@ PLANNERS = ("utamp2-rules", "utamp2-gt")
 
 
 def splits() -> tuple[dict[str, str], str, dict[str, Any]]:
-    """(split name -> suite, training env id, its options), procedural if available."""
-    from utamp_gym import suites
+    """(split name -> suite, training env id, its options): the procedural splits (the env's
+    default split is ``train``)."""
+    from utamp_gym.suites.procedural import SPLITS, SUITE
 
-    if "procedural-v1/train" in getattr(suites, "ALL_SUITES", suites.SUITES):
-        names = ("train", "test-instances", "test-families", "test-count")
-        return {n: f"procedural-v1/{n}" for n in names}, "UTampKitchenProcedural-v0", {}
-    return (
-        {"train": "pick-place", "test-layout": "sliding",
-         "test-objects": "extra"},
-        "UTampKitchen-v0", {},
-    )  # fmt: skip
+    return {n: f"{SUITE}/{n}" for n in SPLITS}, "UTampKitchenProcedural-v0", {}
+
+
+def achievable(split_suites: dict[str, str]) -> dict[str, list[int]]:
+    """Per split: [scenes whose goal the rules call achievable, scenes] (the success ceiling)."""
+    from utamp_gym.suites.procedural import split_scenes
+
+    out = {}
+    for name, suite in split_suites.items():
+        scenes = split_scenes(suite.rsplit("/", 1)[1])
+        out[name] = [sum(g.achievable for g in scenes), len(scenes)]
+    return out
+
+
+def load() -> list[float]:
+    """The 1, 5 and 15 minute load averages (the machine is shared: times are indicative)."""
+    return [round(x, 2) for x in os.getloadavg()]
 
 
 def t_interval(values: list[float]) -> tuple[float, float]:
@@ -62,8 +78,11 @@ def t_interval(values: list[float]) -> tuple[float, float]:
 def evaluate(
     method: str, suite: str, out: Path, workers: int, limit: int | None = None
 ) -> list[Any]:
-    """`utamp eval` rows of one method on one suite (symbolic grounding, seed 0)."""
+    """`utamp eval` rows of one method on one suite (symbolic grounding, seed 0), in the
+    suite's own folder under `out` (so the splits can be evaluated by separate processes)."""
     from utamp_gym.eval.sweep import SweepConfig, run_sweep
+
+    out = out / suite.rsplit("/", 1)[-1]
 
     cfg = SweepConfig(suite=suite, methods=(method,), grounding="symbolic", explain=False,
                       limit=limit)  # fmt: skip
@@ -78,16 +97,23 @@ def evaluate(
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--ppo-steps", type=int, default=40_000)
-    p.add_argument("--ft-steps", type=int, default=15_000)
-    p.add_argument("--demos", type=int, default=200, help="planner episodes for BC")
+    p.add_argument("--ppo-steps", type=int, default=24_576)
+    p.add_argument("--ft-steps", type=int, default=4_096)
+    p.add_argument("--demos", type=int, default=300, help="planner episodes for BC")
     p.add_argument("--bc-epochs", type=int, default=30)
-    p.add_argument("--eval-every", type=int, default=10_000)
+    p.add_argument("--eval-every", type=int, default=4_096)
     p.add_argument("--workers", type=int, default=0, help="evaluation worker processes")
     p.add_argument("--limit", type=int, default=None, help="scenes per split (smoke runs)")
     p.add_argument("--train-workers", type=int, default=0, help="seeds trained in parallel")
     p.add_argument("--out", default="runs/agents")
     p.add_argument("--docs", default="docs/results")
+    p.add_argument(
+        "--only",
+        choices=("ppo", "imitation"),
+        default=None,
+        help="only train these rows (MaskablePPO; or demos, BC and fine-tuning) and stop: two "
+        "processes can train the two families at once, a later full run reuses both",
+    )
     p.add_argument(
         "--rewrite", action="store_true", help="only rewrite the docs from the measured agents.json"
     )
@@ -96,11 +122,12 @@ def main() -> None:
         write(json.loads((Path(args.docs) / "agents.json").read_text()), Path(args.docs))
         return
 
-    from utamp_gym.data.record import dataset_id, record_demos
+    from utamp_gym.data.record import dataset_id
     from utamp_gym.distributed import LocalExecutor
     from utamp_gym.rl.train import train_seeds
 
     out, docs = Path(args.out), Path(args.docs)
+    load_at_start = load()
     split_suites, env_id, env_opts = splits()
     train_suite = split_suites["train"]
     common = {"env_id": env_id, "masks": "geometric", "interface": "objects",
@@ -110,17 +137,16 @@ def main() -> None:
     runs: dict[str, dict[str, Any]] = {}
 
     start = time.perf_counter()
-    ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo", steps=args.ppo_steps,
-                      eval_every=args.eval_every, **common)  # fmt: skip
-    runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
-    demos_root = out / "demos"
-    demo = record_demos(train_suite, args.demos, demos_root, seed=100_000,
-                        env_options={"grounding": "symbolic", "masks": "geometric",
-                                     "interface": "objects"})  # fmt: skip
-    demos = demo.path
-    bc = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=str(demos),
+    if args.only in (None, "ppo"):
+        ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
+                          steps=args.ppo_steps, eval_every=args.eval_every, **common)  # fmt: skip
+        runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
+        if args.only:
+            return
+    demo = record_or_reuse_demos(train_suite, args.demos, out / "demos")
+    bc = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=demo["path"],
                      hyperparams={"epochs": args.bc_epochs}, **common)  # fmt: skip
-    runs[f"BC from {demo.episodes} planner episodes"] = {"dir": out / "bc", "agg": bc}
+    runs[f"BC from {demo['episodes']} planner episodes"] = {"dir": out / "bc", "agg": bc}
     ft_aggs = []
     ft_common = {k: v for k, v in common.items() if k != "executor"}
     for s in range(args.seeds):  # each fine-tuning seed starts from the BC seed of its number
@@ -129,6 +155,8 @@ def main() -> None:
                                    algo="maskable-ppo", steps=args.ft_steps, init_from=str(init),
                                    eval_every=max(1, args.ft_steps // 3), **ft_common))  # fmt: skip
     runs["BC, then MaskablePPO fine-tuning"] = {"dir": out / "ft", "aggs": ft_aggs}
+    if args.only:
+        return
     train_wall = time.perf_counter() - start
 
     table: dict[str, Any] = {
@@ -137,8 +165,9 @@ def main() -> None:
         "methods": {},
         "demos": {
             "dataset": dataset_id(train_suite, "macro", "utamp2-gt"),
-            "episodes": demo.episodes,
-            "steps": demo.steps,
+            "episodes": demo["episodes"],
+            "steps": demo["steps"],
+            "left_out": len(demo.get("left_out", {})),
         },
     }
     for label, run in runs.items():
@@ -173,9 +202,30 @@ def main() -> None:
                               "planning_time_s": statistics.fmean(
                                   r.planning_time_s or 0.0 for r in rows)}  # fmt: skip
         table["methods"][f"planner ({planner})"] = {"kind": "planner", "success": success}
+    table["load_average"] = {"start": load_at_start, "end": load()}
     table["total_wall_time_s"] = round(time.perf_counter() - start, 1)
     table["training_wall_time_s"] = round(train_wall, 1)
     write(table, docs)
+
+
+def record_or_reuse_demos(suite: str, episodes: int, root: Path) -> dict[str, Any]:
+    """`utamp demos`' recording of `episodes` planner episodes of `suite` (reset seeds from
+    100,000, symbolic grounding, objects interface), or the one already under `root`."""
+    from utamp_gym.data.record import record_demos
+
+    marker = root / "demos.json"
+    want = {"suite": suite, "requested": episodes, "seed": 100_000}
+    if marker.is_file():
+        done = json.loads(marker.read_text())
+        if {k: done.get(k) for k in want} == want and Path(done["path"]).is_dir():
+            return done
+    demo = record_demos(suite, episodes, root, seed=100_000,
+                        env_options={"grounding": "symbolic", "masks": "geometric",
+                                     "interface": "objects"})  # fmt: skip
+    done = {**want, "path": str(demo.path), "episodes": demo.episodes, "steps": demo.steps,
+            "left_out": {**demo.failed, **demo.unsolvable}}  # fmt: skip
+    marker.write_text(json.dumps(done, indent=2) + "\n")
+    return done
 
 
 def write(table: dict[str, Any], docs: Path) -> None:
@@ -186,27 +236,18 @@ def write(table: dict[str, Any], docs: Path) -> None:
     docs.mkdir(parents=True, exist_ok=True)
     splits_ = list(table["splits"])
     train = splits_[0]
-    interim = not str(table["splits"][train]).startswith("procedural-")
+    ceiling = table.setdefault("achievable", achievable(table["splits"]))
     lines = [
-        *(
-            [
-                "**Interim splits**: this checkout has no procedural splits (#22), so the paper's "
-                "suites stand in: train on `pick-place`; `sliding` has the same objects in another "
-                "layout (the tray must first be slid into reach); `extra` has objects of new "
-                "families (their affordances from the rules). Re-run `benchmarks/agents.py` where "
-                "`procedural-v1` exists for the real splits.",
-                "",
-            ]
-            if interim
-            else []
-        ),
         f"Training split: `{table['splits'][train]}` ({table['env_id']}, objects interface, "
         "geometric masks, symbolic grounding); every split evaluated on all its scenes, seed 0, "
         "symbolic grounding, deterministic masked policy, 10 steps per object. Learned rows: "
         "mean over seeds ± 95 % t interval; planner rows: one deterministic run per scene.",
         "",
         "| method | seeds | "
-        + " | ".join(f"{s} (`{table['splits'][s]}`)" for s in splits_)
+        + " | ".join(
+            f"{s} (`{table['splits'][s]}`, {ceiling[s][0]}/{ceiling[s][1]} achievable)"
+            for s in splits_
+        )
         + " | gap train − test (mean) | steps / seed | wall s / seed |",
         "|---" * (len(splits_) + 5) + "|",
     ]
@@ -235,14 +276,22 @@ def write(table: dict[str, Any], docs: Path) -> None:
         lines.append(f"| {label} | {len(seeds)} | " + " | ".join(cells)
                      + f" | {statistics.fmean(gaps):+.2f} | {steps} | {wall} |")  # fmt: skip
         curves[label] = [p["curve"] for p in seeds]
+    train_wall = sum(p["wall_time_s"] for m in table["methods"].values()
+                     for p in m.get("per_seed", []))  # fmt: skip
+    lines += ["", budgets(table), ""]
     lines += [
-        "",
-        f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes, "
+        f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes "
+        f"({table['demos'].get('left_out', 0)} more left out: no plan, the goal unreachable), "
         f"{table['demos']['steps']} steps, of the training split (`{table['demos']['dataset']}`); "
         "BC's steps are those demonstration steps (its curve counts samples seen). Training "
-        f"took {table['training_wall_time_s']:.0f} s and everything "
-        f"{table['total_wall_time_s']:.0f} s of wall time on a shared 2-core machine (runs "
-        "niced; times are indicative only).",
+        f"wall time summed over every seed of every learned row: {train_wall:.0f} s, on a shared "
+        "2-core machine (runs niced; times are indicative only)"
+        + (
+            f"; load average (1, 5, 15 min) {table['load_average']['start']} at the start and "
+            f"{table['load_average']['end']} at the end of the run that wrote this table."
+            if "load_average" in table
+            else "."
+        ),
     ]
     (docs / "agents.md").write_text("\n".join(lines) + "\n")
     (docs / "agents.json").write_text(json.dumps(table, indent=2, default=str) + "\n")
@@ -252,6 +301,26 @@ def write(table: dict[str, Any], docs: Path) -> None:
         docs / "agents_learning_curves.png",
         f"evaluation success on {table['splits'][train]} during training",
     )
+
+
+def budgets(table: dict[str, Any]) -> str:
+    """The budgets of the learned rows, read from their training configurations."""
+    parts = []
+    for label, m in table["methods"].items():
+        if m["kind"] != "learned":
+            continue
+        c = m["config"]
+        if c["algo"] == "bc":
+            epochs = c["hyperparams"].get("epochs", "default")
+            parts.append(f"{label}: {epochs} epochs over the demonstrations")
+        else:
+            start = " from the cloned policy of the same seed" if c.get("init_from") else ""
+            parts.append(f"{label}: {c['steps']:,} env steps ({c['n_envs']} envs){start}, "
+                         f"evaluated every {c['eval_every']:,} steps")  # fmt: skip
+    episodes = next(m["config"]["eval_episodes"] for m in table["methods"].values()
+                    if m["kind"] == "learned")  # fmt: skip
+    return ("Budgets per seed: " + "; ".join(parts) + f". Evaluation during training: "
+            f"{episodes} fixed episodes of the training split.")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ Usage::
         [--method utamp2-gt] [--seed S] [--grounding symbolic|physics]
         [--masks affordances|geometric|none] [--interface objects|grounded]
         [--image-size H W] [--executor local|ray] [--workers N] [--ray-address A]
+
     utamp demos export-lerobot --root DIR --dataset ID --out DIR [--repo-id NAME]
 
 The dataset is ``utamp/<suite>-<track>-<method>-v0`` under DIR: read it with
@@ -61,6 +62,10 @@ def _cmd_demos(args: argparse.Namespace) -> int:
         f"{result.dataset_id}: {result.episodes} episodes, {result.steps} steps, "
         f"{result.successes} reached the goal; written to {result.path}"
     )
+    if result.unsolvable:  # by design in the procedural splits: not a failure of the recorder
+        shown = "; ".join(f"episode {i}: {r}" for i, r in sorted(result.unsolvable.items())[:3])
+        print(f"{len(result.unsolvable)} episode(s) left out, their goal proved unreachable "
+              f"({shown})")  # fmt: skip
     if result.failed:
         shown = "; ".join(f"episode {i}: {r}" for i, r in sorted(result.failed.items())[:3])
         print(f"utamp demos: {len(result.failed)} episode(s) not recorded ({shown})",
@@ -72,7 +77,7 @@ def _cmd_demos(args: argparse.Namespace) -> int:
 def add_demos_parser(sub: Any) -> None:
     from utamp_gym.distributed import EXECUTORS
     from utamp_gym.planning.methods import METHODS
-    from utamp_gym.suites import SUITES
+    from utamp_gym.suites import ALL_SUITES  # the paper's suites and the procedural splits
 
     p = sub.add_parser(
         "demos",
@@ -81,7 +86,7 @@ def add_demos_parser(sub: Any) -> None:
         "       utamp demos export-lerobot --root DIR --dataset ID --out DIR",
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
-    p.add_argument("--suite", choices=SUITES, help="required: the scenes to record")
+    p.add_argument("--suite", choices=ALL_SUITES, help="required: the scenes to record")
     p.add_argument("--episodes", type=int, default=10, help="episodes (reset seeds S..S+N-1)")
     p.add_argument("--out", help="required: the folder the dataset is written under")
     p.add_argument(

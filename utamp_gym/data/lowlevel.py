@@ -13,6 +13,7 @@ and its index in the plan (-1 then).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -78,11 +79,12 @@ def _observation(time_step: Any, physics: Any, size: tuple[int, int]) -> dict[st
     }  # fmt: skip
 
 
-def scene_of(env_id: str, seed: int) -> str:
-    """The scene the macro env's ``reset(seed=seed)`` picks (the two tracks share scenes)."""
+def scene_of(env_id: str, seed: int, options: Mapping[str, Any] | None = None) -> str:
+    """The scene the macro env's ``reset(seed=seed)`` picks (the two tracks share scenes);
+    `options` select the scenes (a suite, a procedural ``split``)."""
     from utamp_gym.data.macro import make_env
 
-    env = make_env(env_id, {"grounding": "symbolic"})
+    env = make_env(env_id, {**(options or {}), "grounding": "symbolic"})
     try:
         env.reset(seed=seed)
         return str(env.unwrapped.scene.name)

@@ -3,7 +3,8 @@
 One executor task per episode (`utamp_gym.distributed`: local worker processes or Ray tasks,
 as the evaluation sweeps); the episodes are written in their index order, so the dataset does
 not depend on the executor or on completion order. An episode whose task failed is left out
-and named in the result.
+and named in the result; so is one whose scene's goal the planner proved unreachable (the
+procedural splits hold such scenes on purpose), apart, as `DemoResult.unsolvable`.
 """
 
 from __future__ import annotations
@@ -31,6 +32,15 @@ class DemoResult:
     steps: int
     successes: int
     failed: dict[int, str] = field(default_factory=dict)
+    #: episodes left out because the planner proved their goal unreachable from the start
+    unsolvable: dict[int, str] = field(default_factory=dict)
+
+
+def proved_unsolvable(reason: str) -> bool:
+    """Whether a planner error says the goal was *proved* unreachable (relaxed reachability,
+    the translator, or Fast Downward's exhausted complete search), not a time-out or an
+    incomplete search."""
+    return "proved unsolvable" in reason or "search space exhausted: task unsolvable" in reason
 
 
 def suite_env(suite: str) -> tuple[str, dict[str, Any]]:
@@ -96,17 +106,20 @@ def record_demos(
     else:
         size = image_size or lowlevel.DEFAULT_IMAGE_SIZE
         tasks = [
-            lowlevel.LowLevelTask(lowlevel.scene_of(env_id, seed + i), i, seed + i, method, size)
+            lowlevel.LowLevelTask(
+                lowlevel.scene_of(env_id, seed + i, options), i, seed + i, method, size
+            )
             for i in range(episodes)
         ]
         fn = lowlevel.record_episode
     done: dict[int, Episode] = {}
     failed: dict[int, str] = {}
+    unsolvable: dict[int, str] = {}
 
     def record(item: tuple[int, Episode | str]) -> None:
         index, result = item
-        if isinstance(result, str):
-            failed[index] = result
+        if isinstance(result, str):  # the task raised (low-level: no plan to record)
+            (unsolvable if proved_unsolvable(result) else failed)[index] = result
         else:
             done[index] = result
 
@@ -116,9 +129,10 @@ def record_demos(
     kept = [done[i] for i in sorted(done) if done[i].actions]
     for i in sorted(done):
         if not done[i].actions:
-            failed[i] = str(done[i].metadata.get("planner_error") or "no step recorded")
+            reason = str(done[i].metadata.get("planner_error") or "no step recorded")
+            (unsolvable if proved_unsolvable(reason) else failed)[i] = reason
     if not kept:
-        raise UtampError(f"no episode of {suite} could be recorded: {failed}")
+        raise UtampError(f"no episode of {suite} could be recorded: {failed or unsolvable}")
     name = dataset_id(suite, track, method)
     if track == "macro":
         env = macro.make_env(env_id, options)
@@ -141,7 +155,7 @@ def record_demos(
         )  # fmt: skip
     return DemoResult(
         name, path, len(kept), sum(len(e.actions) for e in kept),
-        sum(bool(e.metadata.get("success")) for e in kept), failed,
+        sum(bool(e.metadata.get("success")) for e in kept), failed, unsolvable,
     )  # fmt: skip
 
 

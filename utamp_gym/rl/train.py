@@ -183,7 +183,9 @@ def save_model(model: Any, path: str | Path, meta: ModelMeta) -> None:
 
 def eval_episodes_of(config: TrainConfig) -> list[tuple[str, int]]:
     """The (scene, seed) pairs of every evaluation: the env's scenes in turn."""
-    env = make_env(config.env_id, grounding="symbolic", num_objects=config.num_objects)
+    # every observation entry: the env's default interface may have no ``symbolic`` entry
+    env = make_env(config.env_id, grounding="symbolic", num_objects=config.num_objects,
+                   obs_keys=None)  # fmt: skip
     names = [s.name for s in env.unwrapped.scenes]  # type: ignore[attr-defined]
     env.close()
     base = config.seed + EVAL_SEED_OFFSET
