@@ -165,7 +165,7 @@ def report(args: argparse.Namespace) -> dict[str, Any]:
         },
         {
             "measurement": f"{ENV_ID} physics: {args.episodes} planner-policy episodes "
-            f"({episodes['macro_actions']} macro actions, {episodes['successes']} successes)",
+            f"({episodes['macro_actions']} macro steps, {episodes['successes']} successes)",
             "start_mb": episodes["samples"][0][1],
             "end_mb": episodes["samples"][-1][1],
             "growth": f"{last_half:+.1f} MB over the last {args.episodes - args.episodes // 2}",
