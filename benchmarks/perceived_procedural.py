@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 from pathlib import Path
+
+from perceived_eval import method_stats  # benchmarks/ is on sys.path when run as a script
 
 from utamp_gym.eval.intervals import wilson_interval
 from utamp_gym.eval.records import ResultRow
-from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS, ATTRIBUTES
+from utamp_gym.eval.stages import ATTRIBUTES
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,15 +42,14 @@ def _rows(split: str, shard: tuple[int, int], out: Path, workers: int) -> list[R
 
 
 def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[str, object]:
+    """`perceived_eval.method_stats` (F1, attribute accuracy, crashes) with the success
+    counted on the achievable scenes and the unachievable ones reported unsolvable."""
     ach = [r for r in rows if achievable[r.scene]]
     unach = [r for r in rows if not achievable[r.scene]]
     ok = sum(r.success for r in ach)
     lo, hi = wilson_interval(ok, len(ach)) if ach else (0.0, 0.0)
-    f1 = [r.affordance_f1 for r in rows if r.affordance_f1 is not None]
-    acc: dict[str, float | None] = {}
-    for attr, col in zip(ATTRIBUTES, ATTRIBUTE_COLUMNS, strict=True):
-        vals = [getattr(r, col) for r in rows if getattr(r, col, None) is not None]
-        acc[attr] = statistics.fmean(vals) if vals else None
+    stats = method_stats(rows)
+    acc = stats["attribute_accuracy"] or dict.fromkeys(ATTRIBUTES)
     return {
         "runs": len(rows),
         "achievable_runs": len(ach),
@@ -58,7 +58,7 @@ def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[st
         "achievable_ci95": [lo, hi],
         "unachievable_runs": len(unach),
         "unachievable_reported": sum(not r.solved for r in unach),
-        "affordance_f1": statistics.fmean(f1) if f1 else None,
+        "affordance_f1": stats["affordance_f1"],
         "accuracy": acc,
         "crashed": sum(r.crashed for r in rows),
     }
