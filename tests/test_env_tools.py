@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from dm_env import StepType, test_utils
 from procs import user_env
+from solvable import solvable_resets
 
 from utamp_gym.env.dm_adapter import DmEnvAdapter
 from utamp_gym.env.planner_policy import PlannerPolicy
@@ -30,14 +31,9 @@ def _registered() -> None:
 
 
 def solvable_reset(env: gym.Env, seed: int) -> tuple[Any, dict[str, Any]]:
-    """`reset(seed=...)` from `seed` on until the scene's goal is achievable (a procedural
-    split also holds scenes whose goal is not: planners report those unsolvable)."""
-    from utamp_gym.planning.methods import plan_scene
-
-    for s in range(seed, seed + 50):
-        obs, info = env.reset(seed=s)
-        if plan_scene(env.unwrapped.scene, "utamp2-gt").solved:
-            return obs, info
+    """`reset(seed=...)` from `seed` on until the scene's goal is achievable."""
+    for _, obs, info in solvable_resets(env, seed):
+        return obs, info
     raise AssertionError("no solvable scene")
 
 

@@ -14,6 +14,7 @@ Physics runs on a two-object scene of each id (``num_objects=2``) to keep the su
 from __future__ import annotations
 
 import copy
+import itertools
 import pickle
 import warnings
 from typing import Any
@@ -23,6 +24,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env, data_equivalence
 from gymnasium.vector import AsyncVectorEnv, SyncVectorEnv
+from solvable import solvable_resets
 
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import env_ids, register_envs
@@ -235,16 +237,9 @@ def test_pickled_and_deep_copied_physics_envs_step_as_the_original(env_id: str) 
 
 def _solvable_seeds(env: gym.Env, n: int) -> list[int]:
     """The first `n` reset seeds whose scene's goal the planner reaches (in the rules)."""
-    from utamp_gym.planning.methods import plan_scene
-
-    seeds = []
-    for seed in range(50):
-        env.reset(seed=seed)
-        if plan_scene(env.unwrapped.scene, "utamp2-gt").solved:
-            seeds.append(seed)
-        if len(seeds) == n:
-            return seeds
-    raise AssertionError(f"fewer than {n} solvable scenes in 50 seeds")
+    seeds = [seed for seed, *_ in itertools.islice(solvable_resets(env), n)]
+    assert len(seeds) == n, f"fewer than {n} solvable scenes in 50 seeds"
+    return seeds
 
 
 def _episode(env: gym.Env, policy: Any, seed: int) -> list[dict[str, Any]]:
