@@ -22,6 +22,7 @@ table is also written to ``closed_loop_<perception>.md`` there.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import time
@@ -149,7 +150,7 @@ def main() -> None:
     for (suite, p), t in sorted(table.items()):
         rec = "–" if t["recovery"] is None else f"{t['recovery']:.2f} ({t['faulty']})"
         closed_n = round(t["closed"] * t["n"])
-        ran_open = t["open"] == t["open"]  # NaN: the open loop was not run (--modes closed)
+        ran_open = not math.isnan(t["open"])  # NaN: the open loop was not run (--modes closed)
         opened = f"{t['open']:.2f}" if ran_open else "–"
         wall_open = f"{t['wall_open']:.2f} s" if ran_open else "–"
         lines.append(
