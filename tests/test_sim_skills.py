@@ -309,7 +309,7 @@ def test_a_grasp_that_lands_on_the_object_backs_off_and_grasps_again(backend, de
     standing; with the true belief no retry is needed."""
     from utamp_gym.sim import relook
 
-    monkeypatch.setattr(relook, "aim_grasp", lambda st, obj, plan, replan: plan)
+    monkeypatch.setattr(relook, "aim_grasp", lambda st, sym, g, plan, replan: plan)
     backend.reset(demo, np.random.default_rng(0))
     assert backend.execute(PICK_MUG).retries == ()
     backend.reset(demo, np.random.default_rng(0))

@@ -12,6 +12,7 @@ Failures come back as a `MacroResult` with a reason naming the object.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Callable, Mapping
@@ -86,6 +87,9 @@ GRASP_ATTEMPTS = 2
 #: the palm resting on an upside-down pot's floor included
 APPROACH_STOP = 0.01  # m
 MAX_TURN_DEG = 15.0  # an object turned further by a failed attempt is not grasped again
+#: a placement on a table slot tries its position, then spots this far apart within this
+#: radius of it (`_slot_spots`)
+SPOT_STEP, SPOT_RADIUS = 0.03, 0.09  # m
 
 
 class MissedGrasp(SkillFailure):
@@ -187,7 +191,7 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
     g, approach, up = _to_pregrasp(st, sym, lift)
     # the wrist camera looks closely before the descent (re-aims) and before closing (aborts)
     g, approach, up = relook.aim_grasp(
-        st, sym.obj, (g, approach, up), lambda: _to_pregrasp(st, sym, lift)
+        st, sym, g, (g, approach, up), lambda: _to_pregrasp(st, sym, lift)
     )
     arm.open_gripper(g.opening)
     arm.move_line(approach, *APPROACH)
@@ -399,15 +403,39 @@ def _verify_lift(
     held.belief = hand_t_world @ relook.in_hand(st, obj)
 
 
-def _support_surface(st: SimState, act: MacroAction) -> np.ndarray:
+def _slot_spots(st: SimState, slot: str) -> list[np.ndarray]:
+    """Where on the table slot `slot` an object may be put, best first: the slot's position,
+    then points `SPOT_STEP` apart within `SPOT_RADIUS` of it (and inside the slot's region),
+    nearest first. A stack beside the slot, or the arm's reach, may leave no room at the
+    position itself (a plate's rim over a neighbour's wall); a person would put it a few
+    centimetres along."""
+    centre = np.asarray(st.world.slot_positions[slot], dtype=float)
+    region = next(s.region for s in st.world.scene.slots if s.name == slot)
+    n = int(SPOT_RADIUS / SPOT_STEP)
+    spots = []
+    for i in range(-n, n + 1):
+        for j in range(-n, n + 1):
+            p = centre + np.array([i * SPOT_STEP, j * SPOT_STEP, 0.0])
+            inside = all(region.min[k] + SPOT_STEP / 2 <= p[k] <= region.max[k] - SPOT_STEP / 2
+                         for k in (0, 1))  # fmt: skip
+            if (i or j) and inside and math.hypot(i, j) * SPOT_STEP <= SPOT_RADIUS + 1e-9:
+                spots.append(p)
+    spots.sort(key=lambda p: (round(float(np.linalg.norm(p - centre)), 6), float(p[0])))
+    return [centre, *spots]
+
+
+def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
+    """Where the held object's footprint may be centred on its support, best first: on an
+    object, the centre of its usable surface; on a slot, `_slot_spots`."""
     scene = st.world.scene
     if act.support in st.world.slot_positions:
-        return np.asarray(st.world.slot_positions[act.support], dtype=float)
+        return _slot_spots(st, act.support)
     if act.support not in st.world.body_ids:
         valid = [*st.world.body_ids, *st.world.slot_positions]
         raise GroundingError(f"unknown support '{act.support}'; valid: {', '.join(valid)}")
     try:
-        return support_point(scene.type_of(act.support), act.support_part, st.estimate(act.support))
+        pose = st.estimate(act.support)
+        return [support_point(scene.type_of(act.support), act.support_part, pose)]
     except GroundingError as exc:
         raise SkillFailure(f"cannot place {act.grasp.obj} on {act.support}: {exc}") from None
 
@@ -498,7 +526,7 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     """
     name, arm = held.obj, st.arm
     t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
-    surface = _support_surface(st, act)
+    surfaces = _support_surfaces(st, act)
     base_yaw = yaw_of(st.estimate(act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
     tried = []
     near = arm.sync(arm.near, gap=arm.gap())
@@ -511,7 +539,8 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     # support (`relook.aim_place`) take care of the rest
     try:
         with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
-            for yaw in (base_yaw, None):  # square to the support first, else as held
+            for surface, yaw in itertools.product(surfaces, (base_yaw, None)):
+                # square to the support first, else as held; on a slot, nearest its position
                 tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
                     try:

@@ -24,6 +24,7 @@ from utamp_gym.suites.procedural.spec import (
     BASE_NAME,
     JITTER,
     REACH,
+    STACK_GAP,
     SUITE,
     Generated,
     NoLayout,
@@ -66,14 +67,25 @@ def _footprint(t: ObjectType, orientation: str) -> tuple[float, float, float, fl
     return box.min[0] - cx, box.min[1] - cy, box.max[0] - cx, box.max[1] - cy
 
 
+Rect = tuple[float, float, float, float]  # min x, min y, max x, max y on the table
+
+
+def _gap(a: Rect, b: Rect) -> float:
+    """The distance between two footprints (0 if they overlap)."""
+    dx = max(b[0] - a[2], a[0] - b[2], 0.0)
+    dy = max(b[1] - a[3], a[1] - b[3], 0.0)
+    return math.hypot(dx, dy)
+
+
 def _place(
     rng: Any, stack: list[str], slot: dict[str, Any], types: dict[str, ObjectType],
-    orient: dict[str, str], workspace: dict[str, Any], base: bool,
+    orient: dict[str, str], workspace: dict[str, Any], base: bool, taken: list[Rect],
 ) -> tuple[float, float] | None:  # fmt: skip
     """A position for the stack's footprint centre where all of it fits in `slot` and the
     workspace: the base's near its slot's position (within `JITTER`), any other stack's
-    uniformly over its slot, nearer than `REACH` (objects above are centred on the one
-    below; `generate_scene` checks the exact poses)."""
+    uniformly over its slot, nearer than `REACH` and at least `STACK_GAP` from the stacks
+    already placed (`taken`, extended with this one's footprint); objects above are centred
+    on the one below, and `generate_scene` checks the exact poses."""
     lo = (max(slot["min"][0], workspace["min"][0]), max(slot["min"][1], workspace["min"][1]))
     hi = (min(slot["max"][0], workspace["max"][0]), min(slot["max"][1], workspace["max"][1]))
     feet = [_footprint(types[o], orient[o]) for o in stack]
@@ -86,10 +98,17 @@ def _place(
     if x0 > x1 or y0 > y1:
         return None
     far = max(math.hypot(f[i], f[j]) for f in feet for i in (0, 2) for j in (1, 3))
+    rel = (min(f[0] for f in feet), min(f[1] for f in feet), max(f[2] for f in feet),
+           max(f[3] for f in feet))  # fmt: skip
     for _ in range(ATTEMPTS):
         x, y = float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1))
-        if base or math.hypot(x, y) + far <= REACH + 0.05:
-            return round(x, 4) + 0.0, round(y, 4) + 0.0
+        x, y = round(x, 4) + 0.0, round(y, 4) + 0.0
+        rect = (x + rel[0], y + rel[1], x + rel[2], y + rel[3])
+        if not base and math.hypot(x, y) + far > REACH + 0.05:
+            continue
+        if all(_gap(rect, other) >= STACK_GAP for other in taken):
+            taken.append(rect)
+            return x, y
     return None
 
 
@@ -101,15 +120,18 @@ def _scene_dict(split: str, index: int, seed: int) -> tuple[dict[str, Any], list
     slots = {s["name"]: s for s in layout["slots"]}
     free = ["slot2", "slot3", "slot4", "slot5"]
     objects: list[dict[str, Any]] = []
+    taken: list[Rect] = []
     for k, stack in enumerate(stacks):
         if k == 0:
             where = "slot1"
-            pos = _place(rng, stack, slots[where], types, orient, layout["workspace"], True)
+            pos = _place(rng, stack, slots[where], types, orient, layout["workspace"], True, taken)
         else:
             pos = None
             for j in rng.permutation(len(free)):
                 where = free[int(j)]
-                pos = _place(rng, stack, slots[where], types, orient, layout["workspace"], False)
+                pos = _place(
+                    rng, stack, slots[where], types, orient, layout["workspace"], False, taken
+                )
                 if pos is not None:
                     break
             if pos is not None:

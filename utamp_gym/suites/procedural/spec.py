@@ -26,6 +26,10 @@ BASE_NAME = "base"
 OBJECT_NAMES = (BASE_NAME, "obj1", "obj2", "obj3", "obj4", "obj5")
 JITTER = 0.03  # m, the base's shift from slot1's position (each axis)
 REACH = 0.74  # m from the robot's base (horizontal) to any member's centre
+#: m between the footprints of two stacks: room for the hand beside a low rim or body. At
+#: 2 cm the wrist (link 7) met a tumbler 15 mm deep over a plate's rim (test-count/0065 of
+#: the first draw), and a finger lifting one tumbler grazed the next
+STACK_GAP = 0.06
 MAX_TOTAL_HEIGHT = 0.42  # m, all objects stacked
 ATTEMPTS = 40  # draws of instances, stacks and layouts before giving up
 TOWERS = 20  # goal towers tried per seed
