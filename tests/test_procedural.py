@@ -57,6 +57,32 @@ def test_every_split_regenerates_to_its_kept_hash(split: str) -> None:
     assert pv.split_digest(split) == pv.split_hash(split)
 
 
+@pytest.mark.parametrize("split", SPLITS)
+def test_stacks_stand_apart_with_room_for_the_hand(split: str) -> None:
+    """Every two stacks of a scene stand at least `STACK_GAP` apart (footprints of every
+    member), so a grasp at the edge of one has room beside the other."""
+    for g in pv.split_scenes(split):
+        scene = g.scene
+        below = {o.name: o.on for o in scene.objects}
+        rects: dict[str, list[float]] = {}
+        for o in scene.objects:
+            root = o.name
+            while below[root] in below:
+                root = below[root]
+            r = rects.setdefault(root, [9.0, 9.0, -9.0, -9.0])
+            for member in scene.type_of(o.name).members:
+                box = scene.world_box(o.name, member)
+                r[:] = [min(r[0], box.min[0]), min(r[1], box.min[1]),
+                        max(r[2], box.max[0]), max(r[3], box.max[1])]  # fmt: skip
+        roots = sorted(rects)
+        for i, a in enumerate(roots):
+            for b in roots[i + 1 :]:
+                ra, rb = rects[a], rects[b]
+                dx = max(rb[0] - ra[2], ra[0] - rb[2], 0.0)
+                dy = max(rb[1] - ra[3], ra[1] - rb[3], 0.0)
+                assert (dx * dx + dy * dy) ** 0.5 >= pv.STACK_GAP - 1e-3, (scene.name, a, b)
+
+
 def test_regeneration_does_not_depend_on_the_python_process() -> None:
     """A fresh interpreter with another hash seed writes the same scene file."""
     name = "procedural-v1/test-families/0007"

@@ -24,12 +24,15 @@ import numpy as np
 from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
 from utamp_gym.robot.collision import CollisionChecker
+from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.sim import relook
 from utamp_gym.sim.bodies import BODY_PREFIX
 from utamp_gym.sim.control import ArmDriver, LinePath, Timings, allowing, ignoring
 from utamp_gym.sim.decode import (
     FINGER_CLEARANCE,
     MAX_OPENING,
+    PLACE_DROP,
+    TIP_BELOW_TCP,
     GraspPose,
     GraspSymbols,
     MacroAction,
@@ -39,6 +42,7 @@ from utamp_gym.sim.decode import (
     place_object_pose,
     slide_vector,
     support_point,
+    world_aabb,
     yaw_of,
 )
 from utamp_gym.sim.measure import (
@@ -90,6 +94,14 @@ MAX_TURN_DEG = 15.0  # an object turned further by a failed attempt is not grasp
 #: a placement on a table slot tries its position, then spots this far apart within this
 #: radius of it (`_slot_spots`)
 SPOT_STEP, SPOT_RADIUS = 0.03, 0.09  # m
+#: m a grasp from above is raised by, in turn, when no arm configuration reaches it, while
+#: the pads keep `PAD_HOLD` of the member between them (`_raised`): a plate in a larger
+#: plate's well (procedural-v1/test-count/0063) is pinched 15 mm higher, 7 mm of its rim
+GRASP_RAISES, PAD_HOLD = (0.005, 0.01, 0.015), 0.006
+#: m above an object support a held object is released at, in turn: a plate held by its rim
+#: over a plate whose rim rises around it would put a finger 4 mm into the lower rim at the
+#: usual `PLACE_DROP`; it is let go 1-2 cm higher and falls into the lower plate's well
+PLACE_DROPS = (PLACE_DROP, PLACE_DROP + 0.01, PLACE_DROP + 0.02)
 
 
 class MissedGrasp(SkillFailure):
@@ -114,6 +126,7 @@ def _plan_grasp(
     palm = [g for g in arm.ids.geom_ids.tolist() if g not in fingers]
     tried = []
     candidates = grasp_candidates(t, sym, st.estimate(sym.obj), prefer_x=arm.tcp()[:3, 0])
+    candidates += _raised(t, sym, st.estimate(sym.obj), candidates)
     noise = 0.0 if st.estimator is None else st.estimator.noise
     if candidates[0].width > MAX_OPENING:
         raise SkillFailure(
@@ -145,6 +158,27 @@ def _plan_grasp(
         f"IK infeasible: cannot grasp {sym.obj} by its {sym.member} with the palm on "
         f"'{sym.palm}' ({'; '.join(dict.fromkeys(tried))})"
     )
+
+
+def _raised(
+    t: ObjectType, sym: GraspSymbols, pose: np.ndarray, grasps: list[GraspPose]
+) -> list[GraspPose]:
+    """The grasps from above again, `GRASP_RAISES` higher, while the pads still hold
+    `PAD_HOLD` of the member: a plate's rim in a larger plate's well, whose rim rises
+    where the outer finger goes down, is pinched higher up."""
+    top = float(world_aabb(t.members[sym.member].box, pose)[1][2])
+    out = []
+    for rise in GRASP_RAISES:
+        for g in grasps:
+            tip = float(g.tcp[2, 3]) + rise - TIP_BELOW_TCP
+            if g.tcp[2, 2] > -0.5 or top - tip < PAD_HOLD:
+                continue  # not from above, or too little of the member between the pads
+            up = np.array([0.0, 0.0, rise])
+            tcp, pre = g.tcp.copy(), g.pregrasp.copy()
+            tcp[:3, 3] += up
+            pre[:3, 3] += up
+            out.append(replace(g, tcp=tcp, pregrasp=pre))
+    return out
 
 
 def _member_geoms(st: SimState, obj: str, member: str) -> list[int]:
@@ -539,9 +573,12 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     # support (`relook.aim_place`) take care of the rest
     try:
         with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
-            for surface, yaw in itertools.product(surfaces, (base_yaw, None)):
-                # square to the support first, else as held; on a slot, nearest its position
-                tcp = hand_for_object(place_object_pose(t, now, surface, yaw=yaw), held.belief)
+            # square to the support first, else as held; on a slot, nearest its position; on
+            # an object, released higher if the fingers would meet it (`PLACE_DROPS`)
+            drops = (PLACE_DROP,) if act.support not in world.body_ids else PLACE_DROPS
+            for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None)):
+                target = place_object_pose(t, now, surface, yaw=yaw, drop=drop)
+                tcp = hand_for_object(target, held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
                     try:
                         return arm.line(

@@ -24,6 +24,7 @@ Splits (`~spec.SPLITS`):
 Layouts: the base stands in slot1 of the suites' table (`assets/scenes/layout.toml`), every
 other stack in its own slot 2-5, shifted by up to `~spec.JITTER` from the slot's position;
 every object lies inside its slot, the workspace and `~spec.REACH` of the robot's base, and
+stacks stand at least `~spec.STACK_GAP` apart (room for the hand beside one), and
 the heights of all objects add up to at most `~spec.MAX_TOTAL_HEIGHT` (a tower of them leaves
 the hand room under the workspace's ceiling).
 
@@ -77,6 +78,7 @@ from utamp_gym.suites.procedural.spec import (
     SPECS,
     SPLIT_SUITES,
     SPLITS,
+    STACK_GAP,
     SUITE,
     TOWERS,
     TRAIN_FAMILIES,
@@ -107,6 +109,7 @@ __all__ = [
     "SPECS",
     "SPLITS",
     "SPLIT_SUITES",
+    "STACK_GAP",
     "SUITE",
     "TOWERS",
     "TRAIN_FAMILIES",

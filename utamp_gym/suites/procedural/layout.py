@@ -10,6 +10,7 @@ from utamp_gym.affordances.facts import Fact
 from utamp_gym.errors import SceneError
 from utamp_gym.scene.catalogue import ObjectType, type_to_dict
 from utamp_gym.scene.io import scene_from_dict
+from utamp_gym.scene.model import Scene
 from utamp_gym.suites.generate import (
     _layout,
     _supports,
@@ -186,4 +187,27 @@ def generate_scene(split: str, seed: int, index: int = 0) -> Generated:
             x, y = scene.world_box(o.name, member).center_xy
             if math.hypot(x, y) > REACH:
                 raise NoLayout(f"{o.name}'s {member} out of reach")
+    rects = _stack_rects(scene)  # exact: an object above may stand off its support's centre
+    roots = sorted(rects)
+    for i, a in enumerate(roots):
+        for b in roots[i + 1 :]:
+            if _gap(rects[a], rects[b]) < STACK_GAP:
+                raise NoLayout(f"the stacks on {a} and {b} stand too close")
     return Generated(scene, seed, tuple(families), achievable)
+
+
+def _stack_rects(scene: Scene) -> dict[str, Rect]:
+    """The footprint of every stack (all members of its objects), by its bottom object."""
+    below = {o.name: o.on for o in scene.objects}
+    rects: dict[str, Rect] = {}
+    for o in scene.objects:
+        root = o.name
+        while below[root] in below:
+            root = below[root]
+        for member in scene.type_of(o.name).members:
+            box = scene.world_box(o.name, member)
+            new = (float(box.min[0]), float(box.min[1]), float(box.max[0]), float(box.max[1]))
+            r = rects.get(root, new)
+            rects[root] = (min(r[0], new[0]), min(r[1], new[1]), max(r[2], new[2]),
+                           max(r[3], new[3]))  # fmt: skip
+    return rects
