@@ -334,6 +334,87 @@ def test_the_wrist_camera_re_aims_a_grasp_before_the_descent(backend, demo):
 
 
 @physics
+@pytest.mark.parametrize("aim_room", [True, False])
+def test_the_wrist_camera_re_aims_a_wrap_off_by_less_than_the_aim_shift(
+    demo, monkeypatch, aim_room
+):
+    """A grasp 1.5 mm off along the finger axis (less than `AIM_SHIFT`) with 1 mm of room
+    for the open fingers: the close look re-aims it because it would not fit, and the
+    grasp succeeds at once; an aim that ignored the room is refused by the check before
+    the fingers close and costs a retry."""
+    from utamp_gym.sim import relook
+    from utamp_gym.sim.backend import MujocoBackend
+    from utamp_gym.sim.decode import FINGER_CLEARANCE, MAX_OPENING
+
+    assert relook.AIM_SHIFT > 0.0015
+    width = float(CAT["glass-mug"].members["body"].box.size[1])  # between left and right
+    opening = min(MAX_OPENING, width + 2 * FINGER_CLEARANCE)
+    monkeypatch.setattr(relook, "CHECK_MARGIN", (opening - width) / 2 - 0.001)  # 1 mm of room
+    if not aim_room:
+        monkeypatch.setattr(relook, "AIM_ROOM_SHARE", 10.0)
+    sim = MujocoBackend(pose_noise=0.0)  # exact looks: only the belief is off
+    try:
+        sim.reset(demo, np.random.default_rng(0))
+        sim.state.estimator.offset("mug", np.array([0.0, 0.0015, 0.0]), 0.0)
+        res = sim.execute(PICK_MUG)
+    finally:
+        sim.close()
+    assert res.success, res.reason
+    if aim_room:
+        assert res.retries == ()
+    else:
+        assert len(res.retries) == 1 and "wrist camera saw the body of mug" in res.retries[0]
+
+
+@physics
+def test_a_placement_on_a_slot_goes_along_when_a_neighbour_stands_at_its_position(backend):
+    """A shaker stands 5 cm from slot4's position: the mug cannot be set down centred on
+    the position, so it is set down at the nearest spot of the slot with room, and the
+    shaker is not touched."""
+    slots = [
+        {"name": "slot4", "position": [0.6, 0.38], "min": [0.44, 0.22], "max": [0.82, 0.52]},
+        {"name": "slot5", "position": [0.6, -0.38], "min": [0.44, -0.52], "max": [0.82, -0.22]},
+    ]
+    scene = scene_from_dict({
+        "name": "crowded-slot", "slots": slots,
+        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "objects": [{"name": "mug", "type": "glass-mug", "on": "slot5"},
+                    {"name": "salt", "type": "salt-shaker", "on": "slot4",
+                     "position": [0.6, 0.33]}],
+    })  # fmt: skip
+    backend.reset(scene, np.random.default_rng(1))
+    salt = backend.state.data.xpos[backend.state.world.body_ids["salt"]].copy()
+    picked = backend.execute("(pick-support mug mug-body on left right back on slot5 under on)")
+    assert picked.success, picked.reason
+    res = backend.execute("(place-support mug mug-body on left right back on under slot4 back on)")
+    assert res.success, res.reason
+    assert _on(backend, "mug") == ("slot4", True)
+    st = backend.state
+    mug = st.data.xpos[st.world.body_ids["mug"]]
+    assert np.hypot(mug[0] - 0.6, mug[1] - 0.38) > 0.02  # not at the position
+    np.testing.assert_allclose(st.data.xpos[st.world.body_ids["salt"]], salt, atol=0.003)
+
+
+@physics
+@pytest.mark.parametrize(
+    "name",
+    [
+        "procedural-v1/test-count/0063",  # a plate in a larger plate's well is picked by its rim
+        "procedural-v1/test-count/0008",  # a plate held by its rim is set down in another's well
+    ],
+)
+def test_plates_pinched_by_the_rim_in_a_larger_plates_well(name):
+    """The lower plate's rim rises where the outer finger goes: the pinch is made higher up
+    on the rim, the plate let go higher above the well (IK found no grasp or placement at
+    the usual heights before); physics then carries the whole plan out."""
+    from utamp_gym.sim.execute import run_episode
+
+    res = run_episode(name, "utamp2-rules", seed=0, pose_noise=0.0)
+    assert any("rim-back" in a and "place-support" in a for a in res.plan)
+    assert res.success, res.failure
+
+
+@physics
 def test_the_wrist_camera_aborts_a_grasp_whose_object_moved(backend, demo, monkeypatch):
     """The shaker is pushed 2.5 cm aside while the hand descends onto it (as a finger would
     push a light shaker): the wrist camera's look before closing sees it outside the open
