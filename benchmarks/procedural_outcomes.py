@@ -57,6 +57,10 @@ class Pair:
     physics: bool
     physics_reason: str
     step_s: float
+    #: an earlier action of the episode was one the rules forbid and physics carried out, so
+    #: the symbolic state may assert what the rules say cannot hold (a tumbler set upside
+    #: down over another)
+    after_forbidden: bool = False
 
 
 def _families(scene_name: str) -> dict[str, str]:
@@ -87,6 +91,7 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
             first = False
             model.reset(env.scene)
             families = _families(env.scene.name)
+            tainted = False
             for step in range(max_steps):
                 allowed = np.flatnonzero(info["action_mask"])
                 if not allowed.size:
@@ -115,8 +120,10 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                         physics=bool(macro["success"]),
                         physics_reason=macro["reason"] or "",
                         step_s=time.perf_counter() - start,
+                        after_forbidden=tainted,
                     )
                 )
+                tainted = tainted or (reason is not None and bool(macro["success"]))
                 print(
                     f"{len(pairs):4d} {split:15s} {env.scene.name:32s} "
                     f"{'allow ' if pairs[-1].allowed else 'forbid'} -> "
@@ -145,6 +152,9 @@ def summarize(pairs: list[Pair]) -> dict[str, Any]:
             if fam:
                 table[fam][f"{key}"] += 1
                 table[fam][f"{key}_ok"] += p.physics
+                if p.allowed and not p.after_forbidden:
+                    table[fam]["allowed_clean"] += 1
+                    table[fam]["allowed_clean_ok"] += p.physics
     allowed = [p for p in pairs if p.allowed]
     failures = Counter(
         f"{p.kind} {p.family}"
@@ -157,12 +167,20 @@ def summarize(pairs: list[Pair]) -> dict[str, Any]:
     for p in allowed:
         if not p.physics:
             examples.setdefault(p.family, []).append(
-                {"scene": p.scene, "action": p.action, "reason": p.physics_reason}
+                {
+                    "scene": p.scene,
+                    "action": p.action,
+                    "reason": p.physics_reason,
+                    "after_forbidden": p.after_forbidden,
+                }
             )
+    clean = [p for p in allowed if not p.after_forbidden]
     return {
         "pairs": len(pairs),
         "allowed": len(allowed),
         "allowed_physics_ok": sum(p.physics for p in allowed),
+        "allowed_clean": len(clean),
+        "allowed_clean_physics_ok": sum(p.physics for p in clean),
         "forbidden": len(pairs) - len(allowed),
         "forbidden_physics_ok": sum(p.physics for p in pairs if not p.allowed),
         "by_family": {f: dict(c) for f, c in sorted(by_family.items())},
@@ -187,9 +205,17 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         f"the rules allow**, and on {_rate(s['forbidden_physics_ok'], s['forbidden'])} of those "
         "they forbid.",
         "",
+        "The last column but one counts only the allowed actions taken in states every "
+        "earlier action of the episode reached with the rules' consent; the others follow an "
+        "action the rules forbid that physics carried out anyway (say, a tumbler set upside "
+        "down over another), after which the symbolic state may assert what the rules say "
+        f"cannot hold. In those states physics succeeded on "
+        f"{_rate(s['allowed_clean_physics_ok'], s['allowed_clean'])} of the allowed actions.",
+        "",
         "| family (object acted on) | rules allow: physics succeeds | "
-        f"≥ {TARGET:.0%} | rules forbid: physics succeeds |",
-        "|---|---|---|---|",
+        f"≥ {TARGET:.0%} | rules allow, no forbidden action before | "
+        "rules forbid: physics succeeds |",
+        "|---|---|---|---|---|",
     ]
     below = []
     for fam, c in s["by_family"].items():
@@ -199,6 +225,7 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
             below.append(fam)
         out.append(
             f"| {fam} | {_rate(ok, n)} | {meets} | "
+            f"{_rate(c.get('allowed_clean_ok', 0), c.get('allowed_clean', 0))} | "
             f"{_rate(c.get('forbidden_ok', 0), c.get('forbidden', 0))} |"
         )
     out += [
@@ -224,7 +251,12 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
     out += [f"* {k}: {n}" for k, n in s["allowed_failures"].items()]
     out += ["", "Each of them, with the simulator's reason:", ""]
     for fam, examples in sorted(s["failure_examples"].items()):
-        out += [f"* {fam}: `{e['scene']}` `{e['action']}`: {e['reason']}" for e in examples]
+        out += [
+            f"* {fam}: `{e['scene']}` `{e['action']}`"
+            + (" (after a forbidden action)" if e.get("after_forbidden") else "")
+            + f": {e['reason']}"
+            for e in examples
+        ]
     return "\n".join(out) + "\n"
 
 

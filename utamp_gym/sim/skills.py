@@ -94,6 +94,9 @@ MAX_TURN_DEG = 15.0  # an object turned further by a failed attempt is not grasp
 #: a placement on a table slot tries its position, then spots this far apart within this
 #: radius of it (`_slot_spots`)
 SPOT_STEP, SPOT_RADIUS = 0.03, 0.09  # m
+#: m: spots that leave this much room to every other object come first (a tumbler set down
+#: 1 mm from another could not be lifted past it later)
+SPOT_GAP = 0.04
 #: m a grasp from above is raised by, in turn, when no arm configuration reaches it, while
 #: the pads keep `PAD_HOLD` of the member between them (`_raised`): a plate in a larger
 #: plate's well (procedural-v1/test-count/0063) is pinched 15 mm higher, 7 mm of its rim
@@ -458,6 +461,27 @@ def _slot_spots(st: SimState, slot: str) -> list[np.ndarray]:
     return [centre, *spots]
 
 
+def _footprints(st: SimState, exclude: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(min, max) x-y corners of every object but `exclude`, as the robot believes them."""
+    scene = st.world.scene
+    out = []
+    for name in st.world.body_ids:
+        if name != exclude:
+            lo, hi = world_aabb(scene.type_of(name).bbox, st.estimate(name))
+            out.append((lo[:2], hi[:2]))
+    return out
+
+
+def _crowded(t: ObjectType, pose: np.ndarray, others: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+    """Whether an object of type `t` at `pose` would stand nearer than `SPOT_GAP` to another."""
+    lo, hi = (c[:2] for c in world_aabb(t.bbox, pose))
+    for olo, ohi in others:
+        gap = np.maximum(np.maximum(olo - hi, lo - ohi), 0.0)
+        if float(np.hypot(*gap)) < SPOT_GAP:
+            return True
+    return False
+
+
 def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
     """Where the held object's footprint may be centred on its support, best first: on an
     object, the centre of its usable surface; on a slot, `_slot_spots`."""
@@ -576,8 +600,14 @@ def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
             # square to the support first, else as held; on a slot, nearest its position; on
             # an object, released higher if the fingers would meet it (`PLACE_DROPS`)
             drops = (PLACE_DROP,) if act.support not in world.body_ids else PLACE_DROPS
-            for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None)):
-                target = place_object_pose(t, now, surface, yaw=yaw, drop=drop)
+            targets = [
+                place_object_pose(t, now, surface, yaw=yaw, drop=drop)
+                for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None))
+            ]
+            if act.support in world.slot_positions:  # spots that leave a finger room first
+                others = _footprints(st, exclude=name)
+                targets.sort(key=lambda target: _crowded(t, target, others))
+            for target in targets:
                 tcp = hand_for_object(target, held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
                     try:
