@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from outcome_model import _physics_class, consistent
+from outcome_model import _physics_class, consistent, symbolic_supports
 
 from utamp_gym.suites import procedural
 
@@ -57,9 +57,9 @@ class Pair:
     physics: bool
     physics_reason: str
     step_s: float
-    #: an earlier action of the episode was one the rules forbid and physics carried out, so
-    #: the symbolic state may assert what the rules say cannot hold (a tumbler set upside
-    #: down over another)
+    #: an earlier action of the episode was one the rules forbid and it changed the state:
+    #: physics carried it out (a tumbler set upside down over another) or it let an object
+    #: fall (beside another, touching it) -- a state the rules never lead to
     after_forbidden: bool = False
 
 
@@ -103,6 +103,7 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                 i = int(rng.choice(pool))
                 reason = model.affordance_failure(i)
                 kind, obj, target = env.universe.roles[i]
+                before = symbolic_supports(env)
                 start = time.perf_counter()
                 _, _, terminated, _, info = env.step(i)
                 macro = info["macro_result"]
@@ -123,7 +124,9 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                         after_forbidden=tainted,
                     )
                 )
-                tainted = tainted or (reason is not None and bool(macro["success"]))
+                # a forbidden action that changed the state (carried out, or an object it
+                # let fall) leaves a state the rules never lead to
+                tainted = tainted or (reason is not None and symbolic_supports(env) != before)
                 print(
                     f"{len(pairs):4d} {split:15s} {env.scene.name:32s} "
                     f"{'allow ' if pairs[-1].allowed else 'forbid'} -> "
@@ -205,11 +208,12 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         f"the rules allow**, and on {_rate(s['forbidden_physics_ok'], s['forbidden'])} of those "
         "they forbid.",
         "",
-        "The last column but one counts only the allowed actions taken in states every "
-        "earlier action of the episode reached with the rules' consent; the others follow an "
-        "action the rules forbid that physics carried out anyway (say, a tumbler set upside "
-        "down over another), after which the symbolic state may assert what the rules say "
-        f"cannot hold. In those states physics succeeded on "
+        "The last column but one counts only the allowed actions taken in states reached with "
+        "the rules' consent; the others follow an action the rules forbid that changed the "
+        "state anyway: physics carried it out (say, a tumbler set upside down over another, "
+        "which the symbolic state then asserts although the rules say it cannot hold) or it "
+        "let an object fall (beside another, touching it). In the states reached with the "
+        f"rules' consent physics succeeded on "
         f"{_rate(s['allowed_clean_physics_ok'], s['allowed_clean'])} of the allowed actions.",
         "",
         "| family (object acted on) | rules allow: physics succeeds | "
