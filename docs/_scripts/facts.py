@@ -155,6 +155,7 @@ CONSTANTS = {
     "place_margin_mm": ("utamp_gym.affordances.rules", "PLACE_MARGIN", 1000),
     "span_margin_mm": ("utamp_gym.affordances.rules", "SPAN_MARGIN", 1000),
     "procedural_reach_cm": ("utamp_gym.suites.procedural", "REACH", 100),
+    "procedural_stack_gap_cm": ("utamp_gym.suites.procedural", "STACK_GAP", 100),
     "procedural_height_cm": ("utamp_gym.suites.procedural", "MAX_TOTAL_HEIGHT", 100),
     "procedural_unachievable_pct": ("utamp_gym.suites.procedural", "UNACHIEVABLE_SHARE", 100),
     "procedural_free_pct": ("utamp_gym.suites.procedural", "FREE_SHARE", 100),
@@ -168,6 +169,11 @@ CONSTANTS = {
     "close_fraction": ("utamp_gym.sim.estimate", "CLOSE_FRACTION", 1),
     "check_margin_mm": ("utamp_gym.sim.relook", "CHECK_MARGIN", 1000),
     "aim_shift_mm": ("utamp_gym.sim.relook", "AIM_SHIFT", 1000),
+    "aim_room_pct": ("utamp_gym.sim.relook", "AIM_ROOM_SHARE", 100),
+    "spot_step_cm": ("utamp_gym.sim.skills", "SPOT_STEP", 100),
+    "spot_radius_cm": ("utamp_gym.sim.skills", "SPOT_RADIUS", 100),
+    "spot_gap_cm": ("utamp_gym.sim.skills", "SPOT_GAP", 100),
+    "pad_hold_mm": ("utamp_gym.sim.skills", "PAD_HOLD", 1000),
     "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }
 
