@@ -16,8 +16,9 @@ within 45 deg of the world's x axis). The steps (`fit_shape`):
    circle fitted to the points of its side wall;
 4. **members** — what is left of the footprint beyond the body: each connected piece of
    at least `MIN_MEMBER_CELLS` is a handle on the side it sticks out of; a bar held away from
-   the body by thin posts (a tray's handle) is trimmed to the bar; an attached handle's box
-   reaches the body. A narrow part standing on top of the body (a bottle's neck) is found
+   the body by thin posts (a tray's handle) is trimmed to the bar, and its thickness is
+   measured between the posts (its middle `BAR_MIDDLE`); an attached handle's box reaches
+   the body. A narrow part standing on top of the body (a bottle's neck) is found
    from the heights: a plateau of less than half the body's area at least `NECK_RISE` above
    the rest;
 5. **top** — the shape of the body's top from its visible heights (cells covered by other
@@ -63,6 +64,7 @@ FLAT_FRACTION = 0.8  # of the visible top at the top level: a flat top
 WELL_RATIO = 0.18  # depth / opening below this: a flat well inside a rim (tray, plate)
 DISH_RATIO = 0.30  # ... below this, with a floor smaller than the opening: a dish (pan)
 FLARE = 0.85  # a floor narrower than this fraction of the opening: the walls flare
+BAR_MIDDLE = 0.6  # of a detached bar's length: its middle, clear of the posts at its ends
 NECK_RISE = 0.02  # m a narrow part must stand above the body's top
 NECK_AREA = 0.35  # of the body's area, at most
 MARGIN = 0.05  # m of grid around an object's points
@@ -256,6 +258,23 @@ def _see_through(
     free[inside] = counts[i[inside], j[inside]] == 0
     out[i[free], j[free]] = True
     return out & ~dilate_disc(counts > 0, 1.0)
+
+
+def _bar_thickness(
+    pts: np.ndarray, side: str, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A detached bar's extent along its outward axis from its points between the posts:
+    the cells at the bar's inner face also hold the posts' ends (a tray's 2 cm bar read
+    2.5 cm by all of its cells' points, too thick for the rules' fingers)."""
+    ax = 0 if side in ("front", "back") else 1
+    across = 1 - ax
+    span = hi[across] - lo[across]
+    mid = np.abs(pts[:, across] - (lo[across] + hi[across]) / 2) <= BAR_MIDDLE * span / 2
+    if mid.sum() < 10:
+        return lo, hi
+    lo, hi = lo.copy(), hi.copy()
+    lo[ax], hi[ax] = np.percentile(pts[mid, ax], [0.5, 99.5])
+    return lo, hi
 
 
 def _between(piece: np.ndarray, bar: np.ndarray) -> np.ndarray:
@@ -454,6 +473,8 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         # the bar's extent is its points' (a cell's edge lies up to a cell beyond them: a
         # tray's 2 cm handle measured by cells came out 2.6 cm, too thick for the fingers)
         mlo, mhi = in_bar[:, :2].min(axis=0), in_bar[:, :2].max(axis=0)
+        if trimmed:  # its thickness from the span between the posts (module docstring)
+            mlo, mhi = _bar_thickness(in_bar, side, mlo, mhi)
         mz = in_bar[:, 2]
         zlo, zhi = float(np.percentile(mz, 1)), float(np.percentile(mz, 99))
         if not trimmed:  # an attached handle reaches the body's box
@@ -482,7 +503,9 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     flare = _flare(local[in_body], centre, body_top) if geom == "cylinder" else 0.0
     if not top_shape.visible:
         shape = "concave" if flare > 0.12 else "flat"
-        top_shape = SeenTop(shape, tuple((body_hi - body_lo).tolist()), body_top, visible=False)  # type: ignore[arg-type]
+        size = tuple((body_hi - body_lo).tolist())
+        mid = tuple(((body_hi + body_lo) / 2).tolist())  # the body's: `_moved_top` shifts it
+        top_shape = SeenTop(shape, size, body_top, mid, visible=False)  # type: ignore[arg-type]
         notes.append("top hidden under other objects: judged from the outer wall")
     bottom = _bottom_size(local[in_body], centre, geom, body_lo, body_hi)
 
