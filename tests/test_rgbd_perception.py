@@ -217,6 +217,47 @@ def test_a_covered_pans_mass_is_its_shell() -> None:
     assert ("canLift", "seen", handle.name) in object_facts(t)
 
 
+def _perceived_type(scene_name: str, obj: str):
+    """The declared and the perceived type of `obj` in a suite scene (seed 0)."""
+    from utamp_gym.eval.perceived import perceive_scene
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene(scene_name)
+    return scene.type_of(obj), perceive_scene(scene, 0).planning.type_of(obj)
+
+
+def test_a_pans_open_top_is_a_dish() -> None:
+    """Its outer wall flares (in pick-place/003 its floor, measured in cells, came out too
+    wide to say so, and it was read as a pot): it supports what spans its rim, and does
+    not rest on its rim."""
+    from utamp_gym.affordances.rules import object_facts
+
+    _, t = _perceived_type("pick-place/003", "pan")
+    assert t.parts["on"].shape == "concave"
+    facts = object_facts(t)
+    assert ("isSupportive", t.name, "on") in facts
+    assert ("isSupportable", t.name, "on") not in facts
+
+
+@pytest.mark.parametrize("scene_name", ["pick-place/018", "pick-place/053"])
+def test_a_board_fits_a_trays_well_as_declared(scene_name: str) -> None:
+    """A board (24 cm and its 7 cm handle) in a tray's 32 cm well fits with 2 mm to spare:
+    the board's face beside its handle (read up to 24.5 cm) and the well's inner edges
+    (read 1 mm narrow) are measured to 1 mm along the board's length."""
+    from utamp_gym.affordances.rules import p2p_supportive
+
+    declared_board, board = _perceived_type(scene_name, "board")
+    declared_tray, tray = _perceived_type(scene_name, "tray")
+    length = board.bbox.size[0] - declared_board.bbox.size[0]  # along its handle
+    assert abs(length) <= 0.001 and np.all(
+        np.abs(board.bbox.size - declared_board.bbox.size) <= SIZE_TOL
+    )
+    well = np.asarray(declared_tray.surface_size("on"))
+    error = np.abs(np.asarray(tray.surface_size("on")) - well)
+    assert error[0] <= 0.001 and error[1] <= 0.002, error
+    assert p2p_supportive(tray, "on", board, "under")
+
+
 def test_the_lift_mass_is_cautious_only_where_the_density_leaves_lifting_open() -> None:
     from utamp_gym.perception.objects import LIFTABLE, lift_mass
 

@@ -25,9 +25,11 @@ within 45 deg of the world's x axis). The steps (`fit_shape`):
    objects are left out): *flat* (nearly all of it at one height), *round* (lower towards
    its outline all around: a dome), or lower inside than at a rim running round it: a
    *flat* well inside a rim when shallow (depth below `WELL_RATIO` of the opening),
-   *concave* (a dish whose walls flare from a smaller floor) or *open* (a cavity). A top
-   hidden under other objects is judged from the body's outer wall: flaring out towards the
-   top is a dish, else flat.
+   *concave* (a dish whose walls flare from a smaller floor, or whose outer wall flares by
+   more than `DISH_FLARE`: a pan's floor measured in cells came out wider than `FLARE` of
+   its opening, and the pan was read as a pot, where nothing rests across its rim) or
+   *open* (a cavity). A top hidden under other objects is judged from the body's outer
+   wall: flaring out towards the top is a dish, else flat.
 
 Heights, sizes and positions are in metres; the result is `SeenShape` (plain numbers and
 boxes), which `utamp_gym.perception.objects` turns into a catalogue type.
@@ -36,7 +38,7 @@ boxes), which `utamp_gym.perception.objects` turns into a catalogue type.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import ndimage
@@ -64,6 +66,7 @@ FLAT_FRACTION = 0.8  # of the visible top at the top level: a flat top
 WELL_RATIO = 0.18  # depth / opening below this: a flat well inside a rim (tray, plate)
 DISH_RATIO = 0.30  # ... below this, with a floor smaller than the opening: a dish (pan)
 FLARE = 0.85  # a floor narrower than this fraction of the opening: the walls flare
+DISH_FLARE = 0.12  # ... as do walls whose outer radius grows by more than this, base to top
 BAR_MIDDLE = 0.6  # of a detached bar's length: its middle, clear of the posts at its ends
 NECK_RISE = 0.02  # m a narrow part must stand above the body's top
 NECK_AREA = 0.35  # of the body's area, at most
@@ -277,6 +280,23 @@ def _bar_thickness(
     return lo, hi
 
 
+def _face_beside(
+    pts: np.ndarray, side: str, lat_lo: float, lat_hi: float, lo: np.ndarray, hi: np.ndarray
+) -> None:
+    """Moves a box body's face on `side` (in `lo` / `hi`) to where its points beside an
+    attached handle spanning [`lat_lo`, `lat_hi`] across it put it: the cells along the
+    handle's root hold the handle's points too (a 24 cm board read up to 24.5 cm)."""
+    ax = 0 if side in ("front", "back") else 1
+    lat = pts[:, 1 - ax]
+    beside = (lat < lat_lo - 2 * CELL) | (lat > lat_hi + 2 * CELL)
+    if beside.sum() < 20:
+        return
+    if side in ("back", "right"):
+        lo[ax] = float(np.percentile(pts[beside, ax], 0.2))
+    else:
+        hi[ax] = float(np.percentile(pts[beside, ax], 99.8))
+
+
 def _between(piece: np.ndarray, bar: np.ndarray) -> np.ndarray:
     """Cells of the piece's bounding box that the trimmed bar left out (the posts' gap)."""
     i, j = np.nonzero(piece)
@@ -479,11 +499,16 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         zlo, zhi = float(np.percentile(mz, 1)), float(np.percentile(mz, 99))
         if not trimmed:  # an attached handle reaches the body's box
             ax = 0 if side in ("front", "back") else 1
+            if geom == "box":  # the body's face from its points beside the handle
+                _face_beside(body_pts, side, mlo[1 - ax], mhi[1 - ax], body_lo, body_hi)
             if side in ("back", "right"):
                 mhi[ax] = body_lo[ax]
             else:
                 mlo[ax] = body_hi[ax]
         members.append(SeenMember("handle", side, SeenBox((*mlo, max(zlo, 0.0)), (*mhi, zhi))))
+
+    if geom == "box":
+        centre = (body_lo + body_hi) / 2
 
     # ---- top surface of the body
     top_shape = _top(
@@ -501,8 +526,12 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     elif geom == "box" and top_shape.visible and top_shape.rim > 0:
         top_shape = _box_opening(top_shape, local[in_body], body_lo, body_hi, body_top)
     flare = _flare(local[in_body], centre, body_top) if geom == "cylinder" else 0.0
+    if top_shape.shape == "open" and flare > DISH_FLARE and top_shape.floor > 0:
+        depth = top_shape.height - top_shape.floor
+        if depth < DISH_RATIO * float(np.mean(top_shape.size)):  # a shallow flared cavity
+            top_shape = replace(top_shape, shape="concave")
     if not top_shape.visible:
-        shape = "concave" if flare > 0.12 else "flat"
+        shape = "concave" if flare > DISH_FLARE else "flat"
         size = tuple((body_hi - body_lo).tolist())
         mid = tuple(((body_hi + body_lo) / 2).tolist())  # the body's: `_moved_top` shifts it
         top_shape = SeenTop(shape, size, body_top, mid, visible=False)  # type: ignore[arg-type]
@@ -671,7 +700,7 @@ def _box_opening(
             if near.sum() < 5:
                 return top
             d = sign * (rim[near, ax] - mid[ax])
-            edges.append(float(np.percentile(d, 1)))
+            edges.append(_inner_edge(d, rim[near, other]))
         inner.append(edges)
     opening = (inner[0][0] + inner[0][1], inner[1][0] + inner[1][1])
     centre = (
@@ -680,6 +709,15 @@ def _box_opening(
     )
     rim_width = float(np.mean(size - np.asarray(opening))) / 2
     return SeenTop(top.shape, opening, top.height, centre, rim_width, top.floor, top.visible)
+
+
+def _inner_edge(dist: np.ndarray, along: np.ndarray, step: float = 0.01) -> float:
+    """Distance of a rim's straight inner edge from the centre: the nearest point in each
+    `step` of its length, their median (the nearest of all, 1st percentile, took the
+    inward end of an edge tilted by the heading's error: a tray's well 1 mm narrow)."""
+    bins = np.floor(along / step).astype(int)
+    nearest = [float(dist[bins == b].min()) for b in np.unique(bins) if (bins == b).sum() >= 3]
+    return float(np.median(nearest)) if len(nearest) >= 3 else float(np.percentile(dist, 1))
 
 
 def _has_ring(rim: np.ndarray, body: np.ndarray) -> bool:
