@@ -261,10 +261,10 @@ def test_a_board_fits_a_trays_well_as_declared(scene_name: str) -> None:
 def test_the_lift_mass_is_cautious_only_where_the_density_leaves_lifting_open() -> None:
     from utamp_gym.perception.objects import LIFTABLE, lift_mass
 
-    assert lift_mass(0.8, 0.5, 1.2) == 0.8  # the board: liftable at any wood density
-    assert lift_mass(1.45, 0.93, 2.28) == 2.28  # the tray: it may be too heavy
-    assert lift_mass(2.0, 1.6, 2.5) == 2.0  # too heavy at any density
-    assert lift_mass(1.0, 0.9, LIFTABLE) == 1.0
+    assert lift_mass(0.8, 1.2) == 0.8  # the board: liftable at any wood density
+    assert lift_mass(1.45, 2.28) == 2.28  # the tray: it may be too heavy
+    assert lift_mass(1.8, 2.8) == 1.8  # too heavy already at the nominal density
+    assert lift_mass(1.0, LIFTABLE) == 1.0
 
 
 def test_the_perceiver_needs_no_type_table(single):

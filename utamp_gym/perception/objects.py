@@ -23,13 +23,13 @@ then need and no camera sees is filled in by stated assumptions:
   grip: on a body too wide for the hand, with no handles or too heavy to lift by them (a
   tray); on the two sides across from the handles, else front and back;
 * the **mass** is volume x the material's nominal density (`material.estimate_mass`),
-  except where the material's density range puts the object on both sides of what the hand
-  may lift (`LIFTABLE`): then the heaviest plausible mass (`lift_mass`). A camera cannot
-  tell those apart, and the cautious reading plans what works either way (the object is
-  slid or held by its rims, as its rims were offered, rather than lifted by a grasp that
-  may not carry it). A wooden tray's seen material (2.1 l) weighs 0.9-2.3 kg over wood's
-  range: it reads 2.3 kg, not the nominal 1.5 kg (its catalogue mass, 3.5 kg, is wood of
-  1.7 t/m^3: no camera sees that).
+  except where that is light enough for the hand to lift (`LIFTABLE`) but the material's
+  density range may make it too heavy: then the heaviest plausible mass (`lift_mass`). A
+  camera cannot tell those apart, and the cautious reading plans what works either way
+  (the object is slid or held by its rims, as its rims were offered, rather than lifted by
+  a grasp that may not carry it). A wooden tray's seen material (2.1 l) weighs 0.9-2.3 kg
+  over wood's range: it reads 2.3 kg, not the nominal 1.5 kg (its catalogue mass, 3.5 kg,
+  is wood of 1.7 t/m^3: no camera sees that).
 
 Members are named by kind and side (``handle-back``, ``edge-left``, ``neck``): the
 perceiver does not know the catalogue's names; `utamp_gym.eval.perceived` aligns them to the
@@ -295,15 +295,15 @@ def perceive_instance(
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     mat = classify_material(colours, looks.shape_class())
     mass, low, high = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
-    return PerceivedObject(instance, shape, mat, lift_mass(mass, low, high), low, high,
+    return PerceivedObject(instance, shape, mat, lift_mass(mass, high), low, high,
                            _edges(shape, high))  # fmt: skip
 
 
-def lift_mass(mass: float, low: float, high: float) -> float:
+def lift_mass(mass: float, high: float) -> float:
     """The mass a perceived type reports: the nominal one, or the heaviest plausible one
-    where the material's density range leaves it undecided whether the object is
-    `LIFTABLE` (module docstring)."""
-    return high if low <= LIFTABLE < high else mass
+    where the nominal one is `LIFTABLE` but the material's density range leaves that
+    undecided (module docstring)."""
+    return high if mass <= LIFTABLE < high else mass
 
 
 __all__ = ["PerceivedObject", "lift_mass", "perceive_instance", "perceive_objects"]
