@@ -21,7 +21,15 @@ then need and no camera sees is filled in by stated assumptions:
 * a narrow part standing on the body's top (a bottle's neck) makes the top **pointy**;
 * a rim (an open, concave or well top) is offered as **edges** only where it is the only
   grip: on a body too wide for the hand, with no handles or too heavy to lift by them (a
-  tray); on the two sides across from the handles, else front and back.
+  tray); on the two sides across from the handles, else front and back;
+* the **mass** is volume x the material's nominal density (`material.estimate_mass`),
+  except where that is light enough for the hand to lift (`LIFTABLE`) but the material's
+  density range may make it too heavy: then the heaviest plausible mass (`lift_mass`). A
+  camera cannot tell those apart, and the cautious reading plans what works either way
+  (the object is slid or held by its rims, as its rims were offered, rather than lifted by
+  a grasp that may not carry it). A wooden tray's seen material (2.1 l) weighs 0.9-2.3 kg
+  over wood's range: it reads 2.3 kg, not the nominal 1.5 kg (its catalogue mass, 3.5 kg,
+  is wood of 1.7 t/m^3: no camera sees that).
 
 Members are named by kind and side (``handle-back``, ``edge-left``, ``neck``): the
 perceiver does not know the catalogue's names; `utamp_gym.eval.perceived` aligns them to the
@@ -66,7 +74,7 @@ class PerceivedObject:
     instance: int
     shape: SeenShape
     material: MaterialEstimate
-    mass: float  # kg, at the material's nominal density (see `material.estimate_mass`)
+    mass: float  # kg, the nominal estimate or the heaviest plausible (`lift_mass`)
     mass_low: float  # kg, the lightest plausible
     mass_high: float  # kg, the heaviest plausible
     edges: tuple[SeenMember, ...]
@@ -225,8 +233,8 @@ def _solid_volume(shape: SeenShape) -> float:
     b, top = shape.body.box.size, shape.top
     h = float(b[2])
     footprint = math.pi * (b[0] / 2) * (b[1] / 2) if shape.body.geom == "cylinder" else b[0] * b[1]
-    hollow = 0.0
-    if top.visible and (top.shape in ("open", "concave") or top.rim > 0):
+    hollow = 0.0  # an opening hidden under other objects is judged from the outer wall
+    if top.shape in ("open", "concave") or (top.visible and top.rim > 0):
         floor = top.floor if top.floor > 0 else min(0.01, h / 4)
         depth = max(h - floor, 0.0)
         area = top.size[0] * top.size[1]
@@ -247,7 +255,7 @@ def _shell_area(shape: SeenShape) -> float:
         side, cap = 2 * math.pi * r * b[2], math.pi * r * r
     else:
         side, cap = 2 * (b[0] + b[1]) * b[2], b[0] * b[1]
-    opening = shape.top.visible and shape.top.shape in ("open", "concave")
+    opening = shape.top.shape in ("open", "concave")  # seen, or judged from the outer wall
     area = side + cap + (0.0 if opening else cap)
     for m in shape.members:
         a = m.box.size
@@ -287,7 +295,15 @@ def perceive_instance(
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     mat = classify_material(colours, looks.shape_class())
     mass, low, high = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
-    return PerceivedObject(instance, shape, mat, mass, low, high, _edges(shape, high))
+    return PerceivedObject(instance, shape, mat, lift_mass(mass, high), low, high,
+                           _edges(shape, high))  # fmt: skip
 
 
-__all__ = ["PerceivedObject", "perceive_instance", "perceive_objects"]
+def lift_mass(mass: float, high: float) -> float:
+    """The mass a perceived type reports: the nominal one, or the heaviest plausible one
+    where the nominal one is `LIFTABLE` but the material's density range leaves that
+    undecided (module docstring)."""
+    return high if mass <= LIFTABLE < high else mass
+
+
+__all__ = ["PerceivedObject", "lift_mass", "perceive_instance", "perceive_objects"]

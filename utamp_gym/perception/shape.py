@@ -16,17 +16,20 @@ within 45 deg of the world's x axis). The steps (`fit_shape`):
    circle fitted to the points of its side wall;
 4. **members** — what is left of the footprint beyond the body: each connected piece of
    at least `MIN_MEMBER_CELLS` is a handle on the side it sticks out of; a bar held away from
-   the body by thin posts (a tray's handle) is trimmed to the bar; an attached handle's box
-   reaches the body. A narrow part standing on top of the body (a bottle's neck) is found
+   the body by thin posts (a tray's handle) is trimmed to the bar, and its thickness is
+   measured between the posts (its middle `BAR_MIDDLE`); an attached handle's box reaches
+   the body. A narrow part standing on top of the body (a bottle's neck) is found
    from the heights: a plateau of less than half the body's area at least `NECK_RISE` above
    the rest;
 5. **top** — the shape of the body's top from its visible heights (cells covered by other
    objects are left out): *flat* (nearly all of it at one height), *round* (lower towards
    its outline all around: a dome), or lower inside than at a rim running round it: a
    *flat* well inside a rim when shallow (depth below `WELL_RATIO` of the opening),
-   *concave* (a dish whose walls flare from a smaller floor) or *open* (a cavity). A top
-   hidden under other objects is judged from the body's outer wall: flaring out towards the
-   top is a dish, else flat.
+   *concave* (a dish whose walls flare from a smaller floor, or whose outer wall flares by
+   more than `DISH_FLARE`: a pan's floor measured in cells came out wider than `FLARE` of
+   its opening, and the pan was read as a pot, where nothing rests across its rim) or
+   *open* (a cavity). A top hidden under other objects is judged from the body's outer
+   wall: flaring out towards the top is a dish, else flat.
 
 Heights, sizes and positions are in metres; the result is `SeenShape` (plain numbers and
 boxes), which `utamp_gym.perception.objects` turns into a catalogue type.
@@ -35,7 +38,7 @@ boxes), which `utamp_gym.perception.objects` turns into a catalogue type.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import ndimage
@@ -63,6 +66,8 @@ FLAT_FRACTION = 0.8  # of the visible top at the top level: a flat top
 WELL_RATIO = 0.18  # depth / opening below this: a flat well inside a rim (tray, plate)
 DISH_RATIO = 0.30  # ... below this, with a floor smaller than the opening: a dish (pan)
 FLARE = 0.85  # a floor narrower than this fraction of the opening: the walls flare
+DISH_FLARE = 0.12  # ... as do walls whose outer radius grows by more than this, base to top
+BAR_MIDDLE = 0.6  # of a detached bar's length: its middle, clear of the posts at its ends
 NECK_RISE = 0.02  # m a narrow part must stand above the body's top
 NECK_AREA = 0.35  # of the body's area, at most
 MARGIN = 0.05  # m of grid around an object's points
@@ -256,6 +261,40 @@ def _see_through(
     free[inside] = counts[i[inside], j[inside]] == 0
     out[i[free], j[free]] = True
     return out & ~dilate_disc(counts > 0, 1.0)
+
+
+def _bar_thickness(
+    pts: np.ndarray, side: str, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A detached bar's extent along its outward axis from its points between the posts:
+    the cells at the bar's inner face also hold the posts' ends (a tray's 2 cm bar read
+    2.5 cm by all of its cells' points, too thick for the rules' fingers)."""
+    ax = 0 if side in ("front", "back") else 1
+    across = 1 - ax
+    span = hi[across] - lo[across]
+    mid = np.abs(pts[:, across] - (lo[across] + hi[across]) / 2) <= BAR_MIDDLE * span / 2
+    if mid.sum() < 10:
+        return lo, hi
+    lo, hi = lo.copy(), hi.copy()
+    lo[ax], hi[ax] = np.percentile(pts[mid, ax], [0.5, 99.5])
+    return lo, hi
+
+
+def _face_beside(
+    pts: np.ndarray, side: str, lat_lo: float, lat_hi: float, lo: np.ndarray, hi: np.ndarray
+) -> None:
+    """Moves a box body's face on `side` (in `lo` / `hi`) to where its points beside an
+    attached handle spanning [`lat_lo`, `lat_hi`] across it put it: the cells along the
+    handle's root hold the handle's points too (a 24 cm board read up to 24.5 cm)."""
+    ax = 0 if side in ("front", "back") else 1
+    lat = pts[:, 1 - ax]
+    beside = (lat < lat_lo - 2 * CELL) | (lat > lat_hi + 2 * CELL)
+    if beside.sum() < 20:
+        return
+    if side in ("back", "right"):
+        lo[ax] = float(np.percentile(pts[beside, ax], 0.2))
+    else:
+        hi[ax] = float(np.percentile(pts[beside, ax], 99.8))
 
 
 def _between(piece: np.ndarray, bar: np.ndarray) -> np.ndarray:
@@ -454,15 +493,22 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         # the bar's extent is its points' (a cell's edge lies up to a cell beyond them: a
         # tray's 2 cm handle measured by cells came out 2.6 cm, too thick for the fingers)
         mlo, mhi = in_bar[:, :2].min(axis=0), in_bar[:, :2].max(axis=0)
+        if trimmed:  # its thickness from the span between the posts (module docstring)
+            mlo, mhi = _bar_thickness(in_bar, side, mlo, mhi)
         mz = in_bar[:, 2]
         zlo, zhi = float(np.percentile(mz, 1)), float(np.percentile(mz, 99))
         if not trimmed:  # an attached handle reaches the body's box
             ax = 0 if side in ("front", "back") else 1
+            if geom == "box":  # the body's face from its points beside the handle
+                _face_beside(body_pts, side, mlo[1 - ax], mhi[1 - ax], body_lo, body_hi)
             if side in ("back", "right"):
                 mhi[ax] = body_lo[ax]
             else:
                 mlo[ax] = body_hi[ax]
         members.append(SeenMember("handle", side, SeenBox((*mlo, max(zlo, 0.0)), (*mhi, zhi))))
+
+    if geom == "box":
+        centre = (body_lo + body_hi) / 2
 
     # ---- top surface of the body
     top_shape = _top(
@@ -480,9 +526,15 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     elif geom == "box" and top_shape.visible and top_shape.rim > 0:
         top_shape = _box_opening(top_shape, local[in_body], body_lo, body_hi, body_top)
     flare = _flare(local[in_body], centre, body_top) if geom == "cylinder" else 0.0
+    if top_shape.shape == "open" and flare > DISH_FLARE and top_shape.floor > 0:
+        depth = top_shape.height - top_shape.floor
+        if depth < DISH_RATIO * float(np.mean(top_shape.size)):  # a shallow flared cavity
+            top_shape = replace(top_shape, shape="concave")
     if not top_shape.visible:
-        shape = "concave" if flare > 0.12 else "flat"
-        top_shape = SeenTop(shape, tuple((body_hi - body_lo).tolist()), body_top, visible=False)  # type: ignore[arg-type]
+        shape = "concave" if flare > DISH_FLARE else "flat"
+        size = tuple((body_hi - body_lo).tolist())
+        mid = tuple(((body_hi + body_lo) / 2).tolist())  # the body's: `_moved_top` shifts it
+        top_shape = SeenTop(shape, size, body_top, mid, visible=False)  # type: ignore[arg-type]
         notes.append("top hidden under other objects: judged from the outer wall")
     bottom = _bottom_size(local[in_body], centre, geom, body_lo, body_hi)
 
@@ -648,7 +700,7 @@ def _box_opening(
             if near.sum() < 5:
                 return top
             d = sign * (rim[near, ax] - mid[ax])
-            edges.append(float(np.percentile(d, 1)))
+            edges.append(_inner_edge(d, rim[near, other]))
         inner.append(edges)
     opening = (inner[0][0] + inner[0][1], inner[1][0] + inner[1][1])
     centre = (
@@ -657,6 +709,15 @@ def _box_opening(
     )
     rim_width = float(np.mean(size - np.asarray(opening))) / 2
     return SeenTop(top.shape, opening, top.height, centre, rim_width, top.floor, top.visible)
+
+
+def _inner_edge(dist: np.ndarray, along: np.ndarray, step: float = 0.01) -> float:
+    """Distance of a rim's straight inner edge from the centre: the nearest point in each
+    `step` of its length, their median (the nearest of all, 1st percentile, took the
+    inward end of an edge tilted by the heading's error: a tray's well 1 mm narrow)."""
+    bins = np.floor(along / step).astype(int)
+    nearest = [float(dist[bins == b].min()) for b in np.unique(bins) if (bins == b).sum() >= 3]
+    return float(np.median(nearest)) if len(nearest) >= 3 else float(np.percentile(dist, 1))
 
 
 def _has_ring(rim: np.ndarray, body: np.ndarray) -> bool:
