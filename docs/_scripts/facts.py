@@ -136,7 +136,7 @@ CONSTANTS = {
     "rated_payload_kg": ("utamp_gym.sim.payload", "RATED_PAYLOAD_KG", 1),
     "hold_s": ("utamp_gym.sim.payload", "HOLD_S", 1),
     "carry_hold_s": ("utamp_gym.sim.skills", "CARRY_HOLD_S", 1),
-    "uncertainty_sigmas": ("utamp_gym.sim.skills", "UNCERTAINTY_SIGMAS", 1),
+    "uncertainty_sigmas": ("utamp_gym.sim.grasping", "UNCERTAINTY_SIGMAS", 1),
     "contact_n": ("utamp_gym.sim.skills", "CONTACT_N", 1),
     "place_attempts": ("utamp_gym.sim.skills", "PLACE_ATTEMPTS", 1),
     "approach_stop_cm": ("utamp_gym.sim.skills", "APPROACH_STOP", 100),
@@ -173,10 +173,10 @@ CONSTANTS = {
     "check_margin_mm": ("utamp_gym.sim.relook", "CHECK_MARGIN", 1000),
     "aim_shift_mm": ("utamp_gym.sim.relook", "AIM_SHIFT", 1000),
     "aim_room_pct": ("utamp_gym.sim.relook", "AIM_ROOM_SHARE", 100),
-    "spot_step_cm": ("utamp_gym.sim.skills", "SPOT_STEP", 100),
-    "spot_radius_cm": ("utamp_gym.sim.skills", "SPOT_RADIUS", 100),
-    "spot_gap_cm": ("utamp_gym.sim.skills", "SPOT_GAP", 100),
-    "pad_hold_mm": ("utamp_gym.sim.skills", "PAD_HOLD", 1000),
+    "spot_step_cm": ("utamp_gym.sim.placement", "SPOT_STEP", 100),
+    "spot_radius_cm": ("utamp_gym.sim.placement", "SPOT_RADIUS", 100),
+    "spot_gap_cm": ("utamp_gym.sim.placement", "SPOT_GAP", 100),
+    "pad_hold_mm": ("utamp_gym.sim.grasping", "PAD_HOLD", 1000),
     "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }
 

@@ -12,39 +12,25 @@ Failures come back as a `MacroResult` with a reason naming the object.
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import replace
 from types import MappingProxyType
 
 import numpy as np
 
 from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
-from utamp_gym.robot.collision import CollisionChecker
-from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.sim import relook
-from utamp_gym.sim.bodies import BODY_PREFIX
-from utamp_gym.sim.control import ArmDriver, LinePath, Timings, allowing, ignoring
+from utamp_gym.sim.control import LinePath, Timings, ignoring
 from utamp_gym.sim.decode import (
-    FINGER_CLEARANCE,
-    MAX_OPENING,
-    PLACE_DROP,
-    TIP_BELOW_TCP,
     GraspPose,
     GraspSymbols,
     MacroAction,
     footprint_centre,
-    grasp_candidates,
-    hand_for_object,
-    place_object_pose,
     slide_vector,
-    support_point,
-    world_aabb,
-    yaw_of,
 )
+from utamp_gym.sim.grasping import plan_grasp
 from utamp_gym.sim.measure import (
     Held,
     SimState,
@@ -60,13 +46,13 @@ from utamp_gym.sim.measure import (
     verify_on,
 )
 from utamp_gym.sim.payload import hold_and_measure, payload_failure
+from utamp_gym.sim.placement import plan_place
 from utamp_gym.sim.world import object_orientation
 
 APPROACH = (0.25, 1.0)  # m/s, m/s^2: pre-grasp -> grasp, lift, retreat
 PLACE = (0.15, 0.6)  # pre-place -> place
 SLIDE = (0.12, 0.3)  # pushing/pulling an object over its support
 RELEASE_CLEARANCE = 0.006  # m the fingers open beyond the held width before moving away
-PREPLACE = 0.10  # m above the place pose
 RETREAT = 0.10  # m up after releasing
 MAX_SLIP = 0.02  # m, held object offset change while lifting that counts as slipping
 MAX_TILT_DEG = 15.0  # held object rotation while lifting that counts as pivoting
@@ -79,7 +65,6 @@ CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measur
 #: early; the arm backs up, looks again and aims anew, at most `PLACE_ATTEMPTS` times. (A
 #: support may carry up to the whole weight unpressed: a pan held by its handle sags onto it.)
 CONTACT_N = 5.0
-UNCERTAINTY_SIGMAS = 3.0  # the fingers open this many pose-noise deviations wider a side
 PLACE_ATTEMPTS = 3
 #: the first centimetre of a lift is a test: drift in the hand beyond these by then (or
 #: fingers that closed on nothing) undoes the grasp, which is tried again (`pick`)
@@ -91,20 +76,6 @@ GRASP_ATTEMPTS = 2
 #: the palm resting on an upside-down pot's floor included
 APPROACH_STOP = 0.01  # m
 MAX_TURN_DEG = 15.0  # an object turned further by a failed attempt is not grasped again
-#: a placement on a table slot tries its position, then spots this far apart within this
-#: radius of it (`_slot_spots`)
-SPOT_STEP, SPOT_RADIUS = 0.03, 0.09  # m
-#: m: spots that leave this much room to every other object come first (a tumbler set down
-#: 1 mm from another could not be lifted past it later)
-SPOT_GAP = 0.04
-#: m a grasp from above is raised by, in turn, when no arm configuration reaches it, while
-#: the pads keep `PAD_HOLD` of the member between them (`_raised`): a plate in a larger
-#: plate's well (procedural-v1/test-count/0063) is pinched 15 mm higher, 7 mm of its rim
-GRASP_RAISES, PAD_HOLD = (0.005, 0.01, 0.015), 0.006
-#: m above an object support a held object is released at, in turn: a plate held by its rim
-#: over a plate whose rim rises around it would put a finger 4 mm into the lower rim at the
-#: usual `PLACE_DROP`; it is let go 1-2 cm higher and falls into the lower plate's well
-PLACE_DROPS = (PLACE_DROP, PLACE_DROP + 0.01, PLACE_DROP + 0.02)
 
 
 class MissedGrasp(SkillFailure):
@@ -113,108 +84,6 @@ class MissedGrasp(SkillFailure):
 
 
 # ------------------------------------------------------------------ shared phases
-def _plan_grasp(
-    st: SimState, sym: GraspSymbols, lift: float
-) -> tuple[GraspPose, LinePath, LinePath]:
-    """(grasp, approach path pre-grasp -> grasp, lift path) or `GroundingError`.
-
-    Tries both finger-axis signs and several IK solutions; a solution is kept only if
-    the straight approach and the lift (`lift` m up, 0: none) are feasible from it.
-    """
-    arm, world = st.arm, st.world
-    t = world.scene.type_of(sym.obj)
-    member = _member_geoms(st, sym.obj, sym.member)
-    rest = [g for g in world.geom_ids[sym.obj] if g not in member]
-    fingers = set(arm.ids.finger_geom_ids.tolist()) | set(arm.ids.finger_pad_geom_ids.tolist())
-    palm = [g for g in arm.ids.geom_ids.tolist() if g not in fingers]
-    tried = []
-    candidates = grasp_candidates(t, sym, st.estimate(sym.obj), prefer_x=arm.tcp()[:3, 0])
-    candidates += _raised(t, sym, st.estimate(sym.obj), candidates)
-    noise = 0.0 if st.estimator is None else st.estimator.noise
-    if candidates[0].width > MAX_OPENING:
-        raise SkillFailure(
-            f"cannot grasp {sym.obj} by its {sym.member}: it is {candidates[0].width * 100:.0f} cm"
-            f" between the fingers, the hand opens {MAX_OPENING * 100:.0f} cm"
-        )
-    for g in candidates:
-        near = arm.sync(arm.near, gap=g.opening)
-        # the fingers may touch the member only; the palm may rest against the rest of the
-        # object (an upside-down pot's floor above its lug), as it would in the real hand
-        with ignoring(near, member), allowing(near, palm, rest):
-            for q in arm.ik_solutions(g.tcp, near.is_valid):
-                # the widest opening that fits: room for the error of the pose estimate
-                for opening in _openings(g, noise):
-                    wide = replace(g, opening=opening)
-                    arm.sync(near, gap=opening)
-                    try:
-                        if not near.is_valid(q):
-                            continue
-                        back, up = _approach_and_lift(arm, wide, q, lift, sym.obj, near)
-                    except GroundingError as exc:
-                        tried.append(str(exc))
-                        continue
-                    finally:
-                        arm.sync(near, gap=g.opening)  # the IK search goes on at the narrowest
-                    return wide, back.reversed(), up
-        tried.append("no collision-free IK solution")
-    raise GroundingError(
-        f"IK infeasible: cannot grasp {sym.obj} by its {sym.member} with the palm on "
-        f"'{sym.palm}' ({'; '.join(dict.fromkeys(tried))})"
-    )
-
-
-def _raised(
-    t: ObjectType, sym: GraspSymbols, pose: np.ndarray, grasps: list[GraspPose]
-) -> list[GraspPose]:
-    """The grasps from above again, `GRASP_RAISES` higher, while the pads still hold
-    `PAD_HOLD` of the member: a plate's rim in a larger plate's well, whose rim rises
-    where the outer finger goes down, is pinched higher up."""
-    top = float(world_aabb(t.members[sym.member].box, pose)[1][2])
-    out = []
-    for rise in GRASP_RAISES:
-        for g in grasps:
-            tip = float(g.tcp[2, 3]) + rise - TIP_BELOW_TCP
-            if g.tcp[2, 2] > -0.5 or top - tip < PAD_HOLD:
-                continue  # not from above, or too little of the member between the pads
-            up = np.array([0.0, 0.0, rise])
-            tcp, pre = g.tcp.copy(), g.pregrasp.copy()
-            tcp[:3, 3] += up
-            pre[:3, 3] += up
-            out.append(replace(g, tcp=tcp, pregrasp=pre))
-    return out
-
-
-def _member_geoms(st: SimState, obj: str, member: str) -> list[int]:
-    """The geoms realising `member` of `obj` (the fingers may touch them, not the rest of the
-    object: a finger must not land on a tray's rim next to its handle); all of the object's
-    geoms if the member has none of its own (an edge realised by the body's wall)."""
-    prefix = f"{BODY_PREFIX}{obj}/{member}"
-    names = st.world.info.geom_names[obj]
-    own = [
-        g
-        for g, name in zip(st.world.geom_ids[obj], names, strict=True)
-        if name == prefix or name.startswith(prefix + "/")
-    ]
-    return own or list(st.world.geom_ids[obj])
-
-
-def _openings(g: GraspPose, noise: float) -> tuple[float, ...]:
-    """Pre-grasp finger openings to try, widest first: room for 3 standard deviations of the
-    pose estimate's error on each side (within the hand's opening), then the member's width
-    plus `FINGER_CLEARANCE` a side (`GraspPose.opening`)."""
-    wide = min(MAX_OPENING, g.width + 2 * (FINGER_CLEARANCE + UNCERTAINTY_SIGMAS * noise))
-    return (wide, g.opening) if wide > g.opening + 1e-9 else (g.opening,)
-
-
-def _approach_and_lift(
-    arm: ArmDriver, g: GraspPose, q: np.ndarray, lift: float, obj: str, near: CollisionChecker
-) -> tuple[LinePath, LinePath]:
-    """(path grasp -> pre-grasp, lift path) from grasp configuration `q`, or GroundingError."""
-    back = arm.line(q, g.tcp, g.pregrasp[:3, 3] - g.tcp[:3, 3], near.is_valid, what="the approach")
-    up = arm.line(q, g.tcp, np.array([0.0, 0.0, lift]), near.is_valid, what=f"lifting {obj}")
-    return back, up
-
-
 def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPose, LinePath, Held]:
     """Move to the pre-grasp, approach, close the fingers; check they hold something.
 
@@ -263,8 +132,8 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
 def _to_pregrasp(
     st: SimState, sym: GraspSymbols, lift: float
 ) -> tuple[GraspPose, LinePath, LinePath]:
-    """Plan the grasp (`_plan_grasp`) and move the hand to its pre-grasp pose."""
-    g, approach, up = _plan_grasp(st, sym, lift)
+    """Plan the grasp (`grasping.plan_grasp`) and move the hand to its pre-grasp pose."""
+    g, approach, up = plan_grasp(st, sym, lift)
     st.arm.set_gripper(g.opening)
     st.arm.transfer(approach.q[0], what=f"moving to grasp {sym.obj}")
     return g, approach, up
@@ -440,64 +309,6 @@ def _verify_lift(
     held.belief = hand_t_world @ relook.in_hand(st, obj)
 
 
-def _slot_spots(st: SimState, slot: str) -> list[np.ndarray]:
-    """Where on the table slot `slot` an object may be put, best first: the slot's position,
-    then points `SPOT_STEP` apart within `SPOT_RADIUS` of it (and inside the slot's region),
-    nearest first. A stack beside the slot, or the arm's reach, may leave no room at the
-    position itself (a plate's rim over a neighbour's wall); a person would put it a few
-    centimetres along."""
-    centre = np.asarray(st.world.slot_positions[slot], dtype=float)
-    region = next(s.region for s in st.world.scene.slots if s.name == slot)
-    n = int(SPOT_RADIUS / SPOT_STEP)
-    spots = []
-    for i in range(-n, n + 1):
-        for j in range(-n, n + 1):
-            p = centre + np.array([i * SPOT_STEP, j * SPOT_STEP, 0.0])
-            inside = all(region.min[k] + SPOT_STEP / 2 <= p[k] <= region.max[k] - SPOT_STEP / 2
-                         for k in (0, 1))  # fmt: skip
-            if (i or j) and inside and math.hypot(i, j) * SPOT_STEP <= SPOT_RADIUS + 1e-9:
-                spots.append(p)
-    spots.sort(key=lambda p: (round(float(np.linalg.norm(p - centre)), 6), float(p[0])))
-    return [centre, *spots]
-
-
-def _footprints(st: SimState, exclude: str) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(min, max) x-y corners of every object but `exclude`, as the robot believes them."""
-    scene = st.world.scene
-    out = []
-    for name in st.world.body_ids:
-        if name != exclude:
-            lo, hi = world_aabb(scene.type_of(name).bbox, st.estimate(name))
-            out.append((lo[:2], hi[:2]))
-    return out
-
-
-def _crowded(t: ObjectType, pose: np.ndarray, others: list[tuple[np.ndarray, np.ndarray]]) -> bool:
-    """Whether an object of type `t` at `pose` would stand nearer than `SPOT_GAP` to another."""
-    lo, hi = (c[:2] for c in world_aabb(t.bbox, pose))
-    for olo, ohi in others:
-        gap = np.maximum(np.maximum(olo - hi, lo - ohi), 0.0)
-        if float(np.hypot(*gap)) < SPOT_GAP:
-            return True
-    return False
-
-
-def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
-    """Where the held object's footprint may be centred on its support, best first: on an
-    object, the centre of its usable surface; on a slot, `_slot_spots`."""
-    scene = st.world.scene
-    if act.support in st.world.slot_positions:
-        return _slot_spots(st, act.support)
-    if act.support not in st.world.body_ids:
-        valid = [*st.world.body_ids, *st.world.slot_positions]
-        raise GroundingError(f"unknown support '{act.support}'; valid: {', '.join(valid)}")
-    try:
-        pose = st.estimate(act.support)
-        return [support_point(scene.type_of(act.support), act.support_part, pose)]
-    except GroundingError as exc:
-        raise SkillFailure(f"cannot place {act.grasp.obj} on {act.support}: {exc}") from None
-
-
 def place(st: SimState, act: MacroAction) -> None:
     """Carry the held object over the support's centroid, lower it, release, verify."""
     name, held, arm = act.grasp.obj, st.held, st.arm
@@ -508,7 +319,7 @@ def place(st: SimState, act: MacroAction) -> None:
     if not arm.holds_something() or slip > DROP_SLIP or tilt > DROP_TILT_DEG:
         raise SkillFailure(f"{name} is no longer in the hand (it moved {slip * 100:.1f} cm)")
     before = snapshot(st, {name})
-    up = _plan_place(st, held, act)
+    up = plan_place(st, held, act)
     what = f"carrying {name} to {act.support}"
     arm.transfer(up.end, held=(held.body, held.belief), what=what)
     slip, tilt = grasp_drift(st, held)
@@ -522,11 +333,11 @@ def place(st: SimState, act: MacroAction) -> None:
     if overload:
         raise SkillFailure(overload)
     if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
-        up = _plan_place(st, held, act)
+        up = plan_place(st, held, act)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
 
     def aim_again() -> LinePath:
-        path = _plan_place(st, held, act)
+        path = plan_place(st, held, act)
         arm.transfer(path.end, held=(held.body, held.belief), what=what)
         return path
 
@@ -541,7 +352,7 @@ def place(st: SimState, act: MacroAction) -> None:
         if st.estimator is not None:
             st.estimator.forget(act.support)
         _looked_again(st, held, always=True)
-        up = _plan_place(st, held, act)
+        up = plan_place(st, held, act)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
     _release_and_retreat(st, name, held.opening)
     settle_objects(st)
@@ -574,58 +385,6 @@ def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
         held.belief = new
         return True
     return False
-
-
-def _plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
-    """Path from the place configuration up to the pre-place one, or `GroundingError`.
-
-    The object turns square to its support (its yaw); if that does not fit, it keeps its
-    current yaw.
-    """
-    name, arm = held.obj, st.arm
-    t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
-    surfaces = _support_surfaces(st, act)
-    base_yaw = yaw_of(st.estimate(act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
-    tried = []
-    near = arm.sync(arm.near, gap=arm.gap())
-    near.attach(held.body, held.belief)
-    world = st.world
-    support = world.geom_ids.get(act.support, [world.table_geom_id])
-    # lowering into a snug support (a board into a rimmed tray) may graze it: touching is
-    # allowed there, and penetrating (in the robot's belief) as far as the estimates' error
-    # allows (`relook.PLACE_ROOM_SIGMAS`); the guarded descent and the close look at the
-    # support (`relook.aim_place`) take care of the rest
-    try:
-        with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
-            # square to the support first, else as held; on a slot, nearest its position; on
-            # an object, released higher if the fingers would meet it (`PLACE_DROPS`)
-            drops = (PLACE_DROP,) if act.support not in world.body_ids else PLACE_DROPS
-            targets = [
-                place_object_pose(t, now, surface, yaw=yaw, drop=drop)
-                for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None))
-            ]
-            if act.support in world.slot_positions:  # spots that leave a finger room first
-                others = _footprints(st, exclude=name)
-                targets.sort(key=lambda target: _crowded(t, target, others))
-            for target in targets:
-                tcp = hand_for_object(target, held.belief)
-                for q in arm.ik_solutions(tcp, near.is_valid):
-                    try:
-                        return arm.line(
-                            q,
-                            tcp,
-                            np.array([0.0, 0.0, PREPLACE]),
-                            near.is_valid,
-                            what=f"lowering {name} onto {act.support}",
-                        )
-                    except GroundingError as exc:
-                        tried.append(str(exc))
-                tried.append("no collision-free IK solution")
-    finally:
-        near.detach()
-    raise GroundingError(
-        f"IK infeasible: cannot put {name} on {act.support} ({'; '.join(dict.fromkeys(tried))})"
-    )
 
 
 def slide(st: SimState, act: MacroAction) -> None:

@@ -1,0 +1,156 @@
+"""Where a held object goes down: the spot on its support and the arm's path to it.
+
+On an object, the centre of its usable surface (`decode.support_point`); on a table slot, the
+slot's position or, when that leaves no room (a neighbour, the arm's reach), the nearest spot
+of the slot that does (`_slot_spots`), those that leave every other object `SPOT_GAP` first.
+Over an object the held object is let go higher when the fingers would meet the support at
+the usual drop (`PLACE_DROPS`). `plan_place` returns the path from the place pose up to the
+pre-place pose, or raises `GroundingError`; the place skill (`skills.place`) moves along it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from utamp_gym.errors import GroundingError
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.sim import relook
+from utamp_gym.sim.control import LinePath, allowing
+from utamp_gym.sim.decode import (
+    PLACE_DROP,
+    MacroAction,
+    hand_for_object,
+    place_object_pose,
+    support_point,
+    world_aabb,
+    yaw_of,
+)
+from utamp_gym.sim.measure import Held, SimState, SkillFailure
+
+PREPLACE = 0.10  # m above the place pose
+#: a placement on a table slot tries its position, then spots this far apart within this
+#: radius of it (`_slot_spots`)
+SPOT_STEP, SPOT_RADIUS = 0.03, 0.09  # m
+#: m: spots that leave this much room to every other object come first (a tumbler set down
+#: 1 mm from another could not be lifted past it later)
+SPOT_GAP = 0.04
+#: m above an object support a held object is released at, in turn: a plate held by its rim
+#: over a plate whose rim rises around it would put a finger 4 mm into the lower rim at the
+#: usual `PLACE_DROP`; it is let go 1-2 cm higher and falls into the lower plate's well
+PLACE_DROPS = (PLACE_DROP, PLACE_DROP + 0.01, PLACE_DROP + 0.02)
+
+
+def _slot_spots(st: SimState, slot: str) -> list[np.ndarray]:
+    """Where on the table slot `slot` an object may be put, best first: the slot's position,
+    then points `SPOT_STEP` apart within `SPOT_RADIUS` of it (and inside the slot's region),
+    nearest first. A stack beside the slot, or the arm's reach, may leave no room at the
+    position itself (a plate's rim over a neighbour's wall); a person would put it a few
+    centimetres along."""
+    centre = np.asarray(st.world.slot_positions[slot], dtype=float)
+    region = next(s.region for s in st.world.scene.slots if s.name == slot)
+    n = int(SPOT_RADIUS / SPOT_STEP)
+    spots = []
+    for i in range(-n, n + 1):
+        for j in range(-n, n + 1):
+            p = centre + np.array([i * SPOT_STEP, j * SPOT_STEP, 0.0])
+            inside = all(region.min[k] + SPOT_STEP / 2 <= p[k] <= region.max[k] - SPOT_STEP / 2
+                         for k in (0, 1))  # fmt: skip
+            if (i or j) and inside and math.hypot(i, j) * SPOT_STEP <= SPOT_RADIUS + 1e-9:
+                spots.append(p)
+    spots.sort(key=lambda p: (round(float(np.linalg.norm(p - centre)), 6), float(p[0])))
+    return [centre, *spots]
+
+
+def _footprints(st: SimState, exclude: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(min, max) x-y corners of every object but `exclude`, as the robot believes them."""
+    scene = st.world.scene
+    out = []
+    for name in st.world.body_ids:
+        if name != exclude:
+            lo, hi = world_aabb(scene.type_of(name).bbox, st.estimate(name))
+            out.append((lo[:2], hi[:2]))
+    return out
+
+
+def _crowded(t: ObjectType, pose: np.ndarray, others: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+    """Whether an object of type `t` at `pose` would stand nearer than `SPOT_GAP` to another."""
+    lo, hi = (c[:2] for c in world_aabb(t.bbox, pose))
+    for olo, ohi in others:
+        gap = np.maximum(np.maximum(olo - hi, lo - ohi), 0.0)
+        if float(np.hypot(*gap)) < SPOT_GAP:
+            return True
+    return False
+
+
+def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
+    """Where the held object's footprint may be centred on its support, best first: on an
+    object, the centre of its usable surface; on a slot, `_slot_spots`."""
+    scene = st.world.scene
+    if act.support in st.world.slot_positions:
+        return _slot_spots(st, act.support)
+    if act.support not in st.world.body_ids:
+        valid = [*st.world.body_ids, *st.world.slot_positions]
+        raise GroundingError(f"unknown support '{act.support}'; valid: {', '.join(valid)}")
+    try:
+        pose = st.estimate(act.support)
+        return [support_point(scene.type_of(act.support), act.support_part, pose)]
+    except GroundingError as exc:
+        raise SkillFailure(f"cannot place {act.grasp.obj} on {act.support}: {exc}") from None
+
+
+def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
+    """Path from the place configuration up to the pre-place one, or `GroundingError`.
+
+    The object turns square to its support (its yaw); if that does not fit, it keeps its
+    current yaw.
+    """
+    name, arm = held.obj, st.arm
+    t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
+    surfaces = _support_surfaces(st, act)
+    base_yaw = yaw_of(st.estimate(act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
+    tried = []
+    near = arm.sync(arm.near, gap=arm.gap())
+    near.attach(held.body, held.belief)
+    world = st.world
+    support = world.geom_ids.get(act.support, [world.table_geom_id])
+    # lowering into a snug support (a board into a rimmed tray) may graze it: touching is
+    # allowed there, and penetrating (in the robot's belief) as far as the estimates' error
+    # allows (`relook.PLACE_ROOM_SIGMAS`); the guarded descent and the close look at the
+    # support (`relook.aim_place`) take care of the rest
+    try:
+        with allowing(near, world.geom_ids[name], support, relook.place_room(st)):
+            # square to the support first, else as held; on a slot, nearest its position; on
+            # an object, released higher if the fingers would meet it (`PLACE_DROPS`)
+            drops = (PLACE_DROP,) if act.support not in world.body_ids else PLACE_DROPS
+            targets = [
+                place_object_pose(t, now, surface, yaw=yaw, drop=drop)
+                for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None))
+            ]
+            if act.support in world.slot_positions:  # spots that leave a finger room first
+                others = _footprints(st, exclude=name)
+                targets.sort(key=lambda target: _crowded(t, target, others))
+            for target in targets:
+                tcp = hand_for_object(target, held.belief)
+                for q in arm.ik_solutions(tcp, near.is_valid):
+                    try:
+                        return arm.line(
+                            q,
+                            tcp,
+                            np.array([0.0, 0.0, PREPLACE]),
+                            near.is_valid,
+                            what=f"lowering {name} onto {act.support}",
+                        )
+                    except GroundingError as exc:
+                        tried.append(str(exc))
+                tried.append("no collision-free IK solution")
+    finally:
+        near.detach()
+    raise GroundingError(
+        f"IK infeasible: cannot put {name} on {act.support} ({'; '.join(dict.fromkeys(tried))})"
+    )
+
+
+__all__ = ["PLACE_DROPS", "PREPLACE", "SPOT_GAP", "SPOT_RADIUS", "SPOT_STEP", "plan_place"]
