@@ -103,7 +103,7 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                 i = int(rng.choice(pool))
                 reason = model.affordance_failure(i)
                 kind, obj, target = env.universe.roles[i]
-                before = symbolic_supports(env)
+                before = symbolic_supports(env) if reason is not None else None
                 start = time.perf_counter()
                 _, _, terminated, _, info = env.step(i)
                 macro = info["macro_result"]

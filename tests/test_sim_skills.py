@@ -152,6 +152,14 @@ PLACE_SALT_ON_MUG = "(place-support salt salt-body on left right back on under m
 PLACE_SALT_ON_TRAY = "(place-support salt salt-body on left right back on under tray back on)"
 
 
+#: the suites' side slots 4 and 5 and their workspace, for scenes written in a test
+SIDE_SLOTS = [
+    {"name": "slot4", "position": [0.6, 0.38], "min": [0.44, 0.22], "max": [0.82, 0.52]},
+    {"name": "slot5", "position": [0.6, -0.38], "min": [0.44, -0.52], "max": [0.82, -0.22]},
+]
+WORKSPACE = {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]}
+
+
 @pytest.fixture
 def backend():
     from utamp_gym.sim.backend import MujocoBackend
@@ -221,13 +229,8 @@ def test_the_tray_is_not_liftable_by_one_handle(backend, demo):
 
 @physics
 def test_upright_mug_falls_off_the_shaker(backend):
-    slots = [
-        {"name": "slot4", "position": [0.6, 0.38], "min": [0.44, 0.22], "max": [0.82, 0.52]},
-        {"name": "slot5", "position": [0.6, -0.38], "min": [0.44, -0.52], "max": [0.82, -0.22]},
-    ]
     scene = scene_from_dict({
-        "name": "mug-on-salt", "slots": slots,
-        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "name": "mug-on-salt", "slots": SIDE_SLOTS, "workspace": WORKSPACE,
         "objects": [{"name": "mug", "type": "glass-mug", "on": "slot4"},
                     {"name": "salt", "type": "salt-shaker", "on": "slot5"}],
     })  # fmt: skip
@@ -371,13 +374,8 @@ def test_a_placement_on_a_slot_goes_along_when_a_neighbour_stands_at_its_positio
     """A shaker stands 5 cm from slot4's position: the mug cannot be set down centred on
     the position, so it is set down at the nearest spot of the slot with room, and the
     shaker is not touched."""
-    slots = [
-        {"name": "slot4", "position": [0.6, 0.38], "min": [0.44, 0.22], "max": [0.82, 0.52]},
-        {"name": "slot5", "position": [0.6, -0.38], "min": [0.44, -0.52], "max": [0.82, -0.22]},
-    ]
     scene = scene_from_dict({
-        "name": "crowded-slot", "slots": slots,
-        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "name": "crowded-slot", "slots": SIDE_SLOTS, "workspace": WORKSPACE,
         "objects": [{"name": "mug", "type": "glass-mug", "on": "slot5"},
                     {"name": "salt", "type": "salt-shaker", "on": "slot4",
                      "position": [0.6, 0.33]}],

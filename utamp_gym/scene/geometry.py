@@ -8,6 +8,7 @@ do not import numpy.
 
 from __future__ import annotations
 
+import math
 import operator
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, NamedTuple
@@ -111,6 +112,12 @@ class Box(NamedTuple):
             self.min[i] - tol <= other.min[i] and other.max[i] <= self.max[i] + tol
             for i in range(3)
         )
+
+    def gap_xy(self, other: Box) -> float:
+        """The horizontal distance between the two footprints (0 if they overlap)."""
+        dx = max(other.min[0] - self.max[0], self.min[0] - other.max[0], 0.0)
+        dy = max(other.min[1] - self.max[1], self.min[1] - other.max[1], 0.0)
+        return math.hypot(dx, dy)
 
     def overlaps_xy(self, other: Box, tol: float = 1e-9) -> bool:
         return all(

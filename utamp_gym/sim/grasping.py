@@ -50,8 +50,9 @@ def plan_grasp(
     fingers = set(arm.ids.finger_geom_ids.tolist()) | set(arm.ids.finger_pad_geom_ids.tolist())
     palm = [g for g in arm.ids.geom_ids.tolist() if g not in fingers]
     tried = []
-    candidates = grasp_candidates(t, sym, st.estimate(sym.obj), prefer_x=arm.tcp()[:3, 0])
-    candidates += _raised(t, sym, st.estimate(sym.obj), candidates)
+    pose = st.estimate(sym.obj)
+    candidates = grasp_candidates(t, sym, pose, prefer_x=arm.tcp()[:3, 0])
+    candidates += _raised(t, sym, pose, candidates)
     noise = 0.0 if st.estimator is None else st.estimator.noise
     if candidates[0].width > MAX_OPENING:
         raise SkillFailure(

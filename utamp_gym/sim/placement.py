@@ -17,6 +17,7 @@ import numpy as np
 
 from utamp_gym.errors import GroundingError
 from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.geometry import Box
 from utamp_gym.sim import relook
 from utamp_gym.sim.control import LinePath, allowing
 from utamp_gym.sim.decode import (
@@ -64,25 +65,26 @@ def _slot_spots(st: SimState, slot: str) -> list[np.ndarray]:
     return [centre, *spots]
 
 
-def _footprints(st: SimState, exclude: str) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(min, max) x-y corners of every object but `exclude`, as the robot believes them."""
+def _world_box(t: ObjectType, pose: np.ndarray) -> Box:
+    """The world-aligned box around an object of type `t` at `pose`."""
+    lo, hi = world_aabb(t.bbox, pose)
+    return Box(tuple(map(float, lo)), tuple(map(float, hi)))
+
+
+def _footprints(st: SimState, exclude: str) -> list[Box]:
+    """The boxes around every object but `exclude`, as the robot believes them."""
     scene = st.world.scene
-    out = []
-    for name in st.world.body_ids:
-        if name != exclude:
-            lo, hi = world_aabb(scene.type_of(name).bbox, st.estimate(name))
-            out.append((lo[:2], hi[:2]))
-    return out
+    return [
+        _world_box(scene.type_of(name), st.estimate(name))
+        for name in st.world.body_ids
+        if name != exclude
+    ]
 
 
-def _crowded(t: ObjectType, pose: np.ndarray, others: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+def _crowded(t: ObjectType, pose: np.ndarray, others: list[Box]) -> bool:
     """Whether an object of type `t` at `pose` would stand nearer than `SPOT_GAP` to another."""
-    lo, hi = (c[:2] for c in world_aabb(t.bbox, pose))
-    for olo, ohi in others:
-        gap = np.maximum(np.maximum(olo - hi, lo - ohi), 0.0)
-        if float(np.hypot(*gap)) < SPOT_GAP:
-            return True
-    return False
+    mine = _world_box(t, pose)
+    return any(mine.gap_xy(other) < SPOT_GAP for other in others)
 
 
 def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:

@@ -9,6 +9,7 @@ from typing import Any
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.errors import SceneError
 from utamp_gym.scene.catalogue import ObjectType, type_to_dict
+from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites.generate import (
@@ -68,19 +69,9 @@ def _footprint(t: ObjectType, orientation: str) -> tuple[float, float, float, fl
     return box.min[0] - cx, box.min[1] - cy, box.max[0] - cx, box.max[1] - cy
 
 
-Rect = tuple[float, float, float, float]  # min x, min y, max x, max y on the table
-
-
-def _gap(a: Rect, b: Rect) -> float:
-    """The distance between two footprints (0 if they overlap)."""
-    dx = max(b[0] - a[2], a[0] - b[2], 0.0)
-    dy = max(b[1] - a[3], a[1] - b[3], 0.0)
-    return math.hypot(dx, dy)
-
-
 def _place(
     rng: Any, stack: list[str], slot: dict[str, Any], types: dict[str, ObjectType],
-    orient: dict[str, str], workspace: dict[str, Any], base: bool, taken: list[Rect],
+    orient: dict[str, str], workspace: dict[str, Any], base: bool, taken: list[Box],
 ) -> tuple[float, float] | None:  # fmt: skip
     """A position for the stack's footprint centre where all of it fits in `slot` and the
     workspace: the base's near its slot's position (within `JITTER`), any other stack's
@@ -104,10 +95,10 @@ def _place(
     for _ in range(ATTEMPTS):
         x, y = float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1))
         x, y = round(x, 4) + 0.0, round(y, 4) + 0.0
-        rect = (x + rel[0], y + rel[1], x + rel[2], y + rel[3])
+        rect = Box((x + rel[0], y + rel[1], 0.0), (x + rel[2], y + rel[3], 0.0))
         if not base and math.hypot(x, y) + far > REACH + 0.05:
             continue
-        if all(_gap(rect, other) >= STACK_GAP for other in taken):
+        if all(rect.gap_xy(other) >= STACK_GAP for other in taken):
             taken.append(rect)
             return x, y
     return None
@@ -121,7 +112,7 @@ def _scene_dict(split: str, index: int, seed: int) -> tuple[dict[str, Any], list
     slots = {s["name"]: s for s in layout["slots"]}
     free = ["slot2", "slot3", "slot4", "slot5"]
     objects: list[dict[str, Any]] = []
-    taken: list[Rect] = []
+    taken: list[Box] = []
     for k, stack in enumerate(stacks):
         if k == 0:
             where = "slot1"
@@ -191,23 +182,20 @@ def generate_scene(split: str, seed: int, index: int = 0) -> Generated:
     roots = sorted(rects)
     for i, a in enumerate(roots):
         for b in roots[i + 1 :]:
-            if _gap(rects[a], rects[b]) < STACK_GAP:
+            if rects[a].gap_xy(rects[b]) < STACK_GAP:
                 raise NoLayout(f"the stacks on {a} and {b} stand too close")
     return Generated(scene, seed, tuple(families), achievable)
 
 
-def _stack_rects(scene: Scene) -> dict[str, Rect]:
-    """The footprint of every stack (all members of its objects), by its bottom object."""
+def _stack_rects(scene: Scene) -> dict[str, Box]:
+    """The box around every stack (all members of its objects), by its bottom object."""
     below = {o.name: o.on for o in scene.objects}
-    rects: dict[str, Rect] = {}
+    rects: dict[str, Box] = {}
     for o in scene.objects:
         root = o.name
         while below[root] in below:
             root = below[root]
         for member in scene.type_of(o.name).members:
             box = scene.world_box(o.name, member)
-            new = (float(box.min[0]), float(box.min[1]), float(box.max[0]), float(box.max[1]))
-            r = rects.get(root, new)
-            rects[root] = (min(r[0], new[0]), min(r[1], new[1]), max(r[2], new[2]),
-                           max(r[3], new[3]))  # fmt: skip
+            rects[root] = rects[root].union(box) if root in rects else box
     return rects
