@@ -31,6 +31,8 @@ from utamp_gym.sim.cameras import (
     CameraRig,
     add_wrist_camera,
 )
+from utamp_gym.sim.gl import new_renderer
+from utamp_gym.sim.offscreen import Offscreen
 from utamp_gym.sim.world import build_world_spec, compile_world
 
 pytestmark = pytest.mark.physics
@@ -103,6 +105,61 @@ def test_cameras_render_depth_and_object_level_masks_headless(single):
     # the mug's handle and body share one id: its geoms all map to instance 2
     mug_geoms = world.geom_ids["mug"]
     assert len(mug_geoms) > 3
+
+
+def test_one_pass_gives_mujocos_depth_masks_and_colour_pixel_for_pixel(single):
+    """`Offscreen` reads depth and segments from one pass; the images equal those of
+    `mujoco.Renderer`'s separate depth, segmentation and colour passes."""
+    _, world, d, _, _ = single
+    w, h = ACTING_SIZE
+    off = Offscreen(world.model, w, h)
+    ref = new_renderer(world.model, h, w)
+    try:
+        for cam in range(world.model.ncam):
+            off.update(d, cam)
+            depth, geoms = off.depth_and_geoms()
+            colour = off.colour()
+            ref.update_scene(d, camera=cam)
+            for flag in (
+                mujoco.mjtRndFlag.mjRND_SHADOW,
+                mujoco.mjtRndFlag.mjRND_REFLECTION,
+                mujoco.mjtRndFlag.mjRND_SKYBOX,
+            ):
+                ref.scene.flags[flag] = 0
+            want_colour = ref.render().copy()
+            ref.enable_depth_rendering()
+            want_depth = ref.render().copy()
+            ref.disable_depth_rendering()
+            ref.enable_segmentation_rendering()
+            seg = ref.render()
+            ref.disable_segmentation_rendering()
+            want_geoms = np.where(seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM), seg[..., 0], -1)
+            assert np.array_equal(depth, want_depth)
+            assert np.array_equal(geoms, want_geoms)
+            assert np.array_equal(colour, want_colour)
+            assert (geoms >= 0).mean() > 0.5
+    finally:
+        off.close()
+        ref.close()
+
+
+def test_a_camera_is_drawn_again_only_when_the_world_moved(single):
+    _, world, d, rig, _ = single
+    first = rig.look(d, (*ACTING_VIEWS, WRIST), ACTING_SIZE, rgb=False)
+    again = rig.look(d, (WRIST,), ACTING_SIZE, rgb=False)
+    assert again.views[0] is first.views[-1]  # the world stood still: the same images
+    assert not first.views[0].depth.flags.writeable
+    moved = mujoco.MjData(world.model)
+    moved.qpos[:] = d.qpos
+    mug = world.model.body("obj/mug").jntadr[0]
+    moved.qpos[world.model.jnt_qposadr[mug] + 1] += 0.05  # the mug 5 cm along y
+    mujoco.mj_forward(world.model, moved)
+    after = rig.look(moved, (ACTING_VIEWS[0],), ACTING_SIZE, rgb=False).views[0]
+    assert after is not first.views[0]
+    mug_id = rig.names.index("mug") + 1
+    shift = after.points(after.instances == mug_id).mean(axis=0)
+    shift -= first.views[0].points(first.views[0].instances == mug_id).mean(axis=0)
+    assert 0.03 < shift[1] < 0.07 and abs(shift[0]) < 0.01
 
 
 def test_a_known_object_is_perceived_within_tolerance(single):

@@ -41,7 +41,7 @@ from utamp_gym.perception.views import (
     View,
     ViewBundle,
 )
-from utamp_gym.sim.gl import new_renderer
+from utamp_gym.sim.offscreen import Offscreen
 
 #: cameras of every look while acting, and of the first careful look
 ACTING_VIEWS = ("scene-left", "scene-right")
@@ -54,7 +54,6 @@ SURVEY_VIEWS = (
     "scene-low-right",
 )
 WRIST = "wrist"
-_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)  # an int: comparing arrays with the enum is slow
 ACTING_SIZE = (320, 240)  # width, height
 SURVEY_SIZE = (640, 480)
 WRIST_SIZE = (240, 180)
@@ -124,6 +123,12 @@ class CameraRig:
     `objects` maps each object name to its body id (instance ids follow this order, from 1);
     `robot_bodies` are the robot's bodies (instance -1). One offscreen renderer per image
     size is kept until `close`.
+
+    A camera is rendered once per pose of the world: until a geom, camera or light moves
+    (`_signature`), asking for it again returns the same `View` (read-only arrays). The
+    skills look several times without the world moving between the looks (a wrist look,
+    then the scene cameras' as well); the rasteriser would draw the same pixels again.
+    The model is taken as fixed for the rig's life (a new world gets a new rig).
     """
 
     def __init__(
@@ -146,7 +151,9 @@ class CameraRig:
             for name, cam in [(c.name, c.name) for c in SCENE_CAMERAS]
             + [(WRIST, robot_prefix + WRIST)]
         }
-        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._renderers: dict[tuple[int, int], Offscreen] = {}
+        self._drawn: dict[tuple[str, tuple[int, int], bool], View] = {}  # at `_drawn_at`
+        self._drawn_at = b""
 
     @property
     def instances(self) -> dict[int, str]:
@@ -167,15 +174,22 @@ class CameraRig:
     ) -> ViewBundle:
         """Render `cameras` at `size` (width, height): depth, instance masks and (if `rgb`)
         colour, with each camera's intrinsics and pose."""
-        views = tuple(self._view(data, cam, size, rgb) for cam in cameras)
-        return ViewBundle(views, robot)
+        now = _signature(data)
+        if now != self._drawn_at:
+            self._drawn.clear()
+            self._drawn_at = now
+        views = []
+        for cam in cameras:
+            view = self._drawn.get((cam, size, rgb))
+            if view is None:
+                view = self._drawn[cam, size, rgb] = self._view(data, cam, size, rgb)
+            views.append(view)
+        return ViewBundle(tuple(views), robot)
 
-    def _renderer(self, size: tuple[int, int]) -> mujoco.Renderer:
+    def _renderer(self, size: tuple[int, int]) -> Offscreen:
         r = self._renderers.get(size)
         if r is None:
-            vis = self.model.vis.global_
-            vis.offwidth, vis.offheight = max(vis.offwidth, size[0]), max(vis.offheight, size[1])
-            r = self._renderers[size] = new_renderer(self.model, size[1], size[0])
+            r = self._renderers[size] = Offscreen(self.model, *size)
         return r
 
     def _view(self, data: mujoco.MjData, camera: str, size: tuple[int, int], rgb: bool) -> View:
@@ -184,34 +198,40 @@ class CameraRig:
             valid = ", ".join(self.camera_names())
             raise ValueError(f"unknown camera '{camera}'; valid: {valid}")
         r = self._renderer(size)
-        r.update_scene(data, camera=cid)
-        flags = r.scene.flags
-        for flag in (
-            mujoco.mjtRndFlag.mjRND_SHADOW,
-            mujoco.mjtRndFlag.mjRND_REFLECTION,
-            mujoco.mjtRndFlag.mjRND_SKYBOX,
-        ):
-            flags[flag] = 0
-        colour = r.render().copy() if rgb else None
-        r.enable_depth_rendering()
-        depth = r.render().copy()
-        r.disable_depth_rendering()
-        r.enable_segmentation_rendering()
-        seg = r.render()
-        r.disable_segmentation_rendering()
-        is_geom = seg[..., 1] == _GEOM
-        ids = np.where(is_geom, seg[..., 0], 0)
-        instances = np.where(is_geom, self._geom_instance[ids], BACKGROUND).astype(np.int32)
+        r.update(data, cid)
+        colour = r.colour() if rgb else None
+        depth, geoms = r.depth_and_geoms()
+        instances = np.where(geoms >= 0, self._geom_instance[geoms], BACKGROUND).astype(np.int32)
         pose = np.eye(4)
         pose[:3, :3] = data.cam_xmat[cid].reshape(3, 3) @ np.diag([1.0, -1.0, -1.0])
         pose[:3, 3] = data.cam_xpos[cid]
         fovy = float(self.model.cam_fovy[cid])
+        for array in (pose, depth, instances, colour):
+            if array is not None:
+                array.setflags(write=False)
         return View(camera, intrinsics(fovy, *size), pose, depth, instances, colour)
 
     def close(self) -> None:
         for r in self._renderers.values():
             r.close()
         self._renderers.clear()
+        self._drawn.clear()
+
+
+def _signature(data: mujoco.MjData) -> bytes:
+    """What a rendering of `data` depends on besides the model: where every geom, camera and
+    light is."""
+    return b"".join(
+        a.tobytes()
+        for a in (
+            data.geom_xpos,
+            data.geom_xmat,
+            data.cam_xpos,
+            data.cam_xmat,
+            data.light_xpos,
+            data.light_xdir,
+        )
+    )
 
 
 __all__ = [
