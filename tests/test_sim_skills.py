@@ -394,6 +394,37 @@ def test_a_placement_on_a_slot_goes_along_when_a_neighbour_stands_at_its_positio
 
 
 @physics
+def test_a_tray_set_down_in_a_far_corner_keeps_its_handles_in_reach(backend):
+    """slot5 lies 0.71 m out; a 43 cm tray set down square on its position put its far
+    handle 0.89 m from the robot's base, where no arm configuration reached it again. It
+    goes down at the spot of the slot that leaves every member within `MEMBER_REACH`, and
+    the far handle is picked from there."""
+    from utamp_gym.sim.placement import MEMBER_REACH
+    from utamp_gym.suites import resolve_scene
+
+    backend.reset(resolve_scene("procedural-v1/test-families/0071"), np.random.default_rng(0))
+    for action in (
+        "(pick-support obj2 obj2-lid on back front back on base under on)",
+        "(place-support obj2 obj2-lid on back front back on under slot3 back on)",
+        "(pick-support base base-handle-back on back front back on slot1 under on)",
+        "(place-support base base-handle-back on back front back on under slot5 back on)",
+    ):
+        res = backend.execute(action)
+        assert res.success, (action, res.reason)
+    assert _on(backend, "base") == ("slot5", True)
+    st = backend.state
+    tray = st.world.scene.type_of("base")
+    pose = st.data.xpos[st.world.body_ids["base"]], st.data.xmat[st.world.body_ids["base"]]
+    for member in tray.members.values():
+        centre = pose[1].reshape(3, 3) @ np.asarray(member.box.center) + pose[0]
+        assert math.hypot(centre[0], centre[1]) <= MEMBER_REACH + 0.01, member.name
+    res = backend.execute(
+        "(pick-support base base-handle-front on back front back on slot5 under on)"
+    )
+    assert res.success, res.reason
+
+
+@physics
 @pytest.mark.parametrize(
     "name",
     [

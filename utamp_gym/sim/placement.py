@@ -2,7 +2,9 @@
 
 On an object, the centre of its usable surface (`decode.support_point`); on a table slot, the
 slot's position or, when that leaves no room (a neighbour, the arm's reach), the nearest spot
-of the slot that does (`_slot_spots`), those that leave every other object `SPOT_GAP` first.
+of the slot that does (`_slot_spots`): those that leave every member of the object within
+`MEMBER_REACH` of the robot's base (or its farthest member nearest) first, turned across the
+reach if need be, then those that leave every other object `SPOT_GAP`.
 Over an object the held object is let go higher when the fingers would meet the support at
 the usual drop (`PLACE_DROPS`). `plan_place` returns the path from the place pose up to the
 pre-place pose, or raises `GroundingError`; the place skill (`skills.place`) moves along it.
@@ -42,24 +44,32 @@ SPOT_GAP = 0.04
 #: over a plate whose rim rises around it would put a finger 4 mm into the lower rim at the
 #: usual `PLACE_DROP`; it is let go 1-2 cm higher and falls into the lower plate's well
 PLACE_DROPS = (PLACE_DROP, PLACE_DROP + 0.01, PLACE_DROP + 0.02)
+#: m from the robot's base (horizontal) to a member's centre that the hand picks from above
+#: with room to spare (the Panda's top-down reach is 0.80 m at the table, 0.76 m at 35 cm;
+#: the procedural layout keeps its objects' members as near, `suites.procedural.REACH`). On
+#: a slot, placements that leave every member of the object this near (or the farthest one
+#: nearest) come first: a tray set down square in a far corner put its far handle 0.89 m
+#: out, and no arm reached it again
+MEMBER_REACH = 0.74
 
 
-def _slot_spots(st: SimState, slot: str) -> list[np.ndarray]:
+def _slot_spots(st: SimState, slot: str, radius: float = SPOT_RADIUS) -> list[np.ndarray]:
     """Where on the table slot `slot` an object may be put, best first: the slot's position,
-    then points `SPOT_STEP` apart within `SPOT_RADIUS` of it (and inside the slot's region),
+    then points `SPOT_STEP` apart within `radius` of it (and inside the slot's region),
     nearest first. A stack beside the slot, or the arm's reach, may leave no room at the
     position itself (a plate's rim over a neighbour's wall); a person would put it a few
     centimetres along."""
     centre = np.asarray(st.world.slot_positions[slot], dtype=float)
     region = next(s.region for s in st.world.scene.slots if s.name == slot)
-    n = int(SPOT_RADIUS / SPOT_STEP)
+    size = np.asarray(region.max[:2], dtype=float) - np.asarray(region.min[:2], dtype=float)
+    n = int(min(radius, float(np.hypot(*size))) / SPOT_STEP)
     spots = []
     for i in range(-n, n + 1):
         for j in range(-n, n + 1):
             p = centre + np.array([i * SPOT_STEP, j * SPOT_STEP, 0.0])
             inside = all(region.min[k] + SPOT_STEP / 2 <= p[k] <= region.max[k] - SPOT_STEP / 2
                          for k in (0, 1))  # fmt: skip
-            if (i or j) and inside and math.hypot(i, j) * SPOT_STEP <= SPOT_RADIUS + 1e-9:
+            if (i or j) and inside and math.hypot(i, j) * SPOT_STEP <= radius + 1e-9:
                 spots.append(p)
     spots.sort(key=lambda p: (round(float(np.linalg.norm(p - centre)), 6), float(p[0])))
     return [centre, *spots]
@@ -85,6 +95,16 @@ def _crowded(t: ObjectType, pose: np.ndarray, others: list[Box]) -> bool:
     """Whether an object of type `t` at `pose` would stand nearer than `SPOT_GAP` to another."""
     mine = _world_box(t, pose)
     return any(mine.gap_xy(other) < SPOT_GAP for other in others)
+
+
+def _beyond_reach(t: ObjectType, pose: np.ndarray) -> float:
+    """How far (cm, rounded) the farthest member centre of an object of type `t` at `pose`
+    lies beyond `MEMBER_REACH` of the robot's base (the world origin); 0 within it."""
+    far = max(
+        math.hypot(*(pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3]))
+        for m in t.members.values()
+    )
+    return max(0.0, round(100 * (far - MEMBER_REACH)))
 
 
 def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
@@ -131,9 +151,29 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
                 place_object_pose(t, now, surface, yaw=yaw, drop=drop)
                 for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None))
             ]
-            if act.support in world.slot_positions:  # spots that leave a finger room first
+            if act.support in world.slot_positions:
+                # spots that leave every member in reach (or the farthest nearest) first, then
+                # those that leave a finger room; the whole slot if no spot near its position
+                # leaves every member in reach
+                n_near = len(targets)
+                if min(_beyond_reach(t, target) for target in targets) > 0:
+                    targets += [
+                        place_object_pose(t, now, spot, yaw=yaw)
+                        for spot, yaw in itertools.product(
+                            _slot_spots(st, act.support, math.inf)[len(surfaces) :],
+                            (base_yaw, None),
+                        )
+                    ]
                 others = _footprints(st, exclude=name)
-                targets.sort(key=lambda target: _crowded(t, target, others))
+                order = sorted(
+                    range(len(targets)),
+                    key=lambda k: (
+                        _beyond_reach(t, targets[k]),
+                        k >= n_near,
+                        _crowded(t, targets[k], others),
+                    ),
+                )
+                targets = [targets[k] for k in order]
             for target in targets:
                 tcp = hand_for_object(target, held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
@@ -155,4 +195,12 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     )
 
 
-__all__ = ["PLACE_DROPS", "PREPLACE", "SPOT_GAP", "SPOT_RADIUS", "SPOT_STEP", "plan_place"]
+__all__ = [
+    "MEMBER_REACH",
+    "PLACE_DROPS",
+    "PREPLACE",
+    "SPOT_GAP",
+    "SPOT_RADIUS",
+    "SPOT_STEP",
+    "plan_place",
+]
