@@ -95,3 +95,22 @@ def test_same_generator_seed_same_ik_solution(kin):
     a = kin.ik(target, seed, np.random.default_rng(4))
     b = kin.ik(target, seed, np.random.default_rng(4))
     np.testing.assert_array_equal(a.q, b.q)
+
+
+@pytest.mark.parametrize("height", [0.02, 0.25])
+@pytest.mark.parametrize("bearing_deg", [-40.0, 0.0, 40.0])
+def test_the_hand_reaches_from_above_as_far_as_placements_keep_members(kin, height, bearing_deg):
+    """Placements on a slot keep every member's centre within `MEMBER_REACH` of the base so
+    that it can be picked again: the TCP pointing straight down reaches that far (table
+    height to 25 cm, across the table's front), and FK(IK(x)) = x."""
+    from utamp_gym.sim.placement import MEMBER_REACH
+
+    b = np.radians(bearing_deg)
+    target = np.eye(4)
+    target[:3, :3] = np.array(
+        [[np.cos(b), np.sin(b), 0.0], [np.sin(b), -np.cos(b), 0.0], [0.0, 0.0, -1.0]]
+    )
+    target[:3, 3] = [MEMBER_REACH * np.cos(b), MEMBER_REACH * np.sin(b), height]
+    res = kin.ik(target, HOME_Q, np.random.default_rng(0), max_attempts=40)
+    assert res.success, (bearing_deg, height, res.pos_error)
+    np.testing.assert_allclose(kin.fk(res.q)[:3, 3], target[:3, 3], atol=2e-4)
