@@ -44,12 +44,13 @@ SPOT_GAP = 0.04
 #: over a plate whose rim rises around it would put a finger 4 mm into the lower rim at the
 #: usual `PLACE_DROP`; it is let go 1-2 cm higher and falls into the lower plate's well
 PLACE_DROPS = (PLACE_DROP, PLACE_DROP + 0.01, PLACE_DROP + 0.02)
-#: m from the robot's base (horizontal) to a member's centre that the hand still reaches from
-#: above, from the table to 25 cm up (tests/test_robot_kinematics.py; 0.80 m at 25 cm is out
-#: of reach). On a slot, placements that leave every member of the object this near (or the
-#: farthest one nearest) come first: a tray set down square in a far corner put its far
-#: handle 0.89 m out, and no arm reached it again
-MEMBER_REACH = 0.78
+#: m from the robot's base (horizontal) to a member's centre that the hand reaches from above
+#: and lifts from (the procedural layout's `REACH`; tests/test_robot_kinematics.py: the TCP
+#: pointing down reaches it up to 35 cm above the table). On a slot, placements that leave
+#: every member of the object this near (or the farthest one nearest) come first: a tray set
+#: down square in a far corner put its far handle 0.89 m out, and no arm reached it again. At
+#: 0.78 m a plate's rim set down 0.78 m out was reached but could not be lifted
+MEMBER_REACH = 0.74
 
 
 def _slot_spots(st: SimState, slot: str, radius: float = SPOT_RADIUS) -> list[np.ndarray]:
