@@ -288,6 +288,8 @@ def main() -> None:
         names = {f.name for f in fields(Pair)}
         pairs = [Pair(**{k: v for k, v in p.items() if k in names}) for p in old["all_pairs"]]
         wall = float(old["wall_time_s"])
+        for key in ("pairs", "splits", "seed", "max_steps", "workers"):  # as measured
+            setattr(args, key, old["args"][key])
     else:
         # each worker samples its share of one split from its own seed
         jobs = []
