@@ -50,7 +50,8 @@ from utamp_gym.perception.material import (
     estimate_mass,
     shape_class,
 )
-from utamp_gym.perception.shape import SeenBox, SeenMember, SeenShape, fit_shape
+from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape
+from utamp_gym.perception.shape import fit_shape
 from utamp_gym.perception.views import ViewBundle
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
