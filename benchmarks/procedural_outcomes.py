@@ -12,9 +12,9 @@ ones, with probability 1/2 among those the rules allow (their U-TAMP-2 precondit
 and otherwise among those they forbid; the rules' verdict is recorded, then the simulator
 executes it. An episode ends at the goal, after `--max-steps` steps, or when the simulation
 no longer matches the symbolic state (`outcome_model.consistent`): after a failure, or after
-an action that physics carried out otherwise than its effects say (a tumbler set upside down
-on another that slid down around it is not *on* it). The rules judge the symbolic state; a
-state it misdescribes is not one to judge them on.
+an action that physics carried out otherwise than its effects say (an object that ended
+inside its support, not on it). The rules judge the symbolic state; a state it misdescribes
+is not one to judge them on.
 
 Reported per family of the object acted on (and, for placements, of the support): how
 often physics succeeds where the rules allow (target >= 98 %) and where they forbid (not a
@@ -212,9 +212,9 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         "they forbid.",
         "",
         "An episode ends when the simulation no longer matches the symbolic state, after a "
-        "failure or after an action physics carried out otherwise than its effects say (a "
-        "tumbler set upside down on another that slid down around it is not on it): the rules "
-        "judge the symbolic state, and a state it misdescribes is not one to judge them on. "
+        "failure or after an action physics carried out otherwise than its effects say (an "
+        "object that ended inside its support, not on it): the rules judge the symbolic "
+        "state, and a state it misdescribes is not one to judge them on. "
         "The last column but one counts only the allowed actions taken in states reached with "
         "the rules' consent; the others follow an action the rules forbid that changed the "
         "state anyway (physics carried it out as its effects say, or it let an object fall "
