@@ -412,11 +412,12 @@ def test_a_tray_set_down_in_a_far_corner_keeps_its_handles_in_reach(backend):
         res = backend.execute(action)
         assert res.success, (action, res.reason)
     assert _on(backend, "base") == ("slot5", True)
+    from utamp_gym.sim.measure import obj_pose
+
     st = backend.state
-    tray = st.world.scene.type_of("base")
-    pose = st.data.xpos[st.world.body_ids["base"]], st.data.xmat[st.world.body_ids["base"]]
-    for member in tray.members.values():
-        centre = pose[1].reshape(3, 3) @ np.asarray(member.box.center) + pose[0]
+    pose = obj_pose(st, "base")
+    for member in st.world.scene.type_of("base").members.values():
+        centre = pose[:3, :3] @ np.asarray(member.box.center) + pose[:3, 3]
         assert math.hypot(centre[0], centre[1]) <= MEMBER_REACH + 0.01, member.name
     res = backend.execute(
         "(pick-support base base-handle-front on back front back on slot5 under on)"

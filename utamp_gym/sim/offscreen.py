@@ -6,7 +6,7 @@ way for its precision), and on a CPU rasteriser (EGL or OSMesa over llvmpipe) th
 its read-back are most of a camera look's time. One pass here fills the colour buffer with
 segment colours and the depth buffer at once; one `mjr_readPixels` reads both. The depth is
 converted to metres exactly as `mujoco.Renderer` converts it (reversed Z, float32 result), and
-the images equal that renderer's, pixel for pixel (tests/test_cameras.py compares them under
+the images equal that renderer's, pixel for pixel (tests/test_rgbd_perception.py compares them under
 mujoco 3 and 4). Only the public low-level API is used: a GL context of the backend
 `utamp_gym.sim.gl.ensure_gl` chose, `MjrContext`, `mjv_updateScene`, `mjr_render`,
 `mjr_readPixels`.

@@ -3,8 +3,9 @@
 On an object, the centre of its usable surface (`decode.support_point`); on a table slot, the
 slot's position or, when that leaves no room (a neighbour, the arm's reach), the nearest spot
 of the slot that does (`_slot_spots`): those that leave every member of the object within
-`MEMBER_REACH` of the robot's base (or its farthest member nearest) first, turned across the
-reach if need be, then those that leave every other object `SPOT_GAP`.
+`MEMBER_REACH` of the robot's base (or its farthest member nearest) first, the whole slot
+searched if no spot near its position does, then those that leave every other object
+`SPOT_GAP`.
 Over an object the held object is let go higher when the fingers would meet the support at
 the usual drop (`PLACE_DROPS`). `plan_place` returns the path from the place pose up to the
 pre-place pose, or raises `GroundingError`; the place skill (`skills.place`) moves along it.
@@ -156,22 +157,22 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
                 # those that leave a finger room; the whole slot if no spot near its position
                 # leaves every member in reach
                 n_near = len(targets)
-                if min(_beyond_reach(t, target) for target in targets) > 0:
-                    targets += [
+                beyond = [_beyond_reach(t, target) for target in targets]
+                if min(beyond) > 0:
+                    # the whole slot's spots, nearest first: those near its position lead
+                    far = [
                         place_object_pose(t, now, spot, yaw=yaw)
                         for spot, yaw in itertools.product(
                             _slot_spots(st, act.support, math.inf)[len(surfaces) :],
                             (base_yaw, None),
                         )
                     ]
+                    targets += far
+                    beyond += [_beyond_reach(t, target) for target in far]
                 others = _footprints(st, exclude=name)
                 order = sorted(
                     range(len(targets)),
-                    key=lambda k: (
-                        _beyond_reach(t, targets[k]),
-                        k >= n_near,
-                        _crowded(t, targets[k], others),
-                    ),
+                    key=lambda k: (beyond[k], k >= n_near, _crowded(t, targets[k], others)),
                 )
                 targets = [targets[k] for k in order]
             for target in targets:
