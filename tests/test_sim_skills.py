@@ -399,6 +399,7 @@ def test_a_tray_set_down_in_a_far_corner_keeps_its_handles_in_reach(backend):
     handle 0.89 m from the robot's base, where no arm configuration reached it again. It
     goes down at the spot of the slot that leaves every member within `MEMBER_REACH`, and
     the far handle is picked from there."""
+    from utamp_gym.sim.measure import obj_pose
     from utamp_gym.sim.placement import MEMBER_REACH
     from utamp_gym.suites import resolve_scene
 
@@ -412,8 +413,6 @@ def test_a_tray_set_down_in_a_far_corner_keeps_its_handles_in_reach(backend):
         res = backend.execute(action)
         assert res.success, (action, res.reason)
     assert _on(backend, "base") == ("slot5", True)
-    from utamp_gym.sim.measure import obj_pose
-
     st = backend.state
     pose = obj_pose(st, "base")
     for member in st.world.scene.type_of("base").members.values():
