@@ -14,10 +14,19 @@ import pytest
 
 from utamp_gym.cli import main
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.planning.methods import plan_scene
+from utamp_gym.planning.methods import affordances_for, plan_scene
+from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.io import load_scene, scene_to_toml
 from utamp_gym.suites import ALL_SUITES, PROCEDURAL_SUITES, all_scene_names, resolve_scene
 from utamp_gym.suites import procedural as pv
+from utamp_gym.symbolic.problem import instantiate_affordances
+from utamp_gym.symbolic.slots import (
+    admits,
+    beyond_reach_cm,
+    footprint_size,
+    slot_spots,
+    usable_region,
+)
 
 SPLITS = pv.SPLITS
 
@@ -164,3 +173,42 @@ def test_the_planner_agrees_with_the_achievability_label(split: str) -> None:
     for i in [*range(0, len(seeds), 37), *bad]:
         g = pv.split_scene(split, i)
         assert plan_scene(g.scene, "utamp2-rules").solved == g.achievable, g.scene.name
+
+
+def test_a_slot_admits_only_what_fits_in_its_region_within_reach() -> None:
+    """In `train/0081` the tray (45 cm between its handles) fits only slot1's region; parked in
+    slot4 (38 x 30 cm) it overhung its neighbours and was set down with its far handle out of
+    the arm's reach. The rules no longer let a side slot hold it; the scene's 25 cm utensil
+    may stand in every slot."""
+    scene = pv.split_scene("train", 81).scene
+    facts, _ = affordances_for(scene, "rules", None)
+    atoms = instantiate_affordances(scene, facts)
+    slots = {s.name: s for s in scene.slots}
+    assert float(scene.type_of("base").bbox.size[0]) > 0.38
+    assert "(isP2PSupportive on slot1 under base)" in atoms
+    for slot in ("slot2", "slot3", "slot4", "slot5"):
+        assert f"(isP2PSupportive on {slot} under base)" not in atoms
+        assert not admits(scene, slots[slot], scene.type_of("base"), "under")
+    for slot in slots:
+        assert f"(isP2PSupportive on {slot} under obj1)" in atoms
+
+
+def test_slot_spots_lie_in_the_region_within_the_workspace() -> None:
+    scene = pv.split_scene("train", 81).scene
+    slot1 = next(s for s in scene.slots if s.name == "slot1")
+    # slot1 reaches past the workspace (x <= 0.82)
+    region = usable_region(scene, slot1)
+    assert region.min[:2] == pytest.approx((0.26, -0.20)) and region.max[:2] == pytest.approx(
+        (0.82, 0.20)
+    )
+    spots = slot_spots(scene, slot1)
+    assert spots[0] == pytest.approx(slot1.position)
+    assert all(0.26 - 1e-9 <= x <= 0.82 + 1e-9 and abs(y) <= 0.20 + 1e-9 for x, y in spots)
+    dist = [round(((x - 0.50) ** 2 + y**2) ** 0.5, 6) for x, y in spots]
+    assert dist == sorted(dist) and len(spots) == len(set(spots))
+    assert beyond_reach_cm([(0.74, 0.0), (0.1, 0.1)]) == 0
+    assert beyond_reach_cm([(0.80, 0.0)]) == 6
+    # tipped onto a side, the height lies along that side's axis
+    assert footprint_size(Box((0, 0, 0), (0.1, 0.2, 0.3)), "under") == pytest.approx((0.1, 0.2))
+    assert footprint_size(Box((0, 0, 0), (0.1, 0.2, 0.3)), "front") == pytest.approx((0.3, 0.2))
+    assert footprint_size(Box((0, 0, 0), (0.1, 0.2, 0.3)), "left") == pytest.approx((0.1, 0.3))

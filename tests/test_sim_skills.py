@@ -394,34 +394,48 @@ def test_a_placement_on_a_slot_goes_along_when_a_neighbour_stands_at_its_positio
 
 
 @physics
-def test_a_tray_set_down_in_a_far_corner_keeps_its_handles_in_reach(backend):
-    """slot5 lies 0.71 m out; a 43 cm tray set down square on its position put its far
-    handle 0.89 m from the robot's base, where no arm configuration reached it again. It
-    goes down at the spot of the slot that leaves every member within `MEMBER_REACH`, and
-    the far handle is picked from there."""
+def test_a_slot_takes_an_object_inside_its_region_with_its_members_in_reach(backend):
+    """slot5 lies 0.71 m out and is 38 x 30 cm. A pot's lid set down there lies inside the
+    slot's region with every member within `MEMBER_REACH`, and is picked up again; a 43 cm
+    tray, which the slot's region cannot hold (a tray set down square on the slot's position
+    once put its far handle 0.89 m out, where no arm reached it), is refused before the arm
+    moves, as the rules refuse it."""
+    from utamp_gym.scene.geometry import Box
+    from utamp_gym.sim.decode import world_aabb
     from utamp_gym.sim.measure import obj_pose
-    from utamp_gym.sim.placement import MEMBER_REACH
     from utamp_gym.suites import resolve_scene
+    from utamp_gym.symbolic.slots import MEMBER_REACH, admits, inside, usable_region
 
-    backend.reset(resolve_scene("procedural-v1/test-families/0071"), np.random.default_rng(0))
+    scene = resolve_scene("procedural-v1/test-families/0071")
+    slot5 = next(s for s in scene.slots if s.name == "slot5")
+    assert not admits(scene, slot5, scene.type_of("base"), "under")
+    assert admits(scene, slot5, scene.type_of("obj2"), "under")
+    backend.reset(scene, np.random.default_rng(0))
     for action in (
         "(pick-support obj2 obj2-lid on back front back on base under on)",
-        "(place-support obj2 obj2-lid on back front back on under slot3 back on)",
-        "(pick-support base base-handle-back on back front back on slot1 under on)",
-        "(place-support base base-handle-back on back front back on under slot5 back on)",
+        "(place-support obj2 obj2-lid on back front back on under slot5 back on)",
     ):
         res = backend.execute(action)
         assert res.success, (action, res.reason)
-    assert _on(backend, "base") == ("slot5", True)
+    assert _on(backend, "obj2") == ("slot5", True)
     st = backend.state
-    pose = obj_pose(st, "base")
-    for member in st.world.scene.type_of("base").members.values():
+    pose = obj_pose(st, "obj2")
+    t = st.world.scene.type_of("obj2")
+    for member in t.members.values():
         centre = pose[:3, :3] @ np.asarray(member.box.center) + pose[:3, 3]
         assert math.hypot(centre[0], centre[1]) <= MEMBER_REACH + 0.01, member.name
+    lo, hi = world_aabb(t.bbox, pose)
+    assert inside(usable_region(scene, slot5), Box(tuple(lo), tuple(hi)), tol=0.005)
     res = backend.execute(
-        "(pick-support base base-handle-front on back front back on slot5 under on)"
+        "(pick-support base base-handle-back on back front back on slot1 under on)"
     )
     assert res.success, res.reason
+    res = backend.execute(
+        "(place-support base base-handle-back on back front back on under slot5 back on)"
+    )
+    assert not res.success and res.reason.startswith("no spot of slot5 holds base"), res.reason
+    held = backend.physical_state().held
+    assert held is not None and held.obj == "base"  # refused before the arm moved: still held
 
 
 @physics

@@ -173,10 +173,10 @@ CONSTANTS = {
     "check_margin_mm": ("utamp_gym.sim.relook", "CHECK_MARGIN", 1000),
     "aim_shift_mm": ("utamp_gym.sim.relook", "AIM_SHIFT", 1000),
     "aim_room_pct": ("utamp_gym.sim.relook", "AIM_ROOM_SHARE", 100),
-    "spot_step_cm": ("utamp_gym.sim.placement", "SPOT_STEP", 100),
+    "spot_step_cm": ("utamp_gym.symbolic.slots", "SPOT_STEP", 100),
     "spot_radius_cm": ("utamp_gym.sim.placement", "SPOT_RADIUS", 100),
     "spot_gap_cm": ("utamp_gym.sim.placement", "SPOT_GAP", 100),
-    "member_reach_cm": ("utamp_gym.sim.placement", "MEMBER_REACH", 100),
+    "member_reach_cm": ("utamp_gym.symbolic.slots", "MEMBER_REACH", 100),
     "pad_hold_mm": ("utamp_gym.sim.grasping", "PAD_HOLD", 1000),
     "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }

@@ -1,11 +1,11 @@
 """Where a held object goes down: the spot on its support and the arm's path to it.
 
-On an object, the centre of its usable surface (`decode.support_point`); on a table slot, the
-slot's position or, when that leaves no room (a neighbour, the arm's reach), the nearest spot
-of the slot that does (`_slot_spots`): those that leave every member of the object within
-`MEMBER_REACH` of the robot's base (or its farthest member nearest) first, the whole slot
-searched if no spot near its position does, then those that leave every other object
-`SPOT_GAP`.
+On an object, the centre of its usable surface (`decode.support_point`). On a table slot, a
+spot where the object lies inside the slot's region with every member's centre within
+`MEMBER_REACH` of the robot's base, which is what the rules grant a slot
+(`symbolic.slots.admits`): the slot's position or, when that leaves no room (a neighbour,
+the arm's reach), the nearest such spots within `SPOT_RADIUS` of it (`_slot_spots`), then the
+rest of the slot's; in each group, those that leave every other object `SPOT_GAP` first.
 Over an object the held object is let go higher when the fingers would meet the support at
 the usual drop (`PLACE_DROPS`). `plan_place` returns the path from the place pose up to the
 pre-place pose, or raises `GroundingError`; the place skill (`skills.place`) moves along it.
@@ -33,11 +33,19 @@ from utamp_gym.sim.decode import (
     yaw_of,
 )
 from utamp_gym.sim.measure import Held, SimState, SkillFailure
+from utamp_gym.symbolic.slots import (
+    MEMBER_REACH,
+    SPOT_STEP,
+    beyond_reach_cm,
+    inside,
+    slot_spots,
+    usable_region,
+)
 
 PREPLACE = 0.10  # m above the place pose
-#: a placement on a table slot tries its position, then spots this far apart within this
+#: a placement on a table slot tries its position, then spots `SPOT_STEP` apart within this
 #: radius of it (`_slot_spots`)
-SPOT_STEP, SPOT_RADIUS = 0.03, 0.09  # m
+SPOT_RADIUS = 0.09  # m
 #: m: spots that leave this much room to every other object come first (a tumbler set down
 #: 1 mm from another could not be lifted past it later)
 SPOT_GAP = 0.04
@@ -45,35 +53,22 @@ SPOT_GAP = 0.04
 #: over a plate whose rim rises around it would put a finger 4 mm into the lower rim at the
 #: usual `PLACE_DROP`; it is let go 1-2 cm higher and falls into the lower plate's well
 PLACE_DROPS = (PLACE_DROP, PLACE_DROP + 0.01, PLACE_DROP + 0.02)
-#: m from the robot's base (horizontal) to a member's centre that the hand reaches from above
-#: and lifts from (the procedural layout's `REACH`; tests/test_robot_kinematics.py: the TCP
-#: pointing down reaches it up to 35 cm above the table). On a slot, placements that leave
-#: every member of the object this near (or the farthest one nearest) come first: a tray set
-#: down square in a far corner put its far handle 0.89 m out, and no arm reached it again. At
-#: 0.78 m a plate's rim set down 0.78 m out was reached but could not be lifted
-MEMBER_REACH = 0.74
 
 
 def _slot_spots(st: SimState, slot: str, radius: float = SPOT_RADIUS) -> list[np.ndarray]:
-    """Where on the table slot `slot` an object may be put, best first: the slot's position,
-    then points `SPOT_STEP` apart within `radius` of it (and inside the slot's region),
-    nearest first. A stack beside the slot, or the arm's reach, may leave no room at the
+    """Where on the table slot `slot` an object's footprint centre may go, best first: the
+    slot's position, then the slot's spots (`symbolic.slots.slot_spots`) within `radius` of
+    it, nearest first. A stack beside the slot, or the arm's reach, may leave no room at the
     position itself (a plate's rim over a neighbour's wall); a person would put it a few
     centimetres along."""
-    centre = np.asarray(st.world.slot_positions[slot], dtype=float)
-    region = next(s.region for s in st.world.scene.slots if s.name == slot)
-    size = np.asarray(region.max[:2], dtype=float) - np.asarray(region.min[:2], dtype=float)
-    n = int(min(radius, float(np.hypot(*size))) / SPOT_STEP)
-    spots = []
-    for i in range(-n, n + 1):
-        for j in range(-n, n + 1):
-            p = centre + np.array([i * SPOT_STEP, j * SPOT_STEP, 0.0])
-            inside = all(region.min[k] + SPOT_STEP / 2 <= p[k] <= region.max[k] - SPOT_STEP / 2
-                         for k in (0, 1))  # fmt: skip
-            if (i or j) and inside and math.hypot(i, j) * SPOT_STEP <= radius + 1e-9:
-                spots.append(p)
-    spots.sort(key=lambda p: (round(float(np.linalg.norm(p - centre)), 6), float(p[0])))
-    return [centre, *spots]
+    scene = st.world.scene
+    spec = next(s for s in scene.slots if s.name == slot)
+    px, py = spec.position
+    return [
+        np.array([x, y, 0.0])
+        for x, y in slot_spots(scene, spec)
+        if math.hypot(x - px, y - py) <= radius + 1e-9
+    ]
 
 
 def _world_box(t: ObjectType, pose: np.ndarray) -> Box:
@@ -101,11 +96,22 @@ def _crowded(t: ObjectType, pose: np.ndarray, others: list[Box]) -> bool:
 def _beyond_reach(t: ObjectType, pose: np.ndarray) -> float:
     """How far (cm, rounded) the farthest member centre of an object of type `t` at `pose`
     lies beyond `MEMBER_REACH` of the robot's base (the world origin); 0 within it."""
-    far = max(
-        math.hypot(*(pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3]))
+    return beyond_reach_cm(
+        tuple(pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3])
         for m in t.members.values()
     )
-    return max(0.0, round(100 * (far - MEMBER_REACH)))
+
+
+def _admissible(st: SimState, slot: str, t: ObjectType, targets: list[np.ndarray]) -> list:
+    """The targets at which an object of type `t` lies inside the slot's region with every
+    member's centre within `MEMBER_REACH` of the robot's base."""
+    scene = st.world.scene
+    region = usable_region(scene, next(s for s in scene.slots if s.name == slot))
+    return [
+        target
+        for target in targets
+        if inside(region, _world_box(t, target)) and _beyond_reach(t, target) == 0
+    ]
 
 
 def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
@@ -153,28 +159,30 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
                 for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None))
             ]
             if act.support in world.slot_positions:
-                # spots that leave every member in reach (or the farthest nearest) first, then
-                # those that leave a finger room; the whole slot if no spot near its position
-                # leaves every member in reach
-                n_near = len(targets)
-                beyond = [_beyond_reach(t, target) for target in targets]
-                if min(beyond) > 0:
-                    # the whole slot's spots, nearest first: those near its position lead
-                    far = [
-                        place_object_pose(t, now, spot, yaw=yaw)
-                        for spot, yaw in itertools.product(
-                            _slot_spots(st, act.support, math.inf)[len(surfaces) :],
-                            (base_yaw, None),
-                        )
-                    ]
-                    targets += far
-                    beyond += [_beyond_reach(t, target) for target in far]
+                # inside the slot's region with every member in reach, as the rules grant a
+                # slot (`symbolic.slots.admits`): those near its position first, then the
+                # rest of the slot; in each, those that leave a finger room first
                 others = _footprints(st, exclude=name)
-                order = sorted(
-                    range(len(targets)),
-                    key=lambda k: (beyond[k], k >= n_near, _crowded(t, targets[k], others)),
-                )
-                targets = [targets[k] for k in order]
+                far = [
+                    place_object_pose(t, now, spot, yaw=yaw)
+                    for spot, yaw in itertools.product(
+                        _slot_spots(st, act.support, math.inf)[len(surfaces) :], (base_yaw, None)
+                    )
+                ]
+                targets = [
+                    target
+                    for group in (targets, far)
+                    for target in sorted(
+                        _admissible(st, act.support, t, group),
+                        key=lambda target: _crowded(t, target, others),
+                    )
+                ]
+                if not targets:
+                    raise GroundingError(
+                        f"no spot of {act.support} holds {name}: none leaves its footprint "
+                        f"inside the slot's region with every member within {MEMBER_REACH} m "
+                        "of the robot's base"
+                    )
             for target in targets:
                 tcp = hand_for_object(target, held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):

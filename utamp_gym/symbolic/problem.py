@@ -18,6 +18,7 @@ from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, Box, is_adjacent
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
+from utamp_gym.symbolic.slots import admits
 
 DOMAINS = ("utamp2", "utamp1")
 AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False}
@@ -154,11 +155,14 @@ def scene_facts(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2
 
 
 def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[str]:
-    """Type-level facts -> atoms over the scene's objects; slots inherit the table's facts."""
+    """Type-level facts -> atoms over the scene's objects. Slots inherit the table's facts,
+    for the objects they admit (`symbolic.slots.admits`: inside the region, within reach)."""
     by_type: dict[str, list[str]] = {}
     for o in scene.objects:
         by_type.setdefault(o.type, []).append(o.name)
     by_type.setdefault(scene.table_type, []).extend(s.name for s in scene.slots)
+    slots = {s.name: s for s in scene.slots}
+    admitted: dict[tuple[str, str, str], bool] = {}  # (slot, type, part)
     out: set[str] = set()
     for f in affordances:
         pred = f[0]
@@ -169,8 +173,15 @@ def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[st
             p2, t2, p1, t1 = f[1:]
             for i2 in by_type.get(t2, []):
                 for i1 in by_type.get(t1, []):
-                    if i1 != i2:
-                        out.add(_atom(pred, p2, i2, p1, i1))
+                    if i1 == i2:
+                        continue
+                    if i2 in slots:
+                        key = (i2, t1, p1)
+                        if key not in admitted:
+                            admitted[key] = admits(scene, slots[i2], scene.type_of(i1), p1)
+                        if not admitted[key]:
+                            continue
+                    out.add(_atom(pred, p2, i2, p1, i1))
         elif pred == "canGraspFrom":
             t, member, hp, hf1, hf2 = f[1:]
             for inst in by_type.get(t, []):

@@ -1,0 +1,130 @@
+"""What a table slot holds: an object whose footprint fits inside the slot's region, at a spot
+that leaves every member within the arm's reach.
+
+A slot stands for the table top in its region (`symbolic.problem`), and the symbolic state
+knows one stack per slot. So an object stands in a slot only inside the region (within the
+workspace): hanging over a neighbour's region it would take room the symbolic state gives
+to the neighbour's stack. A tray 45 cm long parked in a 38 cm side slot did just that, and a
+spatula's handle reaching into the slot left room only where the tray's far handle lay
+0.83 m from the robot's base, out of reach (`procedural-v1/train/0081`).
+
+Both sides use this module: the rules grant a placement on a slot only to an object the slot
+`admits` (`symbolic.problem.instantiate_affordances`), and the placement sets an object down
+only at a spot where it lies `inside` the slot (`sim.placement`), among the same
+`slot_spots`, those that leave every member in reach first (`beyond_reach_cm`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from functools import lru_cache
+
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.geometry import Box, axis_of
+from utamp_gym.scene.model import Scene, Slot
+
+#: m between two spots of a slot: its position, then a grid this fine over its region
+SPOT_STEP = 0.03
+#: m from the robot's base (horizontal) to a member's centre that the hand reaches from above
+#: and lifts from (the procedural layout's `REACH`; tests/test_robot_kinematics.py: the TCP
+#: pointing down reaches it up to 35 cm above the table). A tray set down square in a far
+#: corner put its far handle 0.89 m out, and no arm reached it again. At 0.78 m a plate's rim
+#: set down 0.78 m out was reached but could not be lifted
+MEMBER_REACH = 0.74
+#: the parts an object rests on when upright and when upside down (pick and place keep it so)
+_UPRIGHT, _INVERTED = "under", "on"
+
+
+def usable_region(scene: Scene, slot: Slot) -> Box:
+    """The slot's region within the workspace, on the table top (z = 0)."""
+    r, ws = slot.region, scene.workspace
+    lo = [max(r.min[k], ws.min[k]) for k in (0, 1)]
+    hi = [min(r.max[k], ws.max[k]) for k in (0, 1)]
+    return Box((lo[0], lo[1], 0.0), (hi[0], hi[1], 0.0))
+
+
+def inside(region: Box, footprint: Box, tol: float = 1e-6) -> bool:
+    """Whether a footprint lies inside a usable region (in x and y)."""
+    return region.contains_xy(footprint, tol=tol)
+
+
+def slot_spots(scene: Scene, slot: Slot) -> tuple[tuple[float, float], ...]:
+    """The slot's position, then every point `SPOT_STEP` apart on a grid through it inside
+    the usable region, nearest the position first (ties: nearer the robot first)."""
+    return _spots(usable_region(scene, slot), (float(slot.position[0]), float(slot.position[1])))
+
+
+@lru_cache(maxsize=64)
+def _spots(region: Box, position: tuple[float, float]) -> tuple[tuple[float, float], ...]:
+    px, py = position
+    size = math.hypot(region.max[0] - region.min[0], region.max[1] - region.min[1])
+    n = int(size / SPOT_STEP) + 1
+    spots = []
+    for i in range(-n, n + 1):
+        for j in range(-n, n + 1):
+            x, y = px + i * SPOT_STEP, py + j * SPOT_STEP
+            if (i or j) and all(
+                region.min[k] - 1e-9 <= v <= region.max[k] + 1e-9 for k, v in ((0, x), (1, y))
+            ):
+                spots.append((round(math.hypot(i, j) * SPOT_STEP, 6), x, (x, y)))
+    spots.sort(key=lambda s: (s[0], s[1]))
+    return ((px, py), *(s[2] for s in spots))
+
+
+def beyond_reach_cm(centres: Iterable[tuple[float, float]]) -> float:
+    """How far (cm, rounded) the farthest of some member centres (x, y) lies beyond
+    `MEMBER_REACH` of the robot's base (the world origin); 0 within it."""
+    far = max(math.hypot(x, y) for x, y in centres)
+    return max(0.0, round(100 * (far - MEMBER_REACH)))
+
+
+def footprint_size(box: Box, part: str) -> tuple[float, float]:
+    """(x, y) extent on the table of an object with bounding box `box` resting on `part`.
+
+    Objects keep their yaw; on ``under`` or ``on`` the footprint is the box's own; on a side
+    the object has tipped over that side's edge, so its height lies along the side's axis."""
+    sx, sy, sz = (float(hi - lo) for lo, hi in zip(box.min, box.max, strict=True))
+    axis = axis_of(part)
+    if axis == 2:
+        return sx, sy
+    return (sz, sy) if axis == 0 else (sx, sz)
+
+
+def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
+    """Whether an object of type `t` resting on `part` can stand in the slot: at one of its
+    `slot_spots` (footprint centred there, the object square to the table) it lies inside
+    the usable region with every member's centre in reach (`beyond_reach_cm` 0).
+
+    Pick and place keep an object upright or upside down, so it rests on ``under`` or ``on``;
+    for a side (an object tipped over, which no action does) only the footprint's size counts.
+    """
+    region = usable_region(scene, slot)
+    w, d = footprint_size(t.bbox, part)
+    if w > region.max[0] - region.min[0] + 1e-6 or d > region.max[1] - region.min[1] + 1e-6:
+        return False
+    if part not in (_UPRIGHT, _INVERTED):
+        return True
+    box = t.bbox if part == _UPRIGHT else t.bbox.flipped()
+    cx, cy = box.center_xy
+    sign = 1.0 if part == _UPRIGHT else -1.0  # a half turn about x mirrors y
+    centres = [m.box.center_xy for m in t.members.values()]  # plain floats: no numpy here
+    members = [(mx - cx, sign * my - cy) for mx, my in centres]
+    for x, y in slot_spots(scene, slot):
+        foot = Box((x + box.min[0] - cx, y + box.min[1] - cy, 0.0),
+                   (x + box.max[0] - cx, y + box.max[1] - cy, 0.0))  # fmt: skip
+        if inside(region, foot) and beyond_reach_cm((x + mx, y + my) for mx, my in members) == 0:
+            return True
+    return False
+
+
+__all__ = [
+    "MEMBER_REACH",
+    "SPOT_STEP",
+    "admits",
+    "beyond_reach_cm",
+    "footprint_size",
+    "inside",
+    "slot_spots",
+    "usable_region",
+]
