@@ -130,10 +130,16 @@ def symbolic_supports(env: UTampKitchenEnv) -> dict[str, str | None]:
 
 def consistent(env: UTampKitchenEnv) -> bool:
     """Whether the simulation matches the symbolic state: the same support for every object
-    (resting on top of it, not inside), and the same object in the hand."""
+    (resting on top of it, not inside), one object on each support (the domain's ``oc`` holds
+    one: a tumbler that fell off another into a third's mouth "rested" on the same support as
+    the third, `procedural-v1/train/0095`), and the same object in the hand."""
     backend = env.backend
     assert backend is not None
     physical = backend.physical_state()
+    places = set(env.scene.object_names) | {slot.name for slot in env.scene.slots}
+    carried = [s for s in physical.supports.values() if s in places]
+    if len(carried) != len(set(carried)):
+        return False
     mine = symbolic_supports(env)
     held = physical.held.obj if physical.held is not None else None
     for obj in env.scene.object_names:
@@ -168,7 +174,7 @@ def sample_suite(suite: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
                 predicted_reason = model.affordance_failure(i)
                 start = time.perf_counter()
                 _, _, terminated, _, info = env.step(i)
-                macro = env.macro_result  # the MacroResult (info holds its fields)
+                macro = info["macro_result"]  # the MacroResult's fields
                 pairs.append(
                     Pair(
                         suite=suite,
