@@ -404,7 +404,7 @@ def test_a_slot_takes_an_object_inside_its_region_with_its_members_in_reach(back
     from utamp_gym.sim.decode import world_aabb
     from utamp_gym.sim.measure import obj_pose
     from utamp_gym.suites import resolve_scene
-    from utamp_gym.symbolic.slots import MEMBER_REACH, admits, inside, usable_region
+    from utamp_gym.symbolic.slots import MEMBER_REACH, admits, usable_region
 
     scene = resolve_scene("procedural-v1/test-families/0071")
     slot5 = next(s for s in scene.slots if s.name == "slot5")
@@ -425,7 +425,7 @@ def test_a_slot_takes_an_object_inside_its_region_with_its_members_in_reach(back
         centre = pose[:3, :3] @ np.asarray(member.box.center) + pose[:3, 3]
         assert math.hypot(centre[0], centre[1]) <= MEMBER_REACH + 0.01, member.name
     lo, hi = world_aabb(t.bbox, pose)
-    assert inside(usable_region(scene, slot5), Box(tuple(lo), tuple(hi)), tol=0.005)
+    assert usable_region(scene, slot5).contains_xy(Box(tuple(lo), tuple(hi)), tol=0.005)
     res = backend.execute(
         "(pick-support base base-handle-back on back front back on slot1 under on)"
     )

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 
@@ -37,7 +38,6 @@ from utamp_gym.symbolic.slots import (
     MEMBER_REACH,
     SPOT_STEP,
     beyond_reach_cm,
-    inside,
     slot_spots,
     usable_region,
 )
@@ -102,16 +102,34 @@ def _beyond_reach(t: ObjectType, pose: np.ndarray) -> float:
     )
 
 
-def _admissible(st: SimState, slot: str, t: ObjectType, targets: list[np.ndarray]) -> list:
-    """The targets at which an object of type `t` lies inside the slot's region with every
-    member's centre within `MEMBER_REACH` of the robot's base."""
+def _slot_targets(
+    st: SimState, name: str, slot: str, now: np.ndarray, near: list[np.ndarray], n_near: int,
+    base_yaw: float,
+) -> Iterator[np.ndarray]:  # fmt: skip
+    """Place poses of `name` on a table slot where it lies inside the slot's usable region with
+    every member's centre within `MEMBER_REACH`, as the rules grant a slot
+    (`symbolic.slots.admits`): of `near` (at its first `n_near` spots) first, then at the rest
+    of the slot's spots, posed only when every near one has failed; in each group, those that
+    leave a finger room first."""
     scene = st.world.scene
+    t = scene.type_of(name)
     region = usable_region(scene, next(s for s in scene.slots if s.name == slot))
-    return [
-        target
-        for target in targets
-        if inside(region, _world_box(t, target)) and _beyond_reach(t, target) == 0
-    ]
+    others = _footprints(st, exclude=name)
+
+    def admissible(group: Iterable[np.ndarray]) -> list[np.ndarray]:
+        ok = [
+            target
+            for target in group
+            if region.contains_xy(_world_box(t, target), tol=1e-6) and _beyond_reach(t, target) == 0
+        ]
+        return sorted(ok, key=lambda target: _crowded(t, target, others))
+
+    yield from admissible(near)
+    rest = _slot_spots(st, slot, math.inf)[n_near:]
+    yield from admissible(
+        place_object_pose(t, now, spot, yaw=yaw)
+        for spot, yaw in itertools.product(rest, (base_yaw, None))
+    )
 
 
 def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
@@ -140,7 +158,7 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
     t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
     surfaces = _support_surfaces(st, act)
     base_yaw = yaw_of(st.estimate(act.support)[:3, :3]) if act.support in st.world.body_ids else 0.0
-    tried = []
+    tried, posed = [], False
     near = arm.sync(arm.near, gap=arm.gap())
     near.attach(held.body, held.belief)
     world = st.world
@@ -154,36 +172,16 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
             # square to the support first, else as held; on a slot, nearest its position; on
             # an object, released higher if the fingers would meet it (`PLACE_DROPS`)
             drops = (PLACE_DROP,) if act.support not in world.body_ids else PLACE_DROPS
-            targets = [
+            targets: Iterable[np.ndarray] = [
                 place_object_pose(t, now, surface, yaw=yaw, drop=drop)
                 for drop, surface, yaw in itertools.product(drops, surfaces, (base_yaw, None))
             ]
-            if act.support in world.slot_positions:
-                # inside the slot's region with every member in reach, as the rules grant a
-                # slot (`symbolic.slots.admits`): those near its position first, then the
-                # rest of the slot; in each, those that leave a finger room first
-                others = _footprints(st, exclude=name)
-                far = [
-                    place_object_pose(t, now, spot, yaw=yaw)
-                    for spot, yaw in itertools.product(
-                        _slot_spots(st, act.support, math.inf)[len(surfaces) :], (base_yaw, None)
-                    )
-                ]
-                targets = [
-                    target
-                    for group in (targets, far)
-                    for target in sorted(
-                        _admissible(st, act.support, t, group),
-                        key=lambda target: _crowded(t, target, others),
-                    )
-                ]
-                if not targets:
-                    raise GroundingError(
-                        f"no spot of {act.support} holds {name}: none leaves its footprint "
-                        f"inside the slot's region with every member within {MEMBER_REACH} m "
-                        "of the robot's base"
-                    )
+            if act.support in world.slot_positions:  # lazily: the whole slot only if needed
+                targets = _slot_targets(
+                    st, name, act.support, now, list(targets), len(surfaces), base_yaw
+                )
             for target in targets:
+                posed = True
                 tcp = hand_for_object(target, held.belief)
                 for q in arm.ik_solutions(tcp, near.is_valid):
                     try:
@@ -199,6 +197,11 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
                 tried.append("no collision-free IK solution")
     finally:
         near.detach()
+    if not posed:  # on a slot: no spot holds it (the rules do not grant it the slot either)
+        raise GroundingError(
+            f"no spot of {act.support} holds {name}: none leaves its footprint inside the "
+            f"slot's region with every member within {MEMBER_REACH} m of the robot's base"
+        )
     raise GroundingError(
         f"IK infeasible: cannot put {name} on {act.support} ({'; '.join(dict.fromkeys(tried))})"
     )

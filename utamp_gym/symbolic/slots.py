@@ -10,8 +10,8 @@ spatula's handle reaching into the slot left room only where the tray's far hand
 
 Both sides use this module: the rules grant a placement on a slot only to an object the slot
 `admits` (`symbolic.problem.instantiate_affordances`), and the placement sets an object down
-only at a spot where it lies `inside` the slot (`sim.placement`), among the same
-`slot_spots`, those that leave every member in reach first (`beyond_reach_cm`).
+only at one of the same `slot_spots` where it lies inside the `usable_region` with every
+member in reach (`beyond_reach_cm` 0; `sim.placement`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from functools import lru_cache
 
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import Box, axis_of
-from utamp_gym.scene.model import Scene, Slot
+from utamp_gym.scene.model import STANDING_PART, Scene, Slot
 
 #: m between two spots of a slot: its position, then a grid this fine over its region
 SPOT_STEP = 0.03
@@ -32,8 +32,6 @@ SPOT_STEP = 0.03
 #: corner put its far handle 0.89 m out, and no arm reached it again. At 0.78 m a plate's rim
 #: set down 0.78 m out was reached but could not be lifted
 MEMBER_REACH = 0.74
-#: the parts an object rests on when upright and when upside down (pick and place keep it so)
-_UPRIGHT, _INVERTED = "under", "on"
 
 
 def usable_region(scene: Scene, slot: Slot) -> Box:
@@ -42,11 +40,6 @@ def usable_region(scene: Scene, slot: Slot) -> Box:
     lo = [max(r.min[k], ws.min[k]) for k in (0, 1)]
     hi = [min(r.max[k], ws.max[k]) for k in (0, 1)]
     return Box((lo[0], lo[1], 0.0), (hi[0], hi[1], 0.0))
-
-
-def inside(region: Box, footprint: Box, tol: float = 1e-6) -> bool:
-    """Whether a footprint lies inside a usable region (in x and y)."""
-    return region.contains_xy(footprint, tol=tol)
 
 
 def slot_spots(scene: Scene, slot: Slot) -> tuple[tuple[float, float], ...]:
@@ -103,17 +96,21 @@ def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
     w, d = footprint_size(t.bbox, part)
     if w > region.max[0] - region.min[0] + 1e-6 or d > region.max[1] - region.min[1] + 1e-6:
         return False
-    if part not in (_UPRIGHT, _INVERTED):
+    upright = part == STANDING_PART["upright"]
+    if not upright and part != STANDING_PART["inverted"]:
         return True
-    box = t.bbox if part == _UPRIGHT else t.bbox.flipped()
+    box = t.bbox if upright else t.bbox.flipped()
     cx, cy = box.center_xy
-    sign = 1.0 if part == _UPRIGHT else -1.0  # a half turn about x mirrors y
+    sign = 1.0 if upright else -1.0  # a half turn about x mirrors y
     centres = [m.box.center_xy for m in t.members.values()]  # plain floats: no numpy here
     members = [(mx - cx, sign * my - cy) for mx, my in centres]
     for x, y in slot_spots(scene, slot):
         foot = Box((x + box.min[0] - cx, y + box.min[1] - cy, 0.0),
                    (x + box.max[0] - cx, y + box.max[1] - cy, 0.0))  # fmt: skip
-        if inside(region, foot) and beyond_reach_cm((x + mx, y + my) for mx, my in members) == 0:
+        if (
+            region.contains_xy(foot, tol=1e-6)
+            and beyond_reach_cm((x + mx, y + my) for mx, my in members) == 0
+        ):
             return True
     return False
 
@@ -124,7 +121,6 @@ __all__ = [
     "admits",
     "beyond_reach_cm",
     "footprint_size",
-    "inside",
     "slot_spots",
     "usable_region",
 ]
