@@ -114,3 +114,24 @@ def test_the_hand_reaches_from_above_as_far_as_placements_keep_members(kin, heig
     res = kin.ik(target, HOME_Q, np.random.default_rng(0), max_attempts=40)
     assert res.success, (bearing_deg, height, res.pos_error)
     np.testing.assert_allclose(kin.fk(res.q)[:3, 3], target[:3, 3], atol=2e-4)
+
+
+@pytest.mark.parametrize("height", [0.0, 0.15, 0.3])
+@pytest.mark.parametrize("bearing_deg", [-60.0, 0.0, 60.0])
+def test_the_hand_reaches_from_above_as_far_as_top_down_reach_and_no_farther(
+    kin, height, bearing_deg
+):
+    """`TOP_DOWN_REACH` is this arm's reach with the TCP pointing straight down, from the
+    table to 30 cm above it: a placement on an object keeps every member within it, so that
+    the arm can pick the object up again. 3 cm farther, no configuration reaches."""
+    from utamp_gym.robot.kinematics import TOP_DOWN_REACH
+
+    b = np.radians(bearing_deg)
+    target = np.eye(4)
+    target[:3, :3] = np.array(
+        [[np.cos(b), np.sin(b), 0.0], [np.sin(b), -np.cos(b), 0.0], [0.0, 0.0, -1.0]]
+    )
+    for reach, reached in ((TOP_DOWN_REACH, True), (TOP_DOWN_REACH + 0.03, False)):
+        target[:3, 3] = [reach * np.cos(b), reach * np.sin(b), height]
+        res = kin.ik(target, HOME_Q, np.random.default_rng(0), max_attempts=40)
+        assert res.success is reached, (reach, bearing_deg, height, res.pos_error)

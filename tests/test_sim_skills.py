@@ -399,7 +399,8 @@ def test_a_slot_takes_an_object_inside_its_region_with_its_members_in_reach(back
     slot's region with every member within `MEMBER_REACH`, and is picked up again; a 43 cm
     tray, which the slot's region cannot hold (a tray set down square on the slot's position
     once put its far handle 0.89 m out, where no arm reached it), is refused before the arm
-    moves, as the rules refuse it."""
+    moves, as the rules refuse it; and so is the tray set down on the lid there, which the
+    rules forbid but physics once carried out, stranding the tray beyond the arm's reach."""
     from utamp_gym.scene.geometry import Box
     from utamp_gym.sim.decode import world_aabb
     from utamp_gym.sim.measure import obj_pose
@@ -436,6 +437,13 @@ def test_a_slot_takes_an_object_inside_its_region_with_its_members_in_reach(back
     assert not res.success and res.reason.startswith("no spot of slot5 holds base"), res.reason
     held = backend.physical_state().held
     assert held is not None and held.obj == "base"  # refused before the arm moved: still held
+    # nor is it set down on the lid in slot5, which would put its far handle as far out
+    res = backend.execute(
+        "(place-support base base-handle-back on back front back on under obj2 back on)"
+    )
+    assert not res.success and "beyond the hand's reach" in res.reason, res.reason
+    held = backend.physical_state().held
+    assert held is not None and held.obj == "base"
 
 
 @physics

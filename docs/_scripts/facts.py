@@ -177,6 +177,7 @@ CONSTANTS = {
     "spot_radius_cm": ("utamp_gym.sim.placement", "SPOT_RADIUS", 100),
     "spot_gap_cm": ("utamp_gym.sim.placement", "SPOT_GAP", 100),
     "member_reach_cm": ("utamp_gym.symbolic.slots", "MEMBER_REACH", 100),
+    "top_down_reach_cm": ("utamp_gym.robot.kinematics", "TOP_DOWN_REACH", 100),
     "pad_hold_mm": ("utamp_gym.sim.grasping", "PAD_HOLD", 1000),
     "prior_alpha": ("utamp_gym.perception.material", "PRIOR_ALPHA", 1),
 }

@@ -22,6 +22,10 @@ FINGER_JOINTS = ("panda_finger_joint1", "panda_finger_joint2")
 TCP_FRAME = "panda_hand_tcp"
 # SRDF "default" group state (the usual ready pose).
 HOME_Q = (0.0, -0.785398, 0.0, -2.35619, 0.0, 1.5707, 0.785398)
+#: m from the base's axis: the TCP pointing straight down reaches 0.785-0.807 m out at 0-30 cm
+#: above the table, on every bearing (`tests/test_robot_kinematics.py` checks this arm model
+#: reaches this far and not 3 cm farther); a member beyond it cannot be grasped from above
+TOP_DOWN_REACH = 0.78
 
 PoseLike = np.ndarray | tuple[np.ndarray, np.ndarray]
 

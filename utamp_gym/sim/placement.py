@@ -1,6 +1,8 @@
 """Where a held object goes down: the spot on its support and the arm's path to it.
 
-On an object, the centre of its usable surface (`decode.support_point`). On a table slot, a
+On an object, the centre of its usable surface (`decode.support_point`), unless a member of
+the object would then lie beyond the hand's reach from above (`TOP_DOWN_REACH`), where the arm
+could not pick it up again (a tray set on a utensil at the table's far edge). On a table slot, a
 spot where the object lies inside the slot's region with every member's centre within
 `MEMBER_REACH` of the robot's base, which is what the rules grant a slot
 (`symbolic.slots.admits`): the slot's position or, when that leaves no room (a neighbour,
@@ -20,6 +22,7 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from utamp_gym.errors import GroundingError
+from utamp_gym.robot.kinematics import TOP_DOWN_REACH
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import Box
 from utamp_gym.sim import relook
@@ -102,6 +105,16 @@ def _beyond_reach(t: ObjectType, pose: np.ndarray) -> float:
     )
 
 
+def _out_of_hand_reach(t: ObjectType, pose: np.ndarray) -> tuple[str, float] | None:
+    """The member of an object of type `t` at `pose` whose centre lies farthest from the
+    robot's base, and that distance (m), if it is beyond `TOP_DOWN_REACH`; else None."""
+    dist, member = max(
+        (math.hypot(*(pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3])), name)
+        for name, m in t.members.items()
+    )
+    return (member, dist) if dist > TOP_DOWN_REACH else None
+
+
 def _slot_targets(
     st: SimState, name: str, slot: str, now: np.ndarray, near: list[np.ndarray], n_near: int,
     base_yaw: float,
@@ -180,6 +193,16 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
                 targets = _slot_targets(
                     st, name, act.support, now, list(targets), len(surfaces), base_yaw
                 )
+            else:  # on an object: never where the arm could not pick it up again
+                beyond = [(target, _out_of_hand_reach(t, target)) for target in targets]
+                if all(far is not None for _, far in beyond):
+                    member, dist = min((far for _, far in beyond if far), key=lambda f: f[1])
+                    raise GroundingError(
+                        f"{name} on {act.support} would put {name}-{member} {dist:.2f} m from "
+                        f"the robot's base, beyond the hand's reach from above "
+                        f"({TOP_DOWN_REACH} m): the arm could not pick it up again"
+                    )
+                targets = [target for target, far in beyond if far is None]
             for target in targets:
                 posed = True
                 tcp = hand_for_object(target, held.belief)
@@ -214,5 +237,6 @@ __all__ = [
     "SPOT_GAP",
     "SPOT_RADIUS",
     "SPOT_STEP",
+    "TOP_DOWN_REACH",
     "plan_place",
 ]
