@@ -86,8 +86,8 @@ def summarize_split(split: str, folder: Path) -> dict[str, Any]:
 def reason_kind(reason: str) -> str:
     """A failure reason without its step, action, names and numbers: its kind."""
     text = reason.split("): ", 1)[-1]  # drop "step N (action)"
-    text = re.sub(r"\bobj\d\b|\bbase\b", "X", text)
-    text = re.sub(r"\(.*\)", "", text)  # details such as the contacts or the IK's notes
+    text = re.sub(r"\bobj\d\b|(?<!robot's )\bbase\b", "X", text)
+    text = re.sub(r"\s*\(.*\)", "", text)  # details such as the contacts or the IK's notes
     return re.sub(r"-?\d+(\.\d+)?", "#", text).strip()
 
 
