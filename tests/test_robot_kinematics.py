@@ -26,6 +26,18 @@ def _rot_err(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
 
 
+def _top_down(reach: float, bearing_deg: float, height: float) -> np.ndarray:
+    """A TCP pose pointing straight down, `reach` m from the base at `bearing_deg`, `height` m
+    above the table; the gripper's fingers across the radial direction."""
+    b = np.radians(bearing_deg)
+    target = np.eye(4)
+    target[:3, :3] = np.array(
+        [[np.cos(b), np.sin(b), 0.0], [np.sin(b), -np.cos(b), 0.0], [0.0, 0.0, -1.0]]
+    )
+    target[:3, 3] = [reach * np.cos(b), reach * np.sin(b), height]
+    return target
+
+
 def test_assets_found():
     assets = panda_assets()
     assert assets.urdf.is_file() and assets.srdf.is_file()
@@ -105,12 +117,7 @@ def test_the_hand_reaches_from_above_as_far_as_placements_keep_members(kin, heig
     (at the table and 35 cm above it, across the table's front), and FK(IK(x)) = x."""
     from utamp_gym.sim.placement import MEMBER_REACH
 
-    b = np.radians(bearing_deg)
-    target = np.eye(4)
-    target[:3, :3] = np.array(
-        [[np.cos(b), np.sin(b), 0.0], [np.sin(b), -np.cos(b), 0.0], [0.0, 0.0, -1.0]]
-    )
-    target[:3, 3] = [MEMBER_REACH * np.cos(b), MEMBER_REACH * np.sin(b), height]
+    target = _top_down(MEMBER_REACH, bearing_deg, height)
     res = kin.ik(target, HOME_Q, np.random.default_rng(0), max_attempts=40)
     assert res.success, (bearing_deg, height, res.pos_error)
     np.testing.assert_allclose(kin.fk(res.q)[:3, 3], target[:3, 3], atol=2e-4)
@@ -126,12 +133,7 @@ def test_the_hand_reaches_from_above_as_far_as_top_down_reach_and_no_farther(
     the arm can pick the object up again. 3 cm farther, no configuration reaches."""
     from utamp_gym.robot.kinematics import TOP_DOWN_REACH
 
-    b = np.radians(bearing_deg)
-    target = np.eye(4)
-    target[:3, :3] = np.array(
-        [[np.cos(b), np.sin(b), 0.0], [np.sin(b), -np.cos(b), 0.0], [0.0, 0.0, -1.0]]
-    )
     for reach, reached in ((TOP_DOWN_REACH, True), (TOP_DOWN_REACH + 0.03, False)):
-        target[:3, 3] = [reach * np.cos(b), reach * np.sin(b), height]
+        target = _top_down(reach, bearing_deg, height)
         res = kin.ik(target, HOME_Q, np.random.default_rng(0), max_attempts=40)
         assert res.success is reached, (reach, bearing_deg, height, res.pos_error)

@@ -96,22 +96,26 @@ def _crowded(t: ObjectType, pose: np.ndarray, others: list[Box]) -> bool:
     return any(mine.gap_xy(other) < SPOT_GAP for other in others)
 
 
+def _member_centres(t: ObjectType, pose: np.ndarray) -> dict[str, tuple[float, float]]:
+    """World x, y of each member centre of an object of type `t` at `pose`, by member name
+    (the robot's base is the world origin)."""
+    centres = {}
+    for name, m in t.members.items():
+        x, y = pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3]
+        centres[name] = (float(x), float(y))
+    return centres
+
+
 def _beyond_reach(t: ObjectType, pose: np.ndarray) -> float:
     """How far (cm, rounded) the farthest member centre of an object of type `t` at `pose`
-    lies beyond `MEMBER_REACH` of the robot's base (the world origin); 0 within it."""
-    return beyond_reach_cm(
-        tuple(pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3])
-        for m in t.members.values()
-    )
+    lies beyond `MEMBER_REACH` of the robot's base; 0 within it."""
+    return beyond_reach_cm(_member_centres(t, pose).values())
 
 
 def _out_of_hand_reach(t: ObjectType, pose: np.ndarray) -> tuple[str, float] | None:
     """The member of an object of type `t` at `pose` whose centre lies farthest from the
     robot's base, and that distance (m), if it is beyond `TOP_DOWN_REACH`; else None."""
-    dist, member = max(
-        (math.hypot(*(pose[:2, :3] @ np.asarray(m.box.center, dtype=float) + pose[:2, 3])), name)
-        for name, m in t.members.items()
-    )
+    dist, member = max((math.hypot(*xy), name) for name, xy in _member_centres(t, pose).items())
     return (member, dist) if dist > TOP_DOWN_REACH else None
 
 
