@@ -9,6 +9,7 @@ import json
 import shlex
 import subprocess
 import sys
+import tempfile
 import zipfile
 from pathlib import Path
 
@@ -81,13 +82,19 @@ def test_evaluate_rl_rows(maskable_run: Path) -> None:
 
 
 @pytest.mark.parametrize("algo", ["ppo", "dqn"])
-def test_unmasked_algorithms_train_and_load(tmp_path: Path, algo: str) -> None:
+def test_unmasked_algorithms_train_and_load(
+    tmp_path: Path, algo: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     hyper = {"learning_starts": 64} if algo == "dqn" else {"n_steps": 64, "batch_size": 64}
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))  # where SB3 puts a run's default logs
     result = train(
-        algo=algo, num_objects=2, steps=512, n_envs=2, out=tmp_path, eval_every=256,
+        algo=algo, num_objects=2, steps=512, n_envs=2, out=tmp_path / "run", eval_every=256,
         eval_episodes=2, progress=False, hyperparams=hyper,
     )  # fmt: skip
     assert result.model_path.is_file() and result.steps >= 512
+    assert not list(temp.glob("SB3-*")), "a training leaves no SB3 log folder behind"
     assert algo_of(result.model_path) == algo
     masked = load_rl_policy(result.model_path)
     assert masked.algo == algo

@@ -32,6 +32,7 @@ import functools
 import json
 import platform
 import statistics
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
@@ -215,6 +216,7 @@ def train(
     ``hyperparams``). Physics grounding trains in ``SubprocVecEnv`` workers.
     """
     import torch
+    from stable_baselines3.common.logger import HumanOutputFormat, Logger
 
     from utamp_gym.rl.callbacks import PeriodicEval, ProgressBar, plot_learning_curve
     from utamp_gym.rl.policies import POLICY_CLASSES
@@ -256,6 +258,8 @@ def train(
 
         policy_class = SlotPolicy
     model = algo_class(algo)(policy_class, vec, seed=seed, verbose=verbose, **hyper)
+    # given no logger, SB3 makes an empty /tmp/SB3-<time> folder per run: log to stdout only
+    model.set_logger(Logger(None, [HumanOutputFormat(sys.stdout)] if verbose else []))
     if config.init_from:  # fine-tuning: start from a saved policy (e.g. behaviour cloning)
         start_from = algo_class(algo).load(config.init_from, device="cpu")
         model.policy.load_state_dict(start_from.policy.state_dict())
