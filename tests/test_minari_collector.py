@@ -17,6 +17,13 @@ pytest.importorskip("jax", reason="Minari's DataCollector needs minari[create] (
 
 register_envs()
 
+# these datasets are scratch files: the metadata Minari asks for (author, description, ...)
+# would only be noise here (`utamp demos` writes it: `utamp_gym.data.minari_io`)
+pytestmark = pytest.mark.filterwarnings(
+    r"ignore:`(author|author_email|code_permalink|description|eval_env|algorithm_name)` is set to "
+    r"None:UserWarning"
+)
+
 
 def _collect(env: gym.Env, episodes: int, seed: int, steps: int = 12) -> None:
     """Random masked episodes of at most `steps` steps: a longer one is cut by the next
