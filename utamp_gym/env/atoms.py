@@ -13,6 +13,7 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.rules import FINGER_PAIRS, PALM_PARTS
+from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.planning.methods import affordances_for, scene_types
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES
@@ -106,15 +107,16 @@ class InitialAtoms:
         self.noisy = affordances == "noisy" and domain_name != "utamp1"
         self.source = "gt" if affordances == "noisy" else affordances  # utamp1: unused
         self.noise = noise
-        self._cache: dict[str, EpisodeAtoms] = {}
+        self._cache: SceneCache[EpisodeAtoms] = SceneCache()
 
     def __call__(self, scene: Scene, rng: np.random.Generator) -> EpisodeAtoms:
-        cached = self._cache.get(scene.name)
-        if cached is None:
+        def derive() -> EpisodeAtoms:
             facts = () if self.noisy else affordances_for(scene, self.source, rng)[0]  # no draws
             static, fluent, _ = scene_atoms(scene, facts, self.domain_name, self.fluent)
             goal = frozenset(str(parse_atom(g)) for g in goal_atoms(scene))
-            cached = self._cache[scene.name] = EpisodeAtoms(static, fluent, goal)
+            return EpisodeAtoms(static, fluent, goal)
+
+        cached = self._cache.get(scene.name, derive)
         if not self.noisy:
             return cached
         facts = affordances_for(scene, "noisy", rng, self.noise)[0]

@@ -79,6 +79,7 @@ from utamp_gym.env.object_space import (
     member_order,
     observation_space,
 )
+from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import PARTS, SIDES
@@ -267,7 +268,7 @@ class ObjectInterface:
         self._size = sum(sizes)
         self.slots: dict[str, int] = {}  # object name -> slot, this episode
         self._static: dict[str, np.ndarray] = {}
-        self._maps: dict[str, _SceneMap] = {}  # per scene: what does not depend on the slots
+        self._maps: SceneCache[_SceneMap] = SceneCache()  # what does not depend on the slots
 
     def __getstate__(self) -> dict[str, object]:
         state = self.__dict__.copy()
@@ -293,11 +294,14 @@ class ObjectInterface:
                 )
         order = rng.permutation(_K)[: len(names)]
         self.scene, self.slots = scene, {n: int(s) for n, s in zip(names, order, strict=True)}
-        cached = self._maps.get(scene.name) if self.types is declared_type else None
-        if cached is None:
-            cached = _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
-            if self.types is declared_type:  # declared types are fixed per scene
-                self._maps[scene.name] = cached
+
+        def scene_map() -> _SceneMap:
+            return _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
+
+        if self.types is declared_type:  # declared types are fixed per scene
+            cached = self._maps.get(scene.name, scene_map)
+        else:
+            cached = scene_map()
         self._index, self._atom_pos = cached.place(order)
         order_ = np.argsort(self._index, kind="stable")
         self._sorted = order_[self._index[order_] >= 0]

@@ -27,6 +27,7 @@ import numpy as np
 
 from utamp_gym.env.atoms import parse_atom
 from utamp_gym.env.geometric import GEOMETRIC_DROPPED
+from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.env.state import SymbolicState
 from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
 from utamp_gym.planning.methods import ground_truth_for
@@ -94,7 +95,7 @@ class OutcomeModel:
         self.universe = universe
         self._table = _truth_table(universe.key)
         # scene name -> (ground-truth atoms, whether each action's affordances hold)
-        self._scenes: dict[str, tuple[frozenset[str], np.ndarray]] = {}
+        self._scenes: SceneCache[tuple[frozenset[str], np.ndarray]] = SceneCache()
         self._ok = np.ones(universe.n_actions, bool)
         self._truth: frozenset[str] = frozenset()
 
@@ -112,8 +113,8 @@ class OutcomeModel:
 
     def reset(self, scene: Scene) -> None:
         """Start an episode in `scene`: its ground-truth affordances decide from now on."""
-        cached = self._scenes.get(scene.name)
-        if cached is None:
+
+        def derive() -> tuple[frozenset[str], np.ndarray]:
             truth, t = truth_atoms(scene), self._table
             words = np.zeros(t.pos.shape[1], np.uint64)
             for a in truth:
@@ -122,8 +123,9 @@ class OutcomeModel:
                     words[j >> 6] |= np.uint64(1) << np.uint64(j & 63)
             ok = ~((t.pos & ~words) | (t.neg & words)).any(axis=1)
             ok.setflags(write=False)
-            cached = self._scenes[scene.name] = (truth, ok)
-        self._truth, self._ok = cached
+            return truth, ok
+
+        self._truth, self._ok = self._scenes.get(scene.name, derive)
 
     def affordances_hold(self) -> np.ndarray:
         """Read-only bool array: per action, whether its affordance literals hold here."""

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.scene.model import Scene
 
 LIFT_HEIGHT = 0.25  # m, how high a held object is reported above where it was picked
@@ -64,13 +65,11 @@ class SymbolicPoses:
         self._above: dict[str, str] = {}  # support (object or slot) -> what stands on it
         self._below: dict[str, str] = {}
         self._geometry: _Geometry = _Geometry(self._pose, self._present, {}, {}, {})
-        self._cache: dict[str, _Geometry] = {}  # per scene name: resets are frequent
+        self._cache: SceneCache[_Geometry] = SceneCache()  # resets are frequent
 
     def reset(self, scene: Scene) -> None:
         """Start from the scene's initial poses and stacking."""
-        geometry = self._cache.get(scene.name)
-        if geometry is None:
-            geometry = self._cache[scene.name] = _Geometry.of(scene, self._row)
+        geometry = self._cache.get(scene.name, lambda: _Geometry.of(scene, self._row))
         self._geometry = geometry
         self._pose = geometry.pose.copy()
         self._present = geometry.present

@@ -22,6 +22,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from utamp_gym.env.atoms import EpisodeAtoms
+from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.env.universe import Universe, ground_universe
 
 MASK_MODES = ("affordances", "geometric", "none")
@@ -46,9 +47,9 @@ class SymbolicState:
         self._flat = universe.check_flat
         self._ext = np.zeros(2 * half, np.intp)
         self._mask = np.zeros(universe.n_actions, bool)
-        self._tables: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._tables: SceneCache[tuple[np.ndarray, np.ndarray]] = SceneCache()
         self._present = np.zeros(universe.n_actions, bool)  # masks "none": objects in scene
-        self._presence: dict[str, np.ndarray] = {}
+        self._presence: SceneCache[np.ndarray] = SceneCache()
         self.unrepresented: tuple[str, ...] = ()  # perceived atoms outside the universe
 
     def reset(self, atoms: EpisodeAtoms, cache_key: str | None = None) -> None:
@@ -57,20 +58,17 @@ class SymbolicState:
         The per-op literal table depends only on the static atoms, so it is cached under
         `cache_key` (the scene name when those atoms are fixed per scene).
         """
-        table = self._tables.get(cache_key) if cache_key is not None else None
-        if table is None:
-            table = self._table(atoms.static)
-            if cache_key is not None:
-                self._tables[cache_key] = table
-        self._flat, self._ptr = table
-        self._static = atoms.static
+        static = atoms.static
+        if cache_key is None:
+            self._flat, self._ptr = self._table(static)
+        else:
+            self._flat, self._ptr = self._tables.get(cache_key, lambda: self._table(static))
+        self._static = static
         if self.masks == "none":
-            present = self._presence.get(cache_key) if cache_key is not None else None
-            if present is None:
-                present = self._objects_present(atoms.static)
-                if cache_key is not None:
-                    self._presence[cache_key] = present
-            self._present = present
+            if cache_key is None:
+                self._present = self._objects_present(static)
+            else:
+                self._present = self._presence.get(cache_key, lambda: self._objects_present(static))
         self.unrepresented = ()
         self.bits = self.universe.state_bits(atoms.fluent)
         self._goal = self.universe.state_bits(atoms.goal)
