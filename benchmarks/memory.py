@@ -1,13 +1,18 @@
 """Memory over long runs: RSS of a physics env over resets and full episodes, and of a vector env.
 
-Three measurements, each in a fresh Python process so none inherits another's heap:
+Four measurements, each in a fresh Python process so none inherits another's heap:
 
 * ``resets``: one ``UTampKitchen-v0`` env (physics grounding), ``--resets`` resets (seeds
   0, 1, ...): RSS every 100, and the growth per 1,000 resets after the first 500 (least-squares
   slope; target <= 10 MB);
 * ``episodes``: the same env, ``--episodes`` full episodes of the planner policy
   (`utamp_gym.env.planner_policy.PlannerPolicy`, one episode per seed): RSS after each, and the
-  growth over the last half (target <= 10 MB over the last 100 of 200);
+  growth over the last half (target <= 10 MB over the last 100 of 200), and how many scenes
+  they met: the env keeps what a reset derives from each scene it meets (up to
+  `utamp_gym.env.scene_cache.SCENES_KEPT`), so its memory grows with the scenes it has met;
+* ``repeat``: the same, ``--episodes`` episodes cycling over ``--repeat-scenes`` scenes, so
+  every scene is met within the first few: what an episode itself leaves behind. Its growth
+  compares two episodes of the same scene (target <= 10 MB over the last 100 of 200);
 * ``vector``: a Gymnasium ``AsyncVectorEnv`` of ``--vector-envs`` physics envs, ``--vector-resets``
   resets: the RSS of the parent plus its workers, and its growth over the last half (target
   <= 10 MB over the last 50 of 100).
@@ -58,17 +63,28 @@ def measure_resets(n: int, every: int = 100) -> list[tuple[int, float]]:
     return samples
 
 
-def measure_episodes(n: int) -> tuple[list[tuple[int, float]], dict[str, int]]:
+def measure_episodes(n: int, cycle: int = 0) -> tuple[list[tuple[int, float]], dict[str, int]]:
+    """RSS after each of `n` planner-policy episodes (seeds 1 .. n); with `cycle`, episode i
+    plays scene i % cycle of the first `cycle` distinct scenes the env's seeds give."""
     import gymnasium as gym
 
     import utamp_gym  # noqa: F401
     from utamp_gym.env.planner_policy import PlannerPolicy
 
     env = gym.make(ENV_ID)
+    names: list[str] = []
+    for seed in range(1, 100 * cycle + 1):
+        if len(names) == cycle:
+            break
+        env.reset(seed=seed)
+        if env.unwrapped.scene.name not in names:
+            names.append(env.unwrapped.scene.name)
     policy = PlannerPolicy(env.unwrapped)
-    samples, steps, successes = [(0, rss_mb())], 0, 0
+    samples, steps, successes, met = [(0, rss_mb())], 0, 0, set()
     for i in range(1, n + 1):
-        obs, info = env.reset(seed=i)
+        options = {"scene": names[i % cycle]} if cycle else None
+        obs, info = env.reset(seed=i, options=options)
+        met.add(env.unwrapped.scene.name)
         done = False
         while not done:
             obs, _, terminated, truncated, info = env.step(policy(obs, info))
@@ -77,7 +93,7 @@ def measure_episodes(n: int) -> tuple[list[tuple[int, float]], dict[str, int]]:
         successes += bool(info["is_success"])
         samples.append((i, rss_mb()))
     env.close()
-    return samples, {"macro_actions": steps, "successes": successes}
+    return samples, {"macro_actions": steps, "successes": successes, "scenes": len(met)}
 
 
 def measure_vector(n_envs: int, n: int) -> list[tuple[int, float]]:
@@ -124,6 +140,7 @@ def _child(part: str, args: argparse.Namespace) -> dict[str, Any]:
     """Run one measurement in a fresh interpreter; its JSON result."""
     cmd = [sys.executable, __file__, "--part", part]
     cmd += ["--resets", str(args.resets), "--episodes", str(args.episodes)]
+    cmd += ["--repeat-scenes", str(args.repeat_scenes)]
     cmd += ["--vector-envs", str(args.vector_envs), "--vector-resets", str(args.vector_resets)]
     start = time.perf_counter()
     done = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -137,8 +154,9 @@ def _child(part: str, args: argparse.Namespace) -> dict[str, Any]:
 def _run_part(args: argparse.Namespace) -> None:
     if args.part == "resets":
         out: dict[str, Any] = {"samples": measure_resets(args.resets)}
-    elif args.part == "episodes":
-        samples, counts = measure_episodes(args.episodes)
+    elif args.part in ("episodes", "repeat"):
+        cycle = args.repeat_scenes if args.part == "repeat" else 0
+        samples, counts = measure_episodes(args.episodes, cycle)
         out = {"samples": samples, **counts}
     else:
         out = {"samples": measure_vector(args.vector_envs, args.vector_resets)}
@@ -150,6 +168,8 @@ def report(args: argparse.Namespace) -> dict[str, Any]:
     per_1000 = slope_per_1000(resets["samples"], after=500)
     episodes = _child("episodes", args)
     last_half = growth_over_last_half(episodes["samples"])
+    repeat = _child("repeat", args)
+    repeat_half = growth_over_last_half(repeat["samples"])
     vector = _child("vector", args)
     vector_half = growth_over_last_half(vector["samples"])
     rows = [
@@ -165,7 +185,8 @@ def report(args: argparse.Namespace) -> dict[str, Any]:
         },
         {
             "measurement": f"{ENV_ID} physics: {args.episodes} planner-policy episodes "
-            f"({episodes['macro_actions']} macro steps, {episodes['successes']} successes)",
+            f"({episodes['macro_actions']} macro steps, {episodes['successes']} successes, "
+            f"{episodes['scenes']} scenes met)",
             "start_mb": episodes["samples"][0][1],
             "end_mb": episodes["samples"][-1][1],
             "growth": f"{last_half:+.1f} MB over the last {args.episodes - args.episodes // 2}",
@@ -173,6 +194,18 @@ def report(args: argparse.Namespace) -> dict[str, Any]:
             "target": f"<= {TARGET_MB:g} MB",
             "met": last_half <= TARGET_MB,
             "wall_s": episodes["wall_s"],
+        },
+        {
+            "measurement": f"{ENV_ID} physics: {args.episodes} planner-policy episodes over "
+            f"{repeat['scenes']} scenes, in turn ({repeat['macro_actions']} macro steps, "
+            f"{repeat['successes']} successes)",
+            "start_mb": repeat["samples"][0][1],
+            "end_mb": repeat["samples"][-1][1],
+            "growth": f"{repeat_half:+.1f} MB over the last {args.episodes - args.episodes // 2}",
+            "growth_mb": repeat_half,
+            "target": f"<= {TARGET_MB:g} MB",
+            "met": repeat_half <= TARGET_MB,
+            "wall_s": repeat["wall_s"],
         },
         {
             "measurement": f"AsyncVectorEnv of {args.vector_envs} physics envs: "
@@ -196,6 +229,7 @@ def report(args: argparse.Namespace) -> dict[str, Any]:
         "samples": {
             "resets": resets["samples"],
             "episodes": episodes["samples"],
+            "repeat": repeat["samples"],
             "vector": vector["samples"],
         },
     }
@@ -224,10 +258,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--resets", type=int, default=2000)
     ap.add_argument("--episodes", type=int, default=200)
+    ap.add_argument("--repeat-scenes", type=int, default=10)
     ap.add_argument("--vector-envs", type=int, default=4)
     ap.add_argument("--vector-resets", type=int, default=100)
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
-    ap.add_argument("--part", choices=("resets", "episodes", "vector"), help=argparse.SUPPRESS)
+    parts = ("resets", "episodes", "repeat", "vector")
+    ap.add_argument("--part", choices=parts, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.part:
         _run_part(args)
