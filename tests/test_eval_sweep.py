@@ -166,3 +166,17 @@ def test_physics_grounding_small(tmp_path: Path) -> None:
     for row in report.rows:  # run_episode (gt) and a pre-computed plan (noise 0)
         assert row.grounding == "physics" and row.execution_time_s > 0
         assert row.success, row.failure_reason
+
+
+@pytest.mark.parametrize(
+    ("scene", "suite"),
+    [
+        ("pick-place/080", "pick-place"),
+        ("procedural-v1/test-count/0003", "procedural-v1/test-count"),
+        ("kitchen-demo", "custom"),
+    ],
+)
+def test_a_row_names_the_suite_of_its_scene(scene: str, suite: str) -> None:
+    """A procedural split is a suite of its own: its rows say which split they came from."""
+    row = run_task(EvalTask(scene, "utamp2-gt", grounding="symbolic"))
+    assert (row.suite, row.success) == (suite, True), row.failure_reason

@@ -88,7 +88,11 @@ class _Planned:
 
 
 def _suite_of(name: str) -> str:
-    return name.split("/", 1)[0] if "/" in name else "custom"
+    """The suite of a suite scene (``procedural-v1/train/0042`` -> ``procedural-v1/train``);
+    ``custom`` for a packaged scene or a scene file."""
+    from utamp_gym.suites import suite_of
+
+    return suite_of(name) or "custom"
 
 
 def _plan(scene: Scene, task: EvalTask) -> _Planned:
