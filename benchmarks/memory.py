@@ -163,62 +163,58 @@ def _run_part(args: argparse.Namespace) -> None:
     print(json.dumps(out))
 
 
+def _row(
+    measurement: str, part: dict[str, Any], growth_mb: float, growth: str, per: str = ""
+) -> dict[str, Any]:
+    """One table row: RSS at the first and last sample of `part`, and its growth (MB) against
+    `TARGET_MB` (`per`: the target's unit, e.g. " per 1,000 resets")."""
+    return {
+        "measurement": measurement,
+        "start_mb": part["samples"][0][1],
+        "end_mb": part["samples"][-1][1],
+        "growth": f"{growth_mb:+.1f} MB {growth}",
+        "growth_mb": growth_mb,
+        "target": f"<= {TARGET_MB:g} MB{per}",
+        "met": growth_mb <= TARGET_MB,
+        "wall_s": part["wall_s"],
+    }
+
+
 def report(args: argparse.Namespace) -> dict[str, Any]:
-    resets = _child("resets", args)
-    per_1000 = slope_per_1000(resets["samples"], after=500)
-    episodes = _child("episodes", args)
-    last_half = growth_over_last_half(episodes["samples"])
-    repeat = _child("repeat", args)
-    repeat_half = growth_over_last_half(repeat["samples"])
-    vector = _child("vector", args)
-    vector_half = growth_over_last_half(vector["samples"])
+    parts = {name: _child(name, args) for name in ("resets", "episodes", "repeat", "vector")}
+    resets, episodes, repeat, vector = parts.values()
+    last = args.episodes - args.episodes // 2
     rows = [
-        {
-            "measurement": f"{ENV_ID} physics: {args.resets} resets",
-            "start_mb": resets["samples"][0][1],
-            "end_mb": resets["samples"][-1][1],
-            "growth": f"{per_1000:+.1f} MB per 1,000 resets after the first 500",
-            "growth_mb": per_1000,
-            "target": f"<= {TARGET_MB:g} MB per 1,000 resets",
-            "met": per_1000 <= TARGET_MB,
-            "wall_s": resets["wall_s"],
-        },
-        {
-            "measurement": f"{ENV_ID} physics: {args.episodes} planner-policy episodes "
+        _row(
+            f"{ENV_ID} physics: {args.resets} resets",
+            resets,
+            slope_per_1000(resets["samples"], after=500),
+            "per 1,000 resets after the first 500",
+            per=" per 1,000 resets",
+        ),
+        _row(
+            f"{ENV_ID} physics: {args.episodes} planner-policy episodes "
             f"({episodes['macro_actions']} macro steps, {episodes['successes']} successes, "
             f"{episodes['scenes']} scenes met)",
-            "start_mb": episodes["samples"][0][1],
-            "end_mb": episodes["samples"][-1][1],
-            "growth": f"{last_half:+.1f} MB over the last {args.episodes - args.episodes // 2}",
-            "growth_mb": last_half,
-            "target": f"<= {TARGET_MB:g} MB",
-            "met": last_half <= TARGET_MB,
-            "wall_s": episodes["wall_s"],
-        },
-        {
-            "measurement": f"{ENV_ID} physics: {args.episodes} planner-policy episodes over "
+            episodes,
+            growth_over_last_half(episodes["samples"]),
+            f"over the last {last}",
+        ),
+        _row(
+            f"{ENV_ID} physics: {args.episodes} planner-policy episodes over "
             f"{repeat['scenes']} scenes, in turn ({repeat['macro_actions']} macro steps, "
             f"{repeat['successes']} successes)",
-            "start_mb": repeat["samples"][0][1],
-            "end_mb": repeat["samples"][-1][1],
-            "growth": f"{repeat_half:+.1f} MB over the last {args.episodes - args.episodes // 2}",
-            "growth_mb": repeat_half,
-            "target": f"<= {TARGET_MB:g} MB",
-            "met": repeat_half <= TARGET_MB,
-            "wall_s": repeat["wall_s"],
-        },
-        {
-            "measurement": f"AsyncVectorEnv of {args.vector_envs} physics envs: "
+            repeat,
+            growth_over_last_half(repeat["samples"]),
+            f"over the last {last}",
+        ),
+        _row(
+            f"AsyncVectorEnv of {args.vector_envs} physics envs: "
             f"{args.vector_resets} resets (parent + workers)",
-            "start_mb": vector["samples"][0][1],
-            "end_mb": vector["samples"][-1][1],
-            "growth": f"{vector_half:+.1f} MB over the last "
-            f"{args.vector_resets - args.vector_resets // 2} resets",
-            "growth_mb": vector_half,
-            "target": f"<= {TARGET_MB:g} MB",
-            "met": vector_half <= TARGET_MB,
-            "wall_s": vector["wall_s"],
-        },
+            vector,
+            growth_over_last_half(vector["samples"]),
+            f"over the last {args.vector_resets - args.vector_resets // 2} resets",
+        ),
     ]
     return {
         "env_id": ENV_ID,
@@ -226,12 +222,7 @@ def report(args: argparse.Namespace) -> dict[str, Any]:
         "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
         "load_average_at_end": round(os.getloadavg()[0], 2),
         "rows": rows,
-        "samples": {
-            "resets": resets["samples"],
-            "episodes": episodes["samples"],
-            "repeat": repeat["samples"],
-            "vector": vector["samples"],
-        },
+        "samples": {name: part["samples"] for name, part in parts.items()},
     }
 
 
