@@ -253,27 +253,27 @@ class ArmDriver:
         length = float(np.linalg.norm(offset))
         n = max(1, int(np.ceil(length / LINE_STEP)))
         knots, path = [0.0], [np.asarray(q_start, dtype=float)]
-
-        def solve(s_from: float, s_to: float, depth: int) -> None:
-            target = start.copy()
-            target[:3, 3] = start[:3, 3] + offset * (s_to / length)
-            res = self.kin.ik(target, path[-1], self.rng, max_attempts=1)
-            if res.success and np.abs(res.q - path[-1]).max() <= MAX_JOINT_JUMP:
-                if not valid(res.q):
-                    raise GroundingError(f"{what} would collide ({self._why(res.q)})")
-                knots.append(s_to)
-                path.append(res.q)
-            elif depth < 3:
-                solve(s_from, (s_from + s_to) / 2, depth + 1)
-                solve((s_from + s_to) / 2, s_to, depth + 1)
-            else:
-                raise GroundingError(f"IK infeasible: {what} leaves the arm's reach")
-
+        # segments (from, to, depth) still to solve, the next on top; a stack rather than a
+        # recursive closure, whose reference cycle would keep this driver (and its world)
+        # alive until Python's next full garbage collection
+        todo = [(length * (k - 1) / n, length * k / n, 0) for k in range(n, 0, -1)]
         t0 = time.perf_counter()
         try:
-            if length > 0:
-                for k in range(1, n + 1):
-                    solve(length * (k - 1) / n, length * k / n, 0)
+            while length > 0 and todo:
+                s_from, s_to, depth = todo.pop()
+                target = start.copy()
+                target[:3, 3] = start[:3, 3] + offset * (s_to / length)
+                res = self.kin.ik(target, path[-1], self.rng, max_attempts=1)
+                if res.success and np.abs(res.q - path[-1]).max() <= MAX_JOINT_JUMP:
+                    if not valid(res.q):
+                        raise GroundingError(f"{what} would collide ({self._why(res.q)})")
+                    knots.append(s_to)
+                    path.append(res.q)
+                elif depth < 3:  # halve the step: the first half is solved first
+                    mid = (s_from + s_to) / 2
+                    todo += [(mid, s_to, depth + 1), (s_from, mid, depth + 1)]
+                else:
+                    raise GroundingError(f"IK infeasible: {what} leaves the arm's reach")
         finally:
             self.timings.ik_s += time.perf_counter() - t0
         return LinePath(np.array(knots), np.array(path))
