@@ -39,6 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 ENV_ID = "UTampKitchen-v0"
 TARGET_MB = 10.0
 MiB = 2**20
+PARTS = ("resets", "episodes", "repeat", "vector")  # the measurements, in the table's order
 
 
 def rss_mb(pid: int | str = "self") -> float:
@@ -181,7 +182,7 @@ def _row(
 
 
 def report(args: argparse.Namespace) -> dict[str, Any]:
-    parts = {name: _child(name, args) for name in ("resets", "episodes", "repeat", "vector")}
+    parts = {name: _child(name, args) for name in PARTS}
     resets, episodes, repeat, vector = parts.values()
     last = args.episodes - args.episodes // 2
     rows = [
@@ -253,8 +254,7 @@ def main() -> None:
     ap.add_argument("--vector-envs", type=int, default=4)
     ap.add_argument("--vector-resets", type=int, default=100)
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
-    parts = ("resets", "episodes", "repeat", "vector")
-    ap.add_argument("--part", choices=parts, help=argparse.SUPPRESS)
+    ap.add_argument("--part", choices=PARTS, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.part:
         _run_part(args)

@@ -29,6 +29,7 @@ from utamp_gym.affordances.facts import Fact
 from utamp_gym.env.atoms import scene_atoms
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.physics import perceived_static
+from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.errors import PlanningError, UnknownNameError
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
 from utamp_gym.planning.methods import DEFAULT_NOISE, affordances_for, method_spec
@@ -194,12 +195,10 @@ class PlannerPolicy:
             self._state_planner = StatePlanner(
                 self.spec.domain, search=self.search, timeout=self.timeout
             )
-            self._scene_objects: dict[str, tuple[str, ...]] = {}
-        objects = self._scene_objects.get(scene.name)
-        if objects is None:
-            objects = self._scene_objects[scene.name] = scene_atoms(
-                scene, (), self.spec.domain, self._fluent
-            )[2]
+            self._scene_objects: SceneCache[tuple[str, ...]] = SceneCache()
+        objects = self._scene_objects.get(
+            scene.name, lambda: scene_atoms(scene, (), self.spec.domain, self._fluent)[2]
+        )
         result = self._state_planner.plan(
             objects,
             self._static_atoms(scene),
