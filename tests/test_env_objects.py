@@ -21,6 +21,7 @@ from utamp_gym.env.objects import (
     decode,
     encode,
     encode_type,
+    member_order,
 )
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import register_envs
@@ -153,3 +154,94 @@ def test_extra_suite_and_pickling() -> None:
     clone = pickle.loads(pickle.dumps(env))
     a = int(np.flatnonzero(info["action_mask"])[0])
     assert clone.step(a)[-1]["action"] == env.step(a)[-1]["action"]
+
+
+def _meaning(kitchen: UTampKitchenEnv, text: str) -> dict[str, str]:
+    """The PDDL arguments an `action_strings` entry names, read with this episode's slots."""
+    where = {s: n for n, s in kitchen.objects.slots.items()}
+    words = text.split()
+    obj = where[int(words[1].removeprefix("slot"))]
+    out = {"operator": f"{words[0]}-support", "object": obj}
+    if "member" in words[2]:
+        member = member_order(kitchen.scene.type_of(obj))[int(words[2].removeprefix("member"))]
+        out["member"] = f"{obj}-{member}"
+        out["grasp"] = " ".join(words[4].split("/"))
+    if words[0] == "place":
+        target = words[3]
+        out["support"] = (
+            where[int(target.removeprefix("slot"))] if target.startswith("slot")
+            else kitchen.scene.slots[int(target.removeprefix("region"))].name
+        )  # fmt: skip
+    if words[0] == "slide":
+        out["space"] = kitchen.scene.spaces[int(words[-1].removeprefix("space"))].name
+    return out
+
+
+def _pddl_meaning(action: str) -> dict[str, str]:
+    """The same fields read from a ground action (a place also has the held member, grasp)."""
+    name, *args = action[1:-1].split()
+    out = {"operator": name, "object": args[0], "member": args[1], "grasp": " ".join(args[2:5])}
+    if name == "place-support":
+        out["support"] = args[8]
+    if name == "slide-support":
+        out["space"] = args[9]
+    return out
+
+
+@pytest.mark.parametrize(
+    ("env_id", "masks"),
+    [("UTampKitchenProcedural-v0", "affordances"), ("UTampKitchenProcedural-v0", "geometric"),
+     ("UTampKitchenSlide-v0", "affordances")],
+)  # fmt: skip
+def test_action_strings_and_action_pddl_say_what_the_step_does(env_id: str, masks: str) -> None:
+    """For every valid index along a few episodes: ``action_pddl(a)`` is the ``info["action"]``
+    its step reports, and ``action_strings[a]`` names that action's object, member, grasp,
+    support and space through the episode's slots."""
+    env = gym.make(env_id, grounding="symbolic", interface="objects", masks=masks)
+    kitchen = env.unwrapped
+    assert len(kitchen.action_strings) == N_ACTIONS
+    assert kitchen.action_strings[encode(ObjectAction("place", 3, support=MAX_OBJECTS + 1))] == (
+        "place slot3 on region1"
+    )
+    rng = np.random.default_rng(1)
+    checked = 0
+    for seed in range(3):
+        scene, prefix = env.reset(seed=seed)[1]["scene"], []
+        _, info = env.reset(seed=seed, options={"scene": scene})  # as replayed below
+        for _ in range(4):
+            valid = np.flatnonzero(info["action_mask"])
+            if not valid.size:
+                break
+            for a in rng.permutation(valid)[:15]:
+                env.reset(seed=seed, options={"scene": scene})
+                for p in prefix:
+                    env.step(p)
+                said = kitchen.action_pddl(int(a))
+                meaning = _meaning(kitchen, kitchen.action_strings[a])
+                *_, step_info = env.step(int(a))
+                assert step_info["action"] == said != ""
+                pddl = _pddl_meaning(said)
+                assert {k: pddl.get(k) for k in meaning} == meaning
+                checked += 1
+            env.reset(seed=seed, options={"scene": scene})
+            for p in prefix:
+                env.step(p)
+            a = int(rng.choice(valid))
+            prefix.append(a)
+            *_, terminated, _, info = env.step(a)
+            if terminated:
+                break
+    assert checked >= 30  # indices checked (45 for the first case when written)
+    # an index without a ground action here: "" (its step fails with "no such action")
+    env.reset(seed=0, options={"scene": scene})
+    empty = next(s for s in range(MAX_OBJECTS) if s not in kitchen.objects.slots.values())
+    assert kitchen.action_pddl(encode(ObjectAction("pick", empty, 0, 0))) == ""
+
+
+def test_grounded_action_strings_are_the_pddl_actions() -> None:
+    env = gym.make("UTampKitchenProcedural-v0", grounding="symbolic", interface="grounded")
+    kitchen = env.unwrapped
+    assert kitchen.action_strings == kitchen.universe.actions
+    _, info = env.reset(seed=0)
+    a = int(np.flatnonzero(info["action_mask"])[0])
+    assert kitchen.action_pddl(a) == kitchen.action_strings[a] == env.step(a)[-1]["action"]

@@ -128,7 +128,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       (`utamp_gym.env.outcome`: the ground-truth U-TAMP-2 precondition; a failure names the
       false affordance);
     * ``interface``: "grounded" (default: the spaces above) or "objects" (object slots and a
-      parametrised macro action, the same spaces for every scene: `utamp_gym.env.objects`);
+      parametrised macro action, the same spaces for every scene: `utamp_gym.env.objects`;
+      `action_strings` then names each index in slots, ``pick slot3 member0 grasp
+      on/left/right``, and `action_pddl` (a) is the PDDL action stepping it runs now);
     * physics only: ``backend`` ("module:Class" or a callable, built as
       ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
       wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per

@@ -2,13 +2,15 @@
 
 What an index or an observation entry *means*, whatever the scene (`utamp_gym.env.objects` maps
 a scene's ground actions and atoms onto it): the limits (`MAX_OBJECTS`, `MAX_MEMBERS`,
-`MAX_REGIONS`, `MAX_SPACES`), the 24 `GRASPS`, `ObjectAction` and its `encode` / `decode`, the
-attribute vector of a type (`encode_type`) and the observation space.
+`MAX_REGIONS`, `MAX_SPACES`), the 24 `GRASPS`, `ObjectAction` and its `encode` / `decode` (and
+`action_text`, its readable name), the attribute vector of a type (`encode_type`) and the
+observation space.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -92,6 +94,28 @@ def decode(index: int) -> ObjectAction:
     rest, s = divmod(index - _SLIDE0, _S)
     (i, m), g = divmod(rest // _G, _M), rest % _G
     return ObjectAction("slide", i, m, g, space=s)
+
+
+def action_text(index: int) -> str:
+    """What index `index` does, in the interface's own vocabulary and the same in every scene:
+    ``pick slot3 member1 grasp on/left/right``, ``place slot3 on slot1`` (an object slot) or
+    ``place slot3 on region2`` (a table region), ``slide slot0 member0 grasp on/left/right to
+    space1``. The grasp is (palm, finger 1, finger 2), `GRASPS`."""
+    a = decode(index)
+    text = f"{a.operator} slot{a.obj}"
+    if a.member is not None:
+        text += f" member{a.member} grasp {'/'.join(GRASPS[a.grasp or 0])}"
+    if a.support is not None:
+        text += f" on slot{a.support}" if a.support < _K else f" on region{a.support - _K}"
+    if a.space is not None:
+        text += f" to space{a.space}"
+    return text
+
+
+@lru_cache(maxsize=1)
+def action_texts() -> tuple[str, ...]:
+    """`action_text` of every index, in index order (the objects env's ``action_strings``)."""
+    return tuple(action_text(i) for i in range(N_ACTIONS))
 
 
 def declared_type(scene: Scene, name: str) -> ObjectType:

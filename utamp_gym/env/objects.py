@@ -38,6 +38,11 @@ mask mode (``affordances``, ``geometric``, ``none``: unchanged meaning); steppin
 ground action (an applicable one first). An index with no ground action in the scene (an
 empty slot, a grasp no object has) fails like an unapplicable action: nothing changes and
 ``info["failure_reason"]`` says why.
+
+**Names.** The env's ``action_strings[a]`` is `action_text` (a): the index in this vocabulary,
+the same in every scene (``pick slot3 member0 grasp on/left/right``, ``place slot3 on
+region1``). The PDDL string of the ground action it runs depends on the scene, the slots and
+the state: ``env.action_pddl(a)`` gives it before the step and ``info["action"]`` after.
 """
 
 from __future__ import annotations
@@ -72,6 +77,8 @@ from utamp_gym.env.object_space import (
     OPERATORS,
     ObjectAction,
     TypeSource,
+    action_text,
+    action_texts,
     declared_type,
     decode,
     encode,
@@ -88,8 +95,8 @@ from utamp_gym.scene.model import Scene
 __all__ = [
     "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SPACES",
     "N_ACTIONS", "N_ATTRIBUTES", "N_ENTITIES", "OPERATORS", "ObjectAction", "ObjectInterface",
-    "TypeSource", "declared_type", "decode", "encode", "encode_type", "member_order",
-    "observation_space",
+    "TypeSource", "action_text", "action_texts", "declared_type", "decode", "encode",
+    "encode_type", "member_order", "observation_space",
 ]  # fmt: skip
 
 
@@ -350,18 +357,28 @@ class ObjectInterface:
         return int(ids[0])
 
     def describe(self, index: int) -> str:
-        """A readable name of an index (for failure reasons)."""
+        """`action_text` of an index with this episode's names in brackets (failure reasons):
+        ``pick slot0 (mug) member1 (handle) grasp ...``, ``place slot0 (mug) on region1
+        (slot2)``; an empty slot is ``(empty)``."""
         a = decode(index)
         where = {s: n for n, s in self.slots.items()}
-        parts = [f"{a.operator} slot {a.obj} ({where.get(a.obj, 'empty')})"]
-        if a.member is not None:
-            parts.append(f"member {a.member}, grasp {'/'.join(GRASPS[a.grasp or 0])}")
-        if a.support is not None:
-            parts.append(f"onto {'slot' if a.support < _K else 'region'} "
-                         f"{a.support if a.support < _K else a.support - _K}")  # fmt: skip
-        if a.space is not None:
-            parts.append(f"into space {a.space}")
-        return ", ".join(parts)
+        scene = self.scene
+        out = []
+        for word in action_text(index).split(" "):
+            name = None
+            if word.startswith("slot"):
+                name = where.get(int(word[4:]), "empty")
+            elif word.startswith("member") and a.obj in where:
+                order = member_order(scene.type_of(where[a.obj]))
+                name = order[a.member] if a.member is not None and a.member < len(order) else "none"
+            elif word.startswith("region"):
+                r = int(word[6:])
+                name = scene.slots[r].name if r < len(scene.slots) else "none"
+            elif word.startswith("space"):
+                s = int(word[5:])
+                name = scene.spaces[s].name if s < len(scene.spaces) else "none"
+            out.append(word if name is None else f"{word} ({name})")
+        return " ".join(out)
 
     def observation(
         self, fluent: np.ndarray, static_atoms: frozenset[str], poses: Mapping[str, np.ndarray]

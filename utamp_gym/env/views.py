@@ -10,6 +10,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from utamp_gym.env.atoms import parse_atom
+from utamp_gym.env.object_space import N_ACTIONS, action_texts
+from utamp_gym.env.options import action_id
 
 if TYPE_CHECKING:
     from utamp_gym.backend import MacroResult, PhysicsBackend
@@ -41,8 +43,27 @@ class KitchenViews:
 
     @property
     def action_strings(self) -> tuple[str, ...]:
-        """The PDDL string of every action id."""
+        """What every action id means. Grounded interface: the PDDL string of each ground
+        action (`universe` order). Objects interface: each index in the interface's own
+        vocabulary, the same in every scene (``pick slot3 member0 grasp on/left/right``;
+        `utamp_gym.env.object_space.action_text`); the PDDL action an index runs depends on
+        the episode: `action_pddl`, and ``info["action"]`` after the step."""
+        if self._objects is not None:
+            return action_texts()
         return self.universe.actions
+
+    def action_pddl(self, action: int) -> str:
+        """The PDDL string of the ground action that stepping `action` now would run (what
+        ``info["action"]`` will say; grounded interface: ``action_strings[action]``). With the
+        objects interface it depends on the scene, the slots and the state; ``""`` for an
+        index without a ground action in this scene (its step fails: ``no such action``)."""
+        if self._objects is None:
+            return self.universe.actions[action_id(action, self.universe.n_actions)]
+        index = action_id(action, N_ACTIONS)
+        if self._scene is None:
+            raise RuntimeError("call reset() before action_pddl(): the slots are drawn there")
+        a = self._objects.resolve(index, self._state.mask(), self._state.applicable_mask())
+        return "" if a is None else self.universe.actions[a]
 
     @property
     def symbolic_atoms(self) -> tuple[str, ...]:
