@@ -343,3 +343,34 @@ def test_worker_envs_of_the_utamp_process_find_the_env_ids() -> None:
     )
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "['present', 'symbolic']"
+
+
+def test_a_model_of_one_interface_names_both_on_the_others_observation() -> None:
+    """SB3's predict and `RLPolicy` on an observation of the other env interface: an error
+    naming the interface the model was trained on and the observation's (was KeyError)."""
+    from sb3_contrib import MaskablePPO
+
+    from utamp_gym.rl.envs import OBJECT_OBS_KEYS, make_env
+    from utamp_gym.rl.policies import MaskableKeysPolicy
+    from utamp_gym.rl.slots import SlotPolicy
+
+    grounded = MaskablePPO(MaskableKeysPolicy, make_env("UTampKitchen-v0", num_objects=3),
+                           n_steps=64, batch_size=64, device="cpu")  # fmt: skip
+    objects_env = make_env("UTampKitchenProcedural-v0", obs_keys=OBJECT_OBS_KEYS)
+    slots = MaskablePPO(SlotPolicy, objects_env, n_steps=64, batch_size=64, device="cpu")
+    procedural = gym.make("UTampKitchenProcedural-v0", grounding="symbolic")  # objects
+    kitchen = gym.make("UTampKitchen-v0", grounding="symbolic", num_objects=3)  # grounded
+    cases = [(grounded, procedural, "grounded", "objects", "'symbolic'"),
+             (slots, kitchen, "objects", "grounded", "'attributes'")]  # fmt: skip
+    for model, env, trained, seen, lacks in cases:
+        obs, info = env.reset(seed=0)
+        match = (
+            rf"trained on the {trained} interface, but this observation comes from the {seen} "
+            rf"interface \(it lacks {lacks}.*interface='{trained}'"
+        )
+        with pytest.raises(ModelError, match=match):
+            model.predict(obs, action_masks=info["action_mask"])
+        with pytest.raises(ModelError, match=match):
+            RLPolicy(model)(obs, info)
+    obs, info = procedural.reset(seed=0)  # the matching pair still acts
+    assert info["action_mask"][int(slots.predict(obs, action_masks=info["action_mask"])[0])]

@@ -19,15 +19,18 @@ from sb3_contrib.common.maskable.policies import MaskableMultiInputActorCriticPo
 from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 from stable_baselines3.dqn.policies import MultiInputPolicy as DQNMultiInputPolicy
 
+from utamp_gym.rl.saved import trained_entries
+
 
 class _TrainedKeys:
-    """Mixin: keep only the Dict entries of the policy's observation space."""
+    """Mixin: keep only the Dict entries of the policy's observation space (`trained_entries`:
+    a clear error for an observation of the other env interface)."""
 
     observation_space: Any
 
     def obs_to_tensor(self, observation: Any) -> Any:
-        if isinstance(observation, dict):
-            observation = {k: observation[k] for k in self.observation_space.spaces}
+        if isinstance(observation, Mapping):
+            observation = trained_entries(tuple(self.observation_space.spaces), observation)
         return super().obs_to_tensor(observation)  # type: ignore[misc]
 
 

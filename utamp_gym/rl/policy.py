@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
+from utamp_gym.rl.saved import trained_entries
+
 if TYPE_CHECKING:
     from utamp_gym.rl.saved import ModelMeta
 
@@ -102,7 +104,8 @@ class RLPolicy:
         """Nothing to forget between episodes (the policy is memoryless)."""
 
     def __call__(self, obs: Mapping[str, np.ndarray], info: Mapping[str, Any] | None = None) -> int:
-        scores = self._scores({k: np.asarray(obs[k]) for k in self.keys})
+        entries = trained_entries(self.keys, obs)
+        scores = self._scores({k: np.asarray(v) for k, v in entries.items()})
         mask = self._mask(info)
         if mask is not None:
             scores = np.where(mask, scores, -np.inf)

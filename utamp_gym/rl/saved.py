@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -109,6 +109,38 @@ def read_meta(path: str | Path) -> ModelMeta:
     except (OSError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
         raise ModelError(f"{path}: not a readable model zip ({exc})") from None
     return ModelMeta.from_json(data, str(path))
+
+
+def interface_of(keys: Iterable[str]) -> str:
+    """The env option ``interface`` an observation (or a model's observation space) with
+    these entries comes from: "grounded" (``symbolic``), "objects" (``attributes``, ``held``,
+    ...), else "unknown"."""
+    keys = set(keys)
+    if "symbolic" in keys:
+        return "grounded"
+    return "objects" if {"attributes", "held"} <= keys else "unknown"
+
+
+def trained_entries(keys: Sequence[str], observation: Mapping[str, Any]) -> dict[str, Any]:
+    """The entries `keys` of `observation`; `ModelError` naming both interfaces when some are
+    missing (a model of one env interface given the other's observation)."""
+    missing = [k for k in keys if k not in observation]
+    if not missing:
+        return {k: observation[k] for k in keys}
+    want, have = interface_of(keys), interface_of(observation)
+    lacks = ", ".join(f"'{k}'" for k in missing)
+    if want == have or "unknown" in (want, have):
+        which = "" if want == "unknown" else f" (the {want} interface)"
+        raise ModelError(
+            f"the model reads the observation entries {', '.join(keys)}{which}, but this "
+            f"observation lacks {lacks}"
+        )
+    raise ModelError(
+        f"the model was trained on the {want} interface, but this observation comes from the "
+        f"{have} interface (it lacks {lacks}): make the env with interface='{want}', e.g. "
+        f"gym.make(..., interface='{want}'), or use a model trained with "
+        f"interface='{have}' (utamp train --interface {have})"
+    )
 
 
 def check_model(meta: ModelMeta, path: str | Path, *, suite: str | None = None) -> None:
