@@ -45,7 +45,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         f"  plan {len(result.plan)} steps, planning {result.planning_time_s:.3f} s, "
         f"execution {result.execution_time_s:.2f} s, wall {result.wall_time_s:.2f} s"
     )
-    print(f"  tower on the tray: {' / '.join(result.final_stack) or '(empty)'}")
+    base = scene.tower_base  # the tray, or a procedural scene's base (a tray or a board)
+    print(
+        f"  tower on {base} ({scene.type_of(base).name}): "
+        f"{' / '.join(result.final_stack) or '(empty)'}"
+    )
     return 0
 
 

@@ -28,6 +28,7 @@ from utamp_gym.eval.intervals import (
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.runner import EVAL_METHODS
 from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS, ATTRIBUTES, STAGES
+from utamp_gym.suites import SUITES
 
 _PRECONDITION = re.compile(r"precondition \((\S+)")
 
@@ -201,7 +202,8 @@ def _header(summary: dict[str, Any]) -> list[str]:
         + (
             "plan valid under the ground-truth U-TAMP-2 model."
             if grounding == "symbolic"
-            else "every step executed in MuJoCo and the tower stands on the tray."
+            else "every step executed in MuJoCo and the tower stands on "
+            + ("the tray." if suite in SUITES else "each scene's base object (`goal_base`).")
         )
     )
     out.append(

@@ -52,7 +52,7 @@ class EpisodeResult:
     plan: list[str]
     success: bool
     failure: dict[str, Any] | None  # {step, action, reason}
-    final_stack: list[str]  # standing on the tray, bottom -> top, measured
+    final_stack: list[str]  # standing on the tower base (`Scene.tower_base`), bottom -> top
     object_poses: dict[str, list[float]]  # name -> [x, y, z, qw, qx, qy, qz]
     planning_time_s: float
     execution_time_s: float
@@ -136,7 +136,7 @@ def execute_plan(
         failure = {
             "step": len(plan),
             "action": None,
-            "reason": f"goal not reached: the tray holds {final_stack or 'nothing'}",
+            "reason": f"goal not reached: {scene.tower_base} holds {final_stack or 'nothing'}",
         }
     return Execution(failure is None, failure, final_stack, poses, elapsed, steps, n_faults)
 
