@@ -55,7 +55,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
     from utamp_gym.rl.train import TrainConfig
 
     try:  # every option checked before anything is built or trained
-        TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
+        config = TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
     except ValueError as exc:
         raise UtampError(str(exc)) from None
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
@@ -79,19 +79,21 @@ def _cmd_train(args: argparse.Namespace) -> int:
         final = agg["final_success"]
         print(
             f"{args.algo} (masks {args.masks}), {args.seeds} seeds: final success "
-            f"{final['mean']:.2f} ± {final['std']:.2f}, target success reached by {reached}; "
+            f"{final['mean']:.2f} ± {final['std']:.2f}; target success "
+            f"{config.target_success:.2f} reached by {reached}; "
             f"wrote aggregate.json and learning_curves.png to {args.out}"
         )
         return 0
     result = train(seed=args.seed, out=args.out, **kwargs)
     reached = (
-        f"{result.steps_to_target} steps ({result.time_to_target_s:.1f} s)"
+        f"reached at {result.steps_to_target} steps ({result.time_to_target_s:.1f} s)"
         if result.steps_to_target is not None
         else "not reached"
     )
     print(
         f"{args.algo}: {result.steps} steps in {result.wall_time_s:.1f} s, final success "
-        f"{result.final_success:.2f}, target success at {reached}; model: {result.model_path}"
+        f"{result.final_success:.2f}; target success {config.target_success:.2f} {reached}; "
+        f"model: {result.model_path}"
     )
     return 0
 
