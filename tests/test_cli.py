@@ -84,7 +84,7 @@ def test_plan_unsolvable_scene_exits_zero(capsys, tmp_path: Path, demo_dict) -> 
 
 def test_bad_input_exits_two_with_a_message(capsys, tmp_path: Path) -> None:
     assert main(["plan", "pick-place/999"]) == 2
-    assert "unknown scene 'pick-place/999'; valid:" in capsys.readouterr().err
+    assert "unknown scene 'pick-place/999'; did you mean" in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text('name = "x"\n[workspace]\nmin = [0, 0]\n')
     assert main(["plan", str(bad)]) == 2

@@ -72,5 +72,5 @@ def test_scenes_export_and_reload_identically() -> None:
 def test_lookup_by_name() -> None:
     assert get_scene("sliding/003").name == "sliding/003"
     assert resolve_scene("kitchen-demo").n_objects == 5
-    with pytest.raises(UnknownNameError, match="valid: kitchen-demo, pick-place/000"):
+    with pytest.raises(UnknownNameError, match=r"\(pick-place has pick-place/000 to 105\)"):
         resolve_scene("pick-place/999")

@@ -9,6 +9,8 @@ the kitchenware generator) is imported only when one of its names is used, so th
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +35,63 @@ ALL_SUITES = (*SUITES, *PROCEDURAL_SUITES)
 
 def _split(suite: str) -> str:
     return suite.removeprefix(f"{PROCEDURAL}/")
+
+
+class UnknownSceneError(UnknownNameError):
+    """A scene name that is none of the valid ones: one line that suggests the nearest names
+    (`nearest_scene_names`) and, for a suite's numbered name, that suite's range."""
+
+    def __init__(self, name: str, valid: Sequence[str] | None = None):
+        names = list(valid) if valid is not None else _valid_names()
+        super().__init__("scene", name, names)
+        self.suggestions = nearest_scene_names(name, names)
+        near, message = self.suggestions, f"unknown scene '{name}'"
+        if not near:
+            message += f"; valid: {', '.join(_ranges(names))} or a scene file (.toml)"
+        else:
+            message += f"; did you mean {', '.join(near[:-1]) + ' or ' if near[1:] else ''}"
+            message += f"{near[-1]}?"
+            suite = name.strip().rpartition("/")[0]
+            own = [n for n in names if suite and n.rpartition("/")[0] == suite]
+            if own and near != [_normalised(name, set(names))]:  # e.g. a number out of range
+                message += f" ({suite} has {_ranges(own)[0]})"
+        self.args = (message,)
+
+
+def nearest_scene_names(name: str, valid: Sequence[str], n: int = 3) -> list[str]:
+    """The valid names nearest to `name`: its number zero-padded to a suite's width
+    (``pick-place/17`` -> ``pick-place/017``) if that is one, else up to `n` close matches
+    (`difflib`, most similar first)."""
+    normalised = _normalised(name, set(valid))
+    if normalised is not None:
+        return [normalised]
+    return difflib.get_close_matches(name, list(valid), n=n, cutoff=0.6)
+
+
+def _normalised(name: str, known: set[str]) -> str | None:
+    """`name` stripped, in lower case and with its number zero-padded (3 or 4 digits), if
+    that is a known name."""
+    name = name.strip().lower()
+    prefix, _, number = name.rpartition("/")
+    candidates = [name]
+    if prefix and number.isdigit():
+        candidates += [f"{prefix}/{int(number):0{width}d}" for width in (3, 4)]
+    return next((c for c in candidates if c in known), None)
+
+
+def _ranges(names: Sequence[str]) -> list[str]:
+    """Names with the numbered ones of each prefix folded: ``pick-place/000 to 105``."""
+    single: list[str] = []
+    numbered: dict[str, list[str]] = {}
+    for n in names:
+        prefix, _, number = n.rpartition("/")
+        if prefix and number.isdigit():
+            numbered.setdefault(prefix, []).append(n)
+        else:
+            single.append(n)
+    return single + [
+        v[0] if len(v) == 1 else f"{v[0]} to {v[-1].rpartition('/')[2]}" for v in numbered.values()
+    ]
 
 
 def _check_suite(suite: str) -> None:
@@ -82,10 +141,11 @@ def get_scene(name: str) -> Scene:
         parsed = procedural.parse_name(name)
         if parsed is not None and parsed[1] < len(procedural.split_seeds(parsed[0])):
             return procedural.split_scene(*parsed).scene
-        suite = suite_of(name)
-        valid = all_scene_names(suite) if suite else list(PROCEDURAL_SUITES)
-        raise UnknownNameError("scene", name, valid)
-    return _get_enumerated(name)
+        raise UnknownSceneError(name)
+    try:
+        return _get_enumerated(name)
+    except UnknownNameError:
+        raise UnknownSceneError(name) from None
 
 
 def scene_summary(suite: str) -> list[dict[str, Any]]:
@@ -131,22 +191,15 @@ def resolve_scene(ref: str) -> Scene:
     Only the scene asked for is built; the lists of valid names are made for errors only.
     """
     suite = ref.split("/", 1)[0]
-    if suite == PROCEDURAL and not Path(ref).exists():
-        return get_scene(ref)  # its error lists the split's scenes
-    if suite in _enumerated.SUITES and not Path(ref).exists():
-        try:
-            return get_scene(ref)
-        except UnknownNameError:  # list that suite's scenes (the first 40 are shown)
-            raise UnknownNameError(
-                "scene", ref, [*packaged_scene_names(), *_enumerated.all_scene_names(suite)]
-            ) from None
+    if suite in (PROCEDURAL, *_enumerated.SUITES) and not Path(ref).exists():
+        return get_scene(ref)  # its error suggests the nearest names (`UnknownSceneError`)
     packaged = assets_dir() / "scenes" / f"{ref}.toml"
     if "/" not in ref and ref != "layout" and packaged.is_file():
         return load_scene(packaged)
     path = Path(ref)
     if path.suffix == ".toml" or path.exists():
         return load_scene(path)
-    raise UnknownNameError("scene", ref, _valid_names())
+    raise UnknownSceneError(ref)
 
 
 def suite_of(ref: str) -> str:
@@ -159,15 +212,18 @@ def suite_of(ref: str) -> str:
 
 
 def _valid_names() -> list[str]:
-    return [*packaged_scene_names(), *_enumerated.all_scene_names()]
+    """Every scene name: the packaged ones, then every suite's (for errors only)."""
+    return [*packaged_scene_names(), *all_scene_names()]
 
 
 __all__ = [
     "ALL_SUITES",
     "PROCEDURAL_SUITES",
     "SUITES",
+    "UnknownSceneError",
     "all_scene_names",
     "get_scene",
+    "nearest_scene_names",
     "packaged_scene_names",
     "resolve_scene",
     "scene_summary",
