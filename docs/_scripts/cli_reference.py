@@ -130,6 +130,17 @@ def json_keys() -> dict[str, list[str]]:
     }
 
 
+def plan_json_nulls() -> list[str]:
+    """The keys ``utamp plan --json`` prints as null for ``--method utamp1`` (which has no
+    affordances) but not for ``utamp2-gt``, read from the objects the CLI serialises."""
+    from utamp_gym.planning.methods import plan_scene
+    from utamp_gym.suites import resolve_scene
+
+    demo = resolve_scene("kitchen-demo")
+    gt, u1 = (plan_scene(demo, m).to_json() for m in ("utamp2-gt", "utamp1"))
+    return [k for k, v in u1.items() if v is None and gt[k] is not None]
+
+
 def reference() -> str:
     """The whole reference as MyST Markdown (included by ``docs/cli.md``)."""
     from utamp_gym import cli
@@ -164,6 +175,9 @@ def reference() -> str:
                     + ".",
                     "",
                 ]
+                if command == "utamp plan --json":
+                    nulls = ", ".join(f"`{k}`" for k in plan_json_nulls())
+                    out += [f"With `--method utamp1` (no affordances) {nulls} are null.", ""]
     return "\n".join(out)
 
 

@@ -175,6 +175,10 @@ class PlanOutcome(NamedTuple):
         return f"PlanOutcome({shown})"
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON object; the affordance scores are None (null) for a method without
+        affordances (utamp1)."""
+        spec = SPECS.get(self.method)
+        s = None if spec is not None and spec.domain == "utamp1" else self.affordance_scores
         return {
             "scene": self.scene,
             "method": self.method,
@@ -187,9 +191,9 @@ class PlanOutcome(NamedTuple):
             "reason": self.reason,
             "timed_out": self.timed_out,
             "phase": self.phase,
-            "affordance_precision": round(self.affordance_scores.precision, 4),
-            "affordance_recall": round(self.affordance_scores.recall, 4),
-            "affordance_f1": round(self.affordance_scores.f1, 4),
+            "affordance_precision": None if s is None else round(s.precision, 4),
+            "affordance_recall": None if s is None else round(s.recall, 4),
+            "affordance_f1": None if s is None else round(s.f1, 4),
         }
 
 
