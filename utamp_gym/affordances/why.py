@@ -58,10 +58,10 @@ TEMPLATES: dict[str, str] = {
     "hand-room": "closing on {member} ({fingers}), the hand would land on {other}",
     "finger-room": (
         "closing on {member} ({fingers}), the {side} finger would stop {shortfall:cm} cm "
-        "above its target, on {other} ({tolerance:cm} cm allowed)"
+        "above its target, on its {other} ({tolerance:cm} cm allowed)"
     ),
     "payload": (
-        "mass {mass:.2f} kg > {limit:.2f} kg, what a {kind} grasp by {member} lifts "
+        "mass {mass:.2f} kg > {limit:.2f} kg, what a {kind} grasp lifts "
         "(the Panda's payload: {payload:.1f} kg)"
     ),
     "torque": (
@@ -69,6 +69,11 @@ TEMPLATES: dict[str, str] = {
         "({mass:.2f} kg at {lever:cm} cm) > {limit:.1f} N m"
     ),
     "ground-truth": "{fact} is not in the hand-written ground truth (the rules grant it)",
+    "off-tower": "{supporter} cannot join the tower itself",
+    "one-tower": (
+        "every object can join the tower on its own, but no order stacks {objects} with all "
+        "the others: {rest}"
+    ),
 }
 
 
