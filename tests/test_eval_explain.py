@@ -183,9 +183,12 @@ def test_objects_that_each_fit_but_not_together_are_named(tmp_path) -> None:
     expl = explain_unsolvable(scene, ground_truth_for(scene))
     # each shaker can stand on the tray, but not both, and neither carries the other
     assert expl.blocked_atoms == ("(oc on slot2 air)", "(oc on slot3 air)")
-    assert {b.refusal.rule for b in expl.blocking} == {"one-tower"}
-    assert expl.rest_solvable is True
-    assert "the goal without this atom is solvable" in expl.blocking[0].refusal.detail
+    assert [(b.object, b.refusal.rule) for b in expl.blocking] == [
+        ("salt2", "one-tower"),
+        ("salt", "one-tower"),
+    ]
+    detail = "every object can join the tower on its own, but not all together: "
+    assert expl.blocking[0].refusal.detail == detail + "without salt2, the others stack"
 
 
 def test_a_found_explanation_has_no_blocks() -> None:

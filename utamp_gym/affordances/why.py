@@ -70,10 +70,7 @@ TEMPLATES: dict[str, str] = {
     ),
     "ground-truth": "{fact} is not in the hand-written ground truth (the rules grant it)",
     "off-tower": "{supporter} cannot join the tower itself",
-    "one-tower": (
-        "every object can join the tower on its own, but no order stacks {objects} with all "
-        "the others: {rest}"
-    ),
+    "one-tower": "every object can join the tower on its own, but not all together: {rest}",
 }
 
 

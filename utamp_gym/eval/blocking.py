@@ -11,8 +11,8 @@ rule that decides it (`utamp_gym.affordances.rules`, the ``*_refusal`` twins): t
 name and the numbers it compared. A fact that the rules would grant but the hand-written
 ground truth lacks is named as such. Fast Downward then checks the rest of the goal without
 the blocked atoms (`SolvabilityOracle`). When every object can join the tower on its own but
-the planner finds no order that stacks them all, the goal atoms whose removal makes the
-rest solvable are named (rule ``one-tower``).
+the planner finds no order that stacks them all, each object without which the others do
+stack is named, with its goal atom (rule ``one-tower``; an object above it takes its place).
 """
 
 from __future__ import annotations
@@ -21,16 +21,17 @@ from collections.abc import Iterable
 from typing import Any, NamedTuple
 
 from utamp_gym.affordances import rules
-from utamp_gym.affordances.facts import Fact
+from utamp_gym.affordances.facts import Fact, score
 from utamp_gym.affordances.why import Refusal
 from utamp_gym.eval.solvability import SolvabilityOracle
+from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene, SceneObject
 from utamp_gym.symbolic.problem import goal_atoms
 
 #: rules of the grasp's later tests first: the closest the object came to being picked up
 _PICK_ORDER = ("ground-truth", "torque", "payload", "finger-room", "hand-room", "pinch")
-NO_ONE_HELPS = "no goal atom left out makes the rest solvable"
+NO_ONE_HELPS = "leaving out any one object does not let the others stack"
 
 
 def format_fact(fact: Fact) -> str:
@@ -195,19 +196,41 @@ def blocking_goals(
         blocked = {b.atom for b in blocks}
         return tuple(blocks), oracle(facts, [g for g in goal if g not in blocked])
     # every object joins the tower on its own: no order stacks them all
-    slots = [g for g in goal if g in slot_atom.values()]
-    freeing = [g for g in slots if oracle(facts, [k for k in goal if k != g])]
-    for atom in freeing or slots:
-        slot = next(s for s, a in slot_atom.items() if a == atom)
-        names = scene.stacks.get(slot, ())
-        rest = NO_ONE_HELPS if not freeing else "the goal without this atom is solvable"
-        values = {"objects": ", ".join(names), "rest": rest}
-        refusal = Refusal("one-tower", values)
-        types = ", ".join(scene.object(n).type for n in names)
-        blocks.append(
-            Block(atom, ", ".join(names), types, "tower", "with the rest of the goal", refusal)
-        )
-    return tuple(blocks), bool(freeing)
+    return _one_tower(scene, facts, slot_atom, oracle.timeout), None
+
+
+def _without(scene: Scene, name: str) -> Scene:
+    """`scene` without object `name` (what stood on it takes its place)."""
+    gone = scene.object(name)
+    objects = tuple(
+        o._replace(on=gone.on, position=gone.position) if o.on == name else o
+        for o in scene.objects
+        if o.name != name
+    )
+    return scene._replace(objects=objects)
+
+
+def _one_tower(
+    scene: Scene, facts: frozenset[Fact], slot_atom: dict[str, str], timeout: float
+) -> tuple[Block, ...]:
+    """Objects without which the others stack under `facts` (all that must move if there
+    is none)."""
+    movable = [o for o in scene.objects if slot_atom[scene.slot_of(o.name)]]
+    given = (facts, score(facts, facts))
+
+    def stacks(rest: Scene) -> bool:
+        if all(not slot_atom[rest.slot_of(o.name)] for o in rest.objects):
+            return True  # only the base's stack is left: the goal holds already
+        return plan_scene(rest, timeout=timeout, affordances=given).solved
+
+    spoilers = [o for o in movable if stacks(_without(scene, o.name))]
+    blocks = []
+    for o in spoilers or movable:
+        rest = f"without {o.name}, the others stack" if spoilers else NO_ONE_HELPS
+        refusal = Refusal("one-tower", {"object": o.name, "rest": rest})
+        atom = slot_atom[scene.slot_of(o.name)]
+        blocks.append(Block(atom, o.name, o.type, "tower", _label(o), refusal))
+    return tuple(blocks)
 
 
 def _label(o: SceneObject) -> str:
