@@ -1,4 +1,5 @@
-"""The rules' refusals: each names the test that fails, and its numbers do fail it."""
+"""The rules' refusals: each names the test that fails, its numbers do fail it, and asking
+with why=True (an explanation) and why=False (a decision) gives the same answer."""
 
 from __future__ import annotations
 

@@ -42,7 +42,7 @@ import math
 from functools import lru_cache
 from typing import NamedTuple
 
-from utamp_gym.affordances.why import Refusal
+from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import NORMALS, Box, axis_of
 from utamp_gym.scene.shapes import BAR, floor_thickness, loop_axis
@@ -219,15 +219,17 @@ def stands_on(t: ObjectType, part: str) -> bool:
     """The object's centre of mass lies over its standing surface `part` (``under`` or
     ``on``), `STAND_MARGIN` inside its edge: a pan whose handle outweighs its shallow body
     tips over onto it."""
-    return stand_refusal(t, part) is None
+    return stand_refusal(t, part, why=False) is None
 
 
-def stand_refusal(t: ObjectType, part: str) -> Refusal | None:
-    """Why `stands_on` refuses (None: it stands)."""
+def stand_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
+    """Why `stands_on` refuses (None: it stands; `REFUSED` if not `why`)."""
     x, y = centre_of_mass(t)
     (w, d), (cx, cy) = t.surface_size(part), t.surface_center(part)
     if abs(x - cx) <= w / 2 - STAND_MARGIN and abs(y - cy) <= d / 2 - STAND_MARGIN:
         return None
+    if not why:
+        return REFUSED
     values = {"type": t.name, "part": part, "offset": (abs(x - cx), abs(y - cy))}
     return Refusal("tips-over", {**values, "half": (w / 2, d / 2), "margin": STAND_MARGIN})
 
@@ -354,20 +356,23 @@ def hand_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | No
 def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     """Both fingers reach their places beside the member, the hand comes down above them,
     and a pinched edge is thick enough to be felt (see the module docstring)."""
-    return fingers_refusal(t, member, palm, finger) is None
+    return fingers_refusal(t, member, palm, finger, why=False) is None
 
 
-def fingers_refusal(t: ObjectType, member: str, palm: str, finger: str) -> Refusal | None:
-    """Why `fingers_fit` refuses (None: the fingers fit)."""
+def fingers_refusal(
+    t: ObjectType, member: str, palm: str, finger: str, why: bool = True
+) -> Refusal | None:
+    """Why `fingers_fit` refuses (None: the fingers fit; `REFUSED` if not `why`)."""
     m = t.members[member]
-    fingers = f"{finger}/{_opposite_side(finger)}"
+    fingers = f"{finger}/{_opposite_side(finger)}" if why else ""
     width = m.box.size[axis_of(finger)]
     if m.kind == "edge" and width < MIN_PINCH - 1e-9:
         values = {"member": member, "width": width, "fingers": fingers, "limit": MIN_PINCH}
-        return Refusal("pinch", values)
+        return Refusal("pinch", values) if why else REFUSED
     other = hand_blocker(t, member, palm, finger)
     if other is not None:
-        return Refusal("hand-room", {"member": member, "other": other, "fingers": fingers})
+        values = {"member": member, "other": other, "fingers": fingers}
+        return Refusal("hand-room", values) if why else REFUSED
     room = finger_room(t, member, palm, finger)
     edge = realised_by_body(t, m)
     for i, (short, body, overlap) in enumerate(
@@ -376,6 +381,8 @@ def fingers_refusal(t: ObjectType, member: str, palm: str, finger: str) -> Refus
         if short <= TOUCH:
             continue
         if not (edge and body and short <= STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
+            if not why:
+                return REFUSED
             values = {
                 "member": member,
                 "fingers": fingers,
@@ -402,11 +409,11 @@ def grip_limit(member: Member) -> float:
 
 def holds(t: ObjectType, member: str, palm: str) -> bool:
     """The pads hold the moment of the object's weight about the grasp (module docstring)."""
-    return hold_refusal(t, member, palm) is None
+    return hold_refusal(t, member, palm, why=False) is None
 
 
-def hold_refusal(t: ObjectType, member: str, palm: str) -> Refusal | None:
-    """Why `holds` refuses (None: the pads hold it)."""
+def hold_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Refusal | None:
+    """Why `holds` refuses (None: the pads hold it; `REFUSED` if not `why`)."""
     flipped = palm == "under"
     grip = _member_box(t, member, flipped)
     body = _member_box(t, t.body.name, flipped)
@@ -419,6 +426,8 @@ def hold_refusal(t: ObjectType, member: str, palm: str) -> Refusal | None:
     moment = t.mass * G * lever
     if moment <= limit:
         return None
+    if not why:
+        return REFUSED
     values = {"member": member, "mass": t.mass, "lever": lever, "moment": moment}
     return Refusal("torque", {**values, "limit": limit, "centre_above": above})
 

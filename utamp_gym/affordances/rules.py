@@ -32,7 +32,8 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
 Each rule decides through its ``*_refusal`` twin (`rest_refusal`, `supportable_refusal`,
 `supportive_refusal`, `p2p_refusal`, `grasp_refusal`, `lift_refusal`, `pick_refusal`): None
 grants the affordance, a `utamp_gym.affordances.why.Refusal` names the failing test and its
-numbers, so an explanation (`utamp plan --explain`) says exactly why a rule refuses.
+numbers, so an explanation (`utamp plan --explain`) says exactly why a rule refuses. The
+boolean rules ask with ``why=False`` (any refusal is then the shared `REFUSED`).
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ from utamp_gym.affordances.hand import (
     stand_refusal,
     width_fits,
 )
-from utamp_gym.affordances.why import Refusal
+from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
 
@@ -73,48 +74,54 @@ WRAPS = f"closes around with {WRAP_CLEARANCE * 100:.1f} cm to spare a side"
 
 
 def can_rest_on(t: ObjectType, part: str) -> bool:
-    return rest_refusal(t, part) is None
+    return rest_refusal(t, part, why=False) is None
 
 
-def rest_refusal(t: ObjectType, part: str) -> Refusal | None:
+def rest_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
     """Why `t` cannot rest on its `part` (None: it can)."""
     attrs = t.parts[part]
     if attrs.shape not in ("flat", "open"):
+        if not why:
+            return REFUSED
         return Refusal("surface-shape", {"type": t.name, "part": part, "shape": attrs.shape})
     if attrs.food_surface:
-        return Refusal("food-surface", {"type": t.name, "part": part})
+        return Refusal("food-surface", {"type": t.name, "part": part}) if why else REFUSED
     return None
 
 
 def is_supportable(t: ObjectType, part: str) -> bool:
-    return supportable_refusal(t, part) is None
+    return supportable_refusal(t, part, why=False) is None
 
 
-def supportable_refusal(t: ObjectType, part: str) -> Refusal | None:
+def supportable_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
     """Why `t` cannot be put down on its `part` (None: it can)."""
     if not t.movable:
-        return Refusal("fixed", {"type": t.name})
-    return rest_refusal(t, part) or stand_refusal(t, part)
+        return Refusal("fixed", {"type": t.name}) if why else REFUSED
+    return rest_refusal(t, part, why) or stand_refusal(t, part, why)
 
 
 def is_supportive(t: ObjectType, part: str) -> bool:
-    return supportive_refusal(t, part) is None
+    return supportive_refusal(t, part, why=False) is None
 
 
-def supportive_refusal(t: ObjectType, part: str) -> Refusal | None:
+def supportive_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
     """Why `part` of `t` carries nothing (None: it carries things)."""
     shape = t.parts[part].shape
     if not t.movable:
         if part == "on" and shape == "flat":
             return None
+        if not why:
+            return REFUSED
         return Refusal("fixed-top-only", {"type": t.name, "part": part, "shape": shape})
     if shape not in ("flat", "concave"):
+        if not why:
+            return REFUSED
         return Refusal("support-shape", {"type": t.name, "part": part, "shape": shape})
-    opposite = OPPOSITE[part]
-    below = rest_refusal(t, opposite)
-    if below is None:
-        return None
-    return Refusal("never-up", {"type": t.name, "part": part, "opposite": opposite, "why": below})
+    below = rest_refusal(t, OPPOSITE[part], why)
+    if below is None or not why:
+        return below
+    values = {"type": t.name, "part": part, "opposite": OPPOSITE[part], "why": below}
+    return Refusal("never-up", values)
 
 
 def _disc(t: ObjectType, part: str) -> float | None:
@@ -134,7 +141,9 @@ def _close(a: float, b: float) -> bool:
     return abs(a - b) <= 1e-8 + 1e-5 * abs(b)  # numpy's isclose
 
 
-def _flat_refusal(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> Refusal | None:
+def _flat_refusal(
+    t2: ObjectType, p2: str, t1: ObjectType, p1: str, why: bool = True
+) -> Refusal | None:
     """Why t1's footprint (resting on p1) does not fit the flat surface p2 of t2 (None: it
     fits). Objects keep their yaw (all x-aligned), so a rectangle is compared axis by axis;
     on a round surface a footprint must fit the circle: a round one by its diameter, any
@@ -149,6 +158,8 @@ def _flat_refusal(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> Refusal |
         surface = t2.surface_size(p2)
         if all(f + margin <= s + 1e-9 for f, s in zip(footprint, surface, strict=True)):
             return None
+        if not why:
+            return REFUSED
         values = {"footprint": footprint, "surface": surface}
         rule = "footprint"
     else:
@@ -160,10 +171,12 @@ def _flat_refusal(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> Refusal |
         size = own if round_ and own is not None else math.hypot(*footprint)
         if size + margin <= disc + 1e-9:
             return None
+        if not why:
+            return REFUSED
         values = {"size": size, "disc": disc}
         rule = "footprint-disc"
-    why = "to clear its rim" if recessed else "as it is taller than wide" if tall else ""
-    values.update(type=t1.name, supporter=t2.name, part=p2, margin=margin, margin_why=why)
+    because = "to clear its rim" if recessed else "as it is taller than wide" if tall else ""
+    values.update(type=t1.name, supporter=t2.name, part=p2, margin=margin, margin_why=because)
     return Refusal(rule, values)
 
 
@@ -175,33 +188,41 @@ def _recessed(t: ObjectType, part: str) -> bool:
 
 def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Can part p2 of t2 stably support t1 resting on its part p1?"""
-    return p2p_refusal(t2, p2, t1, p1) is None
+    return p2p_refusal(t2, p2, t1, p1, why=False) is None
 
 
-def p2p_refusal(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> Refusal | None:
+def p2p_refusal(
+    t2: ObjectType, p2: str, t1: ObjectType, p1: str, why: bool = True
+) -> Refusal | None:
     """Why part p2 of t2 does not carry t1 resting on its part p1 (None: it does)."""
     if t1.name == t2.name:
-        return Refusal("same-type", {"type": t1.name})
+        return Refusal("same-type", {"type": t1.name}) if why else REFUSED
     capacity = LOAD_CAPACITY[t2.robustness]
     if t1.mass > capacity:
+        if not why:
+            return REFUSED
         values = {"type": t1.name, "mass": t1.mass, "supporter": t2.name}
         values.update(capacity=capacity, robustness=t2.robustness)
         return Refusal("load-capacity", values)
-    refusal = supportive_refusal(t2, p2)
+    refusal = supportive_refusal(t2, p2, why)
+    if refusal is None and not t1.movable:
+        refusal = Refusal("fixed", {"type": t1.name}) if why else REFUSED
     if refusal is None:
-        refusal = Refusal("fixed", {"type": t1.name}) if not t1.movable else rest_refusal(t1, p1)
+        refusal = rest_refusal(t1, p1, why)
     if refusal is not None:
         return refusal
     if t2.parts[p2].shape == "flat":
-        refusal = _flat_refusal(t2, p2, t1, p1)
+        refusal = _flat_refusal(t2, p2, t1, p1, why)
     else:  # a concave surface: the surface the object stands on spans its opening
         standing, opening = t1.surface_size(p1), t2.surface_size(p2)
         span = zip(standing, opening, strict=True)
         if not all(f >= s + 2 * SPAN_MARGIN - 1e-9 for f, s in span):
+            if not why:
+                return REFUSED
             values = {"type": t1.name, "supporter": t2.name, "part": p2, "margin": SPAN_MARGIN}
             refusal = Refusal("span", {**values, "standing": standing, "opening": opening})
     # t1 is supportable on p1 (the costliest test last)
-    return refusal if refusal is not None else stand_refusal(t1, p1)
+    return refusal if refusal is not None else stand_refusal(t1, p1, why)
 
 
 def _blocker(t: ObjectType, member: str, side: str) -> str | None:
@@ -241,35 +262,47 @@ def _cover(t: ObjectType, member: str, palm: str) -> str | None:
     return None
 
 
-def _palm_refusal(t: ObjectType, member: str, palm: str) -> Refusal | None:
+def _palm_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Refusal | None:
     """Why the hand cannot come down with its palm on `palm` onto `member` (None: it can)."""
-    below = rest_refusal(t, OPPOSITE[palm])
+    below = rest_refusal(t, OPPOSITE[palm], why)
     if below is not None:  # that part never faces up
+        if not why:
+            return REFUSED
         return Refusal("palm-never-up", {"member": member, "palm": palm, "why": below})
     other = _cover(t, member, palm)
     if other is not None:  # the hand cannot reach the member
+        if not why:
+            return REFUSED
         return Refusal("covered", {"member": member, "palm": palm, "other": other})
     return None
 
 
-def _fingers_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Refusal | None:
+def _fingers_refusal(
+    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+) -> Refusal | None:
     """Why the fingers cannot close on `member` along f1/f2 (None: they can)."""
     m = t.members[member]
     width = float(m.box.size[axis_of(f1)])
-    fingers = f"{f1}/{f2}"
     if width < MIN_GRASP_WIDTH:
-        values = {"member": member, "width": width, "fingers": fingers}
+        if not why:
+            return REFUSED
+        values = {"member": member, "width": width, "fingers": f"{f1}/{f2}"}
         return Refusal("too-thin", {**values, "limit": MIN_GRASP_WIDTH})
     if not width_fits(width, m):
+        if not why:
+            return REFUSED
         how = "pinches" if m.kind == "edge" else WRAPS
-        values = {"member": member, "width": width, "fingers": fingers, "limit": grip_limit(m)}
-        return Refusal("grip-width", {**values, "opening": GRIPPER_OPENING, "how": how})
+        values = {"member": member, "width": width, "fingers": f"{f1}/{f2}"}
+        values.update(limit=grip_limit(m), opening=GRIPPER_OPENING, how=how)
+        return Refusal("grip-width", values)
     for side in (f1, f2):
         other = _blocker(t, member, side)
         if other is not None:
+            if not why:
+                return REFUSED
             values = {"member": member, "side": side, "other": other, "gap": BLOCKING_GAP}
             return Refusal("finger-blocked", values)
-    return fingers_refusal(t, member, palm, f1)
+    return fingers_refusal(t, member, palm, f1, why)
 
 
 def grasp_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Refusal | None:
@@ -287,24 +320,26 @@ def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
     out = []
     for mname in t.members:
         for palm in PALM_PARTS:
-            if _palm_refusal(t, mname, palm) is not None:
+            if _palm_refusal(t, mname, palm, why=False) is not None:
                 continue
             for f1, f2 in FINGER_PAIRS:
-                if _fingers_refusal(t, mname, palm, f1, f2) is None:
+                if _fingers_refusal(t, mname, palm, f1, f2, why=False) is None:
                     out.append((mname, palm, f1, f2))
     return out
 
 
 def liftable_via(t: ObjectType, member: str) -> bool:
-    return lift_refusal(t, member) is None
+    return lift_refusal(t, member, why=False) is None
 
 
-def lift_refusal(t: ObjectType, member: str) -> Refusal | None:
+def lift_refusal(t: ObjectType, member: str, why: bool = True) -> Refusal | None:
     """Why `t` is too heavy to lift by `member` (None: light enough)."""
     edge = t.members[member].kind == "edge"
     limit = EDGE_LIFT_LIMIT if edge else PAYLOAD * LIFT_FRACTION
     if t.mass <= limit:
         return None
+    if not why:
+        return REFUSED
     kind = "pinch (edge)" if edge else "wrapping"
     values = {"member": member, "mass": t.mass, "limit": limit, "kind": kind}
     return Refusal("payload", {**values, "payload": PAYLOAD})

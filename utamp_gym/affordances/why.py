@@ -4,7 +4,8 @@ Each rule of `utamp_gym.affordances.rules` and `utamp_gym.affordances.hand` has 
 ``*_refusal`` twin that returns None when the rule grants the affordance, else a `Refusal`:
 the rule's name and the numbers it compared. The boolean rule is ``refusal is None``, so an
 explanation and the decision it explains cannot disagree. The text (`Refusal.detail`) is
-formatted only when asked for: the scene generator asks the rules many thousand times.
+formatted only when asked for, and a decision asks with ``why=False``: the refusal is then
+the shared `REFUSED`, built once (the scene generator asks the rules many thousand times).
 
 Lengths in `values` are metres, masses kilograms, moments newton metres; the text shows
 centimetres.
@@ -124,4 +125,8 @@ class Refusal(NamedTuple):
         return {"rule": self.rule, "detail": self.detail, "values": values}
 
 
-__all__ = ["TEMPLATES", "Refusal"]
+#: what a ``*_refusal(..., why=False)`` returns for any refusal: the decision needs no reason
+REFUSED = Refusal("refused", {})
+TEMPLATES["refused"] = "refused (ask with why=True for the reason)"
+
+__all__ = ["REFUSED", "TEMPLATES", "Refusal"]
