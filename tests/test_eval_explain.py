@@ -196,3 +196,13 @@ def test_a_found_explanation_has_no_blocks() -> None:
     expl = explain_unsolvable(scene, ground_truth_for(scene) - {PAN_SUPPORTS_BOARD})
     assert expl.found and expl.blocking == () and expl.rest_solvable is None
     assert expl.to_json()["blocking"] == [] and expl.headline == expl.message
+
+
+def test_failure_reason_in_results_names_the_blocking_rule() -> None:
+    task = EvalTask(str(SCENES / "heavy-pot.toml"), "utamp2-gt", seed=0, grounding="symbolic")
+    row = run_task(task)
+    assert not row.solved and not row.crashed
+    reason = row.failure_reason
+    assert f"{NO_CORRECTION}: even the ground truth cannot reach {SLOT2}" in reason
+    assert "mass 4.00 kg > 1.50 kg, what a wrapping grasp lifts" in reason
+    assert reason.count("[payload]") == 1 and reason.count("[grip-width]") == 0  # one a stage
