@@ -206,3 +206,24 @@ def test_failure_reason_in_results_names_the_blocking_rule() -> None:
     assert f"{NO_CORRECTION}: even the ground truth cannot reach {SLOT2}" in reason
     assert "mass 4.00 kg > 1.50 kg, what a wrapping grasp lifts" in reason
     assert reason.count("[payload]") == 1 and reason.count("[grip-width]") == 0  # one a stage
+
+
+def test_an_object_that_cannot_stand_on_its_face_is_named(tmp_path) -> None:
+    data = tomllib.loads((SCENES / "heavy-pot.toml").read_text())
+    data["objects"][1] = {
+        "name": "board",
+        "type": "cutting-board",
+        "on": "slot2",
+        "orientation": "inverted",
+    }
+    del data["types"]
+    path = tmp_path / "face-down-board.toml"
+    path.write_text(tomli_w.dumps(data))
+    scene = resolve_scene(str(path))
+    expl = explain_unsolvable(scene, ground_truth_for(scene))
+    assert expl.blocked_atoms == (SLOT2,)
+    stages = {b.stage: b for b in expl.blocking}
+    assert set(stages) == {"pick", "stand"}  # no place reasons once it cannot stand
+    stand = stages["stand"]
+    assert stand.subject == "board (cutting-board, upside down) cannot be put down on its on"
+    assert stand.refusal.rule == "food-surface"

@@ -64,16 +64,13 @@ class Block(NamedTuple):
         return head | self.refusal.to_json() | {"text": self.text}
 
 
-def _grasps(facts: frozenset[Fact], t: str, palm: str) -> list[tuple[str, str, str]]:
-    return [
-        (f[2], f[4], f[5])
-        for f in facts
-        if f[0] == "canGraspFrom" and f[1] == t and f[3] == palm and ("canLift", t, f[2]) in facts
-    ]
-
-
 def _pickable(facts: frozenset[Fact], o: SceneObject) -> bool:
-    return bool(_grasps(facts, o.type, UP_PART[o.orientation]))
+    """A grasp with the palm on the part facing up, of a member it can be lifted by."""
+    t, palm = o.type, UP_PART[o.orientation]
+    return any(
+        f[0] == "canGraspFrom" and f[1] == t and f[3] == palm and ("canLift", t, f[2]) in facts
+        for f in facts
+    )
 
 
 def _carry_facts(y: SceneObject, o: SceneObject) -> tuple[Fact, ...]:
@@ -140,21 +137,18 @@ def object_blocks(
     t = scene.catalogue[o.type]
     label = _label(o)
     blocks: list[Block] = []
+
+    def block(stage: str, subject: str, refusal: Refusal) -> None:
+        blocks.append(Block(atom, name, o.type, stage, subject, refusal))
+
     if not _pickable(facts, o):
-        for subject, refusal in _pick_blocks(facts, t, o):
-            blocks.append(
-                Block(
-                    atom, name, o.type, "pick", f"{label} cannot be picked up by {subject}", refusal
-                )
-            )
+        for grasps, refusal in _pick_blocks(facts, t, o):
+            block("pick", f"{label} cannot be picked up by {grasps}", refusal)
     stand = STANDING_PART[o.orientation]
-    if ("isSupportable", o.type, stand) not in facts:
-        refusal = _or_truth(rules.supportable_refusal(t, stand), [("isSupportable", o.type, stand)])
-        blocks.append(
-            Block(
-                atom, name, o.type, "stand", f"{label} cannot be put down on its {stand}", refusal
-            )
-        )
+    supportable = ("isSupportable", o.type, stand)
+    if supportable not in facts:
+        refusal = _or_truth(rules.supportable_refusal(t, stand), [supportable])
+        block("stand", f"{label} cannot be put down on its {stand}", refusal)
         return blocks
     base = scene.tower_base  # the base first, then the others by name
     supporters = [scene.object(y) for y in sorted(joined, key=lambda y: (y != base, y))]
@@ -166,13 +160,11 @@ def object_blocks(
         ty = scene.catalogue[y.type]
         missing = [f for f in _carry_facts(y, o) if f not in facts]
         refusal = _or_truth(rules.p2p_refusal(ty, up, t, stand), missing)
-        subject = f"{_label(y)} does not carry {label}"
-        blocks.append(Block(atom, name, o.type, "place", subject, refusal))
-    for y in scene.objects:
+        block("place", f"{_label(y)} does not carry {label}", refusal)
+    for y in scene.objects:  # what would carry it, but cannot join the tower itself
         if y.name != name and y.name not in joined and _carries(facts, y, o):
             refusal = Refusal("off-tower", {"supporter": y.name, "type": o.type})
-            subject = f"{_label(y)} would carry {label}"
-            blocks.append(Block(atom, name, o.type, "place", subject, refusal))
+            block("place", f"{_label(y)} would carry {label}", refusal)
     return blocks
 
 
@@ -239,7 +231,8 @@ def _label(o: SceneObject) -> str:
 
 
 def _slot_atoms(scene: Scene) -> list[str]:
-    """Each slot's goal atom, ``(oc on SLOT air)`` (the base's too: it is never blocked)."""
+    """Each slot's goal atom, ``(oc on SLOT air)``, in slot order ("" for the base's slot,
+    which the goal does not clear)."""
     atoms = set(goal_atoms(scene))
     return [
         f"(oc on {s.name} air)" if f"(oc on {s.name} air)" in atoms else "" for s in scene.slots
