@@ -8,6 +8,8 @@ Writes (all git-ignored; the pages are rebuilt from the code on every build):
   `utamp_gym.env.registry.env_ids()` (`env_pages`);
 * ``docs/_generated/cli.md``: the ``utamp`` reference from the argparse parsers (`cli_reference`);
 * ``docs/_generated/cameras.md``: the RGB-D cameras of `utamp_gym.sim.cameras` (`cameras`);
+* ``docs/_generated/explain.md``: what ``utamp plan FILE --explain`` prints for the unsolvable
+  scene files of ``tests/scenes`` (`explain_example`);
 * ``docs/_generated/suites.md``, ``dependencies.md``: the suite statistics and the
   requirements of ``pyproject.toml`` (`facts`);
 * ``docs/_generated/facts.json``: the figures pages quote as ``{{ name }}`` (`facts`).
@@ -30,6 +32,7 @@ sys.path.insert(0, str(HERE))
 import cameras  # noqa: E402
 import cli_reference  # noqa: E402
 import env_pages  # noqa: E402
+import explain_example  # noqa: E402
 import facts as facts_module  # noqa: E402
 
 DOCS = HERE.parent
@@ -65,6 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     _write(ENVS / "index.md", env_pages.index(measured))
     _write(GENERATED / "cli.md", cli_reference.reference())
     _write(GENERATED / "cameras.md", cameras.cameras_table())
+    _write(GENERATED / "explain.md", explain_example.example())
     _write(GENERATED / "suites.md", facts_module.suites_table())
     _write(GENERATED / "paper_table.md", facts_module.paper_table(DOCS / "results"))
     _write(

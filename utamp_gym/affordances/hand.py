@@ -42,8 +42,9 @@ import math
 from functools import lru_cache
 from typing import NamedTuple
 
+from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
-from utamp_gym.scene.geometry import Box, axis_of
+from utamp_gym.scene.geometry import NORMALS, Box, axis_of
 from utamp_gym.scene.shapes import BAR, floor_thickness, loop_axis
 
 # ------------------------------------------------------------------ the Franka Hand
@@ -218,9 +219,19 @@ def stands_on(t: ObjectType, part: str) -> bool:
     """The object's centre of mass lies over its standing surface `part` (``under`` or
     ``on``), `STAND_MARGIN` inside its edge: a pan whose handle outweighs its shallow body
     tips over onto it."""
+    return stand_refusal(t, part, why=False) is None
+
+
+def stand_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
+    """Why `stands_on` refuses (None: it stands; `REFUSED` if not `why`)."""
     x, y = centre_of_mass(t)
     (w, d), (cx, cy) = t.surface_size(part), t.surface_center(part)
-    return abs(x - cx) <= w / 2 - STAND_MARGIN and abs(y - cy) <= d / 2 - STAND_MARGIN
+    if abs(x - cx) <= w / 2 - STAND_MARGIN and abs(y - cy) <= d / 2 - STAND_MARGIN:
+        return None
+    if not why:
+        return REFUSED
+    values = {"type": t.name, "part": part, "offset": (abs(x - cx), abs(y - cy))}
+    return Refusal("tips-over", {**values, "half": (w / 2, d / 2), "margin": STAND_MARGIN})
 
 
 def _member_box(t: ObjectType, member: str, flipped: bool) -> Box:
@@ -235,6 +246,7 @@ class FingerRoom(NamedTuple):
     shortfall: tuple[float, float]
     on_body: tuple[bool, bool]  # the stop is on the grasped edge's own body
     overlap: tuple[float, float]
+    stopped_by: tuple[str | None, str | None] = (None, None)  # the member it stops on
 
 
 def grip_centre(t: ObjectType, member: str, lat: int, flipped: bool) -> float:
@@ -277,10 +289,10 @@ def finger_room(t: ObjectType, member: str, palm: str, finger: str) -> FingerRoo
         (LOWER_FINGER, opening, opening + UPPER_FINGER[1] + NOISE_MARGIN,
          UPPER_FINGER[2] / 2 + NOISE_MARGIN),
     )  # fmt: skip
-    shortfall, on_body, overlap = [], [], []
+    shortfall, on_body, overlap, stopped_by = [], [], [], []
     for sign in (-1, 1):
         face = box.max[ax] if sign > 0 else box.min[ax]
-        stop, stop_body = tip, True
+        stop, stop_body, stopper = tip, True, None
         for above, near, far, half in segments:
             closing = sorted((face + sign * near, face + sign * far))
             rect = [(0.0, 0.0), (0.0, 0.0)]
@@ -288,21 +300,44 @@ def finger_room(t: ObjectType, member: str, palm: str, finger: str) -> FingerRoo
             rect[lat] = (centre - half, centre + half)
             for name, s in material:
                 if s.hi[2] - above > stop + 1e-12 and s.overlaps(rect[0], rect[1]):
-                    stop, stop_body = s.hi[2] - above, name == own
+                    stop, stop_body, stopper = s.hi[2] - above, name == own, name
         short = max(0.0, stop - tip)
         shortfall.append(short)
         on_body.append(stop_body)
+        stopped_by.append(stopper)
         pad_lo = tip + short
         overlap.append(min(pad_lo + PAD_HEIGHT, box.max[2]) - max(pad_lo, box.min[2]))
     return FingerRoom(
-        (shortfall[0], shortfall[1]), (on_body[0], on_body[1]), (overlap[0], overlap[1])
+        (shortfall[0], shortfall[1]),
+        (on_body[0], on_body[1]),
+        (overlap[0], overlap[1]),
+        (stopped_by[0], stopped_by[1]),
     )
+
+
+def finger_side(finger: str, sign: int, flipped: bool) -> str:
+    """The side of the upright object that the finger closing from `sign` along `finger`'s
+    axis lies on, the object turned palm part up (`flipped`: a half turn about x)."""
+    ax = axis_of(finger)
+    if flipped and ax == 1:
+        sign = -sign
+    return next(s for s, n in NORMALS.items() if n[ax] == sign)
+
+
+def _opposite_side(side: str) -> str:
+    normal = tuple(-v for v in NORMALS[side])
+    return next(s for s, n in NORMALS.items() if n == normal)
 
 
 def hand_room(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     """The hand above the fingers comes down without landing on the object: no material
     (but the grasped member) rises above the hand's underside within its thickness across
     the fingers' plane (an upside-down pot whose lug stands out too little)."""
+    return hand_blocker(t, member, palm, finger) is None
+
+
+def hand_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | None:
+    """The member the hand would land on (`hand_room`), or None."""
     flipped = palm == "under"
     box = _member_box(t, member, flipped)
     ax = axis_of(finger)
@@ -311,38 +346,74 @@ def hand_room(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     bottom = tcp + HAND_ABOVE_TCP + STOP_TOLERANCE
     reach = (box.max[ax] - box.min[ax]) / 2 + OPEN_CLEARANCE + UPPER_FINGER[1]
     cl, ca = grip_centre(t, member, lat, flipped), (box.min[ax] + box.max[ax]) / 2
-    material = [s for n, s in solids(t, flipped) if n != member and s.hi[2] > bottom]
+    material = [(n, s) for n, s in solids(t, flipped) if n != member and s.hi[2] > bottom]
     rect = [(0.0, 0.0), (0.0, 0.0)]
     rect[ax] = (ca - reach, ca + reach)
     rect[lat] = (cl - HAND_HALF_THICKNESS, cl + HAND_HALF_THICKNESS)
-    return not any(s.overlaps(rect[0], rect[1]) for s in material)
+    return next((n for n, s in material if s.overlaps(rect[0], rect[1])), None)
 
 
 def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     """Both fingers reach their places beside the member, the hand comes down above them,
     and a pinched edge is thick enough to be felt (see the module docstring)."""
-    edge_member = t.members[member].kind == "edge"
-    if edge_member and t.members[member].box.size[axis_of(finger)] < MIN_PINCH - 1e-9:
-        return False
-    if not hand_room(t, member, palm, finger):
-        return False
+    return fingers_refusal(t, member, palm, finger, why=False) is None
+
+
+def fingers_refusal(
+    t: ObjectType, member: str, palm: str, finger: str, why: bool = True
+) -> Refusal | None:
+    """Why `fingers_fit` refuses (None: the fingers fit; `REFUSED` if not `why`)."""
+    m = t.members[member]
+    fingers = f"{finger}/{_opposite_side(finger)}" if why else ""
+    width = m.box.size[axis_of(finger)]
+    if m.kind == "edge" and width < MIN_PINCH - 1e-9:
+        values = {"member": member, "width": width, "fingers": fingers, "limit": MIN_PINCH}
+        return Refusal("pinch", values) if why else REFUSED
+    other = hand_blocker(t, member, palm, finger)
+    if other is not None:
+        values = {"member": member, "other": other, "fingers": fingers}
+        return Refusal("hand-room", values) if why else REFUSED
     room = finger_room(t, member, palm, finger)
-    edge = realised_by_body(t, t.members[member])
-    for short, body, overlap in zip(room.shortfall, room.on_body, room.overlap, strict=True):
+    edge = realised_by_body(t, m)
+    for i, (short, body, overlap) in enumerate(
+        zip(room.shortfall, room.on_body, room.overlap, strict=True)
+    ):
         if short <= TOUCH:
             continue
         if not (edge and body and short <= STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
-            return False
-    return True
+            if not why:
+                return REFUSED
+            values = {
+                "member": member,
+                "fingers": fingers,
+                "side": finger_side(finger, (-1, 1)[i], palm == "under"),
+                "shortfall": short,
+                "other": room.stopped_by[i],
+                "tolerance": STOP_TOLERANCE if edge else 0.0,
+                "pad_overlap": overlap,
+            }
+            return Refusal("finger-room", values)
+    return None
 
 
 def width_fits(width: float, member: Member) -> bool:
     """The open hand clears a member it wraps (a body, a handle); an edge is pinched."""
-    return width <= GRIPPER_OPENING - (0.0 if member.kind == "edge" else 2 * WRAP_CLEARANCE)
+    return width <= grip_limit(member)
+
+
+def grip_limit(member: Member) -> float:
+    """The widest `member` the hand closes on: the opening, less `WRAP_CLEARANCE` a side for
+    a member it wraps."""
+    return GRIPPER_OPENING - (0.0 if member.kind == "edge" else 2 * WRAP_CLEARANCE)
 
 
 def holds(t: ObjectType, member: str, palm: str) -> bool:
     """The pads hold the moment of the object's weight about the grasp (module docstring)."""
+    return hold_refusal(t, member, palm, why=False) is None
+
+
+def hold_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Refusal | None:
+    """Why `holds` refuses (None: the pads hold it; `REFUSED` if not `why`)."""
     flipped = palm == "under"
     grip = _member_box(t, member, flipped)
     body = _member_box(t, t.body.name, flipped)
@@ -351,7 +422,14 @@ def holds(t: ObjectType, member: str, palm: str) -> bool:
     lever = math.hypot(gx - bx, gy - by)
     grasp_z = grip.max[2] - min(GRASP_DEPTH, (grip.max[2] - grip.min[2]) / 2)
     above = (body.min[2] + body.max[2]) / 2 > grasp_z + ABOVE
-    return t.mass * G * lever <= (TORQUE_LIMIT_ABOVE if above else TORQUE_LIMIT)
+    limit = TORQUE_LIMIT_ABOVE if above else TORQUE_LIMIT
+    moment = t.mass * G * lever
+    if moment <= limit:
+        return None
+    if not why:
+        return REFUSED
+    values = {"member": member, "mass": t.mass, "lever": lever, "moment": moment}
+    return Refusal("torque", {**values, "limit": limit, "centre_above": above})
 
 
 __all__ = [
@@ -360,12 +438,18 @@ __all__ = [
     "Solid",
     "centre_of_mass",
     "finger_room",
+    "finger_side",
     "fingers_fit",
+    "fingers_refusal",
     "grip_centre",
+    "grip_limit",
+    "hand_blocker",
     "hand_room",
+    "hold_refusal",
     "holds",
     "realised_by_body",
     "solids",
+    "stand_refusal",
     "stands_on",
     "tip_height",
     "width_fits",

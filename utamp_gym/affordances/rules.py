@@ -28,6 +28,12 @@ The rules are the paper's assumptions made explicit (Sections IV and VI):
   is only useful when it can lift the object or when the object cannot be lifted at all
   (then it is slid);
 * an object that cannot be lifted but rests flat on a fixed surface can be slid.
+
+Each rule decides through its ``*_refusal`` twin (`rest_refusal`, `supportable_refusal`,
+`supportive_refusal`, `p2p_refusal`, `grasp_refusal`, `lift_refusal`, `pick_refusal`): None
+grants the affordance, a `utamp_gym.affordances.why.Refusal` names the failing test and its
+numbers, so an explanation (`utamp plan --explain`) says exactly why a rule refuses. The
+boolean rules ask with ``why=False`` (any refusal is then the shared `REFUSED`).
 """
 
 from __future__ import annotations
@@ -37,7 +43,16 @@ from collections.abc import Iterable
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
-from utamp_gym.affordances.hand import fingers_fit, holds, stands_on, width_fits
+from utamp_gym.affordances.hand import (
+    WRAP_CLEARANCE,
+    fingers_refusal,
+    grip_limit,
+    hold_refusal,
+    holds,
+    stand_refusal,
+    width_fits,
+)
+from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
 
@@ -55,22 +70,58 @@ PLACE_MARGIN = 0.004
 SPAN_MARGIN = 0.008
 FINGER_PAIRS = (("left", "right"), ("front", "back"))
 PALM_PARTS = ("on", "under")
+WRAPS = f"closes around with {WRAP_CLEARANCE * 100:.1f} cm to spare a side"
 
 
 def can_rest_on(t: ObjectType, part: str) -> bool:
+    return rest_refusal(t, part, why=False) is None
+
+
+def rest_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
+    """Why `t` cannot rest on its `part` (None: it can)."""
     attrs = t.parts[part]
-    return attrs.shape in ("flat", "open") and not attrs.food_surface
+    if attrs.shape not in ("flat", "open"):
+        if not why:
+            return REFUSED
+        return Refusal("surface-shape", {"type": t.name, "part": part, "shape": attrs.shape})
+    if attrs.food_surface:
+        return Refusal("food-surface", {"type": t.name, "part": part}) if why else REFUSED
+    return None
 
 
 def is_supportable(t: ObjectType, part: str) -> bool:
-    return t.movable and can_rest_on(t, part) and stands_on(t, part)
+    return supportable_refusal(t, part, why=False) is None
+
+
+def supportable_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
+    """Why `t` cannot be put down on its `part` (None: it can)."""
+    if not t.movable:
+        return Refusal("fixed", {"type": t.name}) if why else REFUSED
+    return rest_refusal(t, part, why) or stand_refusal(t, part, why)
 
 
 def is_supportive(t: ObjectType, part: str) -> bool:
+    return supportive_refusal(t, part, why=False) is None
+
+
+def supportive_refusal(t: ObjectType, part: str, why: bool = True) -> Refusal | None:
+    """Why `part` of `t` carries nothing (None: it carries things)."""
     shape = t.parts[part].shape
     if not t.movable:
-        return part == "on" and shape == "flat"
-    return shape in ("flat", "concave") and can_rest_on(t, OPPOSITE[part])
+        if part == "on" and shape == "flat":
+            return None
+        if not why:
+            return REFUSED
+        return Refusal("fixed-top-only", {"type": t.name, "part": part, "shape": shape})
+    if shape not in ("flat", "concave"):
+        if not why:
+            return REFUSED
+        return Refusal("support-shape", {"type": t.name, "part": part, "shape": shape})
+    below = rest_refusal(t, OPPOSITE[part], why)
+    if below is None or not why:
+        return below
+    values = {"type": t.name, "part": part, "opposite": OPPOSITE[part], "why": below}
+    return Refusal("never-up", values)
 
 
 def _disc(t: ObjectType, part: str) -> float | None:
@@ -90,25 +141,43 @@ def _close(a: float, b: float) -> bool:
     return abs(a - b) <= 1e-8 + 1e-5 * abs(b)  # numpy's isclose
 
 
-def _fits_flat(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
-    """Does t1's footprint (resting on p1) fit the flat surface p2 of t2? Objects keep
-    their yaw (all x-aligned), so a rectangle is compared axis by axis; on a round
-    surface a footprint must fit the circle: a round one by its diameter, any other by
-    its diagonal. (Plain floats: the scene generator asks this many thousand times.)"""
+def _flat_refusal(
+    t2: ObjectType, p2: str, t1: ObjectType, p1: str, why: bool = True
+) -> Refusal | None:
+    """Why t1's footprint (resting on p1) does not fit the flat surface p2 of t2 (None: it
+    fits). Objects keep their yaw (all x-aligned), so a rectangle is compared axis by axis;
+    on a round surface a footprint must fit the circle: a round one by its diameter, any
+    other by its diagonal. (Plain floats: the scene generator asks this many thousand
+    times.)"""
     footprint = t1.bbox.face_size(p1)
     tall = t1.bbox.max[2] - t1.bbox.min[2] > min(footprint)  # tips if landed off-centre
-    margin = 2 * PLACE_MARGIN if tall or _recessed(t2, p2) else 0.0
+    recessed = _recessed(t2, p2)
+    margin = 2 * PLACE_MARGIN if tall or recessed else 0.0
     disc = _disc(t2, p2)
     if disc is None:
         surface = t2.surface_size(p2)
-        return all(f + margin <= s + 1e-9 for f, s in zip(footprint, surface, strict=True))
-    own = _disc(t1, p1)
-    body, bbox = t1.body.box, t1.bbox
-    round_ = own is not None and all(
-        _close(body.max[i] - body.min[i], bbox.max[i] - bbox.min[i]) for i in (0, 1)
-    )
-    size = own if round_ and own is not None else math.hypot(*footprint)
-    return size + margin <= disc + 1e-9
+        if all(f + margin <= s + 1e-9 for f, s in zip(footprint, surface, strict=True)):
+            return None
+        if not why:
+            return REFUSED
+        values = {"footprint": footprint, "surface": surface}
+        rule = "footprint"
+    else:
+        own = _disc(t1, p1)
+        body, bbox = t1.body.box, t1.bbox
+        round_ = own is not None and all(
+            _close(body.max[i] - body.min[i], bbox.max[i] - bbox.min[i]) for i in (0, 1)
+        )
+        size = own if round_ and own is not None else math.hypot(*footprint)
+        if size + margin <= disc + 1e-9:
+            return None
+        if not why:
+            return REFUSED
+        values = {"size": size, "disc": disc}
+        rule = "footprint-disc"
+    because = "to clear its rim" if recessed else "as it is taller than wide" if tall else ""
+    values.update(type=t1.name, supporter=t2.name, part=p2, margin=margin, margin_why=because)
+    return Refusal(rule, values)
 
 
 def _recessed(t: ObjectType, part: str) -> bool:
@@ -119,28 +188,59 @@ def _recessed(t: ObjectType, part: str) -> bool:
 
 def p2p_supportive(t2: ObjectType, p2: str, t1: ObjectType, p1: str) -> bool:
     """Can part p2 of t2 stably support t1 resting on its part p1?"""
-    if t1.name == t2.name or t1.mass > LOAD_CAPACITY[t2.robustness]:
-        return False
-    if not (is_supportive(t2, p2) and t1.movable and can_rest_on(t1, p1)):
-        return False
+    return p2p_refusal(t2, p2, t1, p1, why=False) is None
+
+
+def p2p_refusal(
+    t2: ObjectType, p2: str, t1: ObjectType, p1: str, why: bool = True
+) -> Refusal | None:
+    """Why part p2 of t2 does not carry t1 resting on its part p1 (None: it does)."""
+    if t1.name == t2.name:
+        return Refusal("same-type", {"type": t1.name}) if why else REFUSED
+    capacity = LOAD_CAPACITY[t2.robustness]
+    if t1.mass > capacity:
+        if not why:
+            return REFUSED
+        values = {"type": t1.name, "mass": t1.mass, "supporter": t2.name}
+        values.update(capacity=capacity, robustness=t2.robustness)
+        return Refusal("load-capacity", values)
+    refusal = supportive_refusal(t2, p2, why)
+    if refusal is None and not t1.movable:
+        refusal = Refusal("fixed", {"type": t1.name}) if why else REFUSED
+    if refusal is None:
+        refusal = rest_refusal(t1, p1, why)
+    if refusal is not None:
+        return refusal
     if t2.parts[p2].shape == "flat":
-        fits = _fits_flat(t2, p2, t1, p1)
+        refusal = _flat_refusal(t2, p2, t1, p1, why)
     else:  # a concave surface: the surface the object stands on spans its opening
-        span = zip(t1.surface_size(p1), t2.surface_size(p2), strict=True)
-        fits = all(f >= s + 2 * SPAN_MARGIN - 1e-9 for f, s in span)
-    return fits and stands_on(t1, p1)  # t1 is supportable on p1 (the costliest test last)
+        standing, opening = t1.surface_size(p1), t2.surface_size(p2)
+        span = zip(standing, opening, strict=True)
+        if not all(f >= s + 2 * SPAN_MARGIN - 1e-9 for f, s in span):
+            if not why:
+                return REFUSED
+            values = {"type": t1.name, "supporter": t2.name, "part": p2, "margin": SPAN_MARGIN}
+            refusal = Refusal("span", {**values, "standing": standing, "opening": opening})
+    # t1 is supportable on p1 (the costliest test last)
+    return refusal if refusal is not None else stand_refusal(t1, p1, why)
 
 
-def _blocked(t: ObjectType, member: str, side: str) -> bool:
+def _blocker(t: ObjectType, member: str, side: str) -> str | None:
+    """A sibling member within `BLOCKING_GAP` of the member's `side` (a finger's place)."""
     box = t.members[member].box
-    return any(
-        box.touches_side(m.box, side, BLOCKING_GAP) for n, m in t.members.items() if n != member
+    return next(
+        (
+            n
+            for n, m in t.members.items()
+            if n != member and box.touches_side(m.box, side, BLOCKING_GAP)
+        ),
+        None,
     )
 
 
-def _covered(t: ObjectType, member: str, palm: str) -> bool:
-    """True if a sibling member reaches beyond the member's `palm` face over that face:
-    the hand coming down against the palm part would meet it first."""
+def _cover(t: ObjectType, member: str, palm: str) -> str | None:
+    """A sibling member that reaches beyond the member's `palm` face over that face (the
+    hand coming down against the palm part would meet it first), or None."""
     box = t.members[member].box
     ax = axis_of(palm)
     for name, m in t.members.items():
@@ -158,8 +258,59 @@ def _covered(t: ObjectType, member: str, palm: str) -> bool:
             if i != ax
         )
         if beyond and over:
-            return True
-    return False
+            return name
+    return None
+
+
+def _palm_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Refusal | None:
+    """Why the hand cannot come down with its palm on `palm` onto `member` (None: it can)."""
+    below = rest_refusal(t, OPPOSITE[palm], why)
+    if below is not None:  # that part never faces up
+        if not why:
+            return REFUSED
+        return Refusal("palm-never-up", {"member": member, "palm": palm, "why": below})
+    other = _cover(t, member, palm)
+    if other is not None:  # the hand cannot reach the member
+        if not why:
+            return REFUSED
+        return Refusal("covered", {"member": member, "palm": palm, "other": other})
+    return None
+
+
+def _fingers_refusal(
+    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+) -> Refusal | None:
+    """Why the fingers cannot close on `member` along f1/f2 (None: they can)."""
+    m = t.members[member]
+    width = float(m.box.size[axis_of(f1)])
+    if width < MIN_GRASP_WIDTH:
+        if not why:
+            return REFUSED
+        values = {"member": member, "width": width, "fingers": f"{f1}/{f2}"}
+        return Refusal("too-thin", {**values, "limit": MIN_GRASP_WIDTH})
+    if not width_fits(width, m):
+        if not why:
+            return REFUSED
+        how = "pinches" if m.kind == "edge" else WRAPS
+        values = {"member": member, "width": width, "fingers": f"{f1}/{f2}"}
+        values.update(limit=grip_limit(m), opening=GRIPPER_OPENING, how=how)
+        return Refusal("grip-width", values)
+    for side in (f1, f2):
+        other = _blocker(t, member, side)
+        if other is not None:
+            if not why:
+                return REFUSED
+            values = {"member": member, "side": side, "other": other, "gap": BLOCKING_GAP}
+            return Refusal("finger-blocked", values)
+    return fingers_refusal(t, member, palm, f1, why)
+
+
+def grasp_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Refusal | None:
+    """Why the gripper cannot close on `member` with its palm on `palm` and its fingers on
+    f1/f2 (None: `geometric_grasps` has it)."""
+    if not t.movable:
+        return Refusal("fixed", {"type": t.name})
+    return _palm_refusal(t, member, palm) or _fingers_refusal(t, member, palm, f1, f2)
 
 
 def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
@@ -167,25 +318,41 @@ def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
     if not t.movable:
         return []
     out = []
-    for mname, m in t.members.items():
+    for mname in t.members:
         for palm in PALM_PARTS:
-            if not can_rest_on(t, OPPOSITE[palm]) or _covered(t, mname, palm):
-                continue  # that part never faces up, or the hand cannot reach the member
+            if _palm_refusal(t, mname, palm, why=False) is not None:
+                continue
             for f1, f2 in FINGER_PAIRS:
-                width = float(m.box.size[axis_of(f1)])
-                if width < MIN_GRASP_WIDTH or not width_fits(width, m):
-                    continue
-                if _blocked(t, mname, f1) or _blocked(t, mname, f2):
-                    continue
-                if not fingers_fit(t, mname, palm, f1):
-                    continue
-                out.append((mname, palm, f1, f2))
+                if _fingers_refusal(t, mname, palm, f1, f2, why=False) is None:
+                    out.append((mname, palm, f1, f2))
     return out
 
 
 def liftable_via(t: ObjectType, member: str) -> bool:
-    limit = EDGE_LIFT_LIMIT if t.members[member].kind == "edge" else PAYLOAD * LIFT_FRACTION
-    return t.mass <= limit
+    return lift_refusal(t, member, why=False) is None
+
+
+def lift_refusal(t: ObjectType, member: str, why: bool = True) -> Refusal | None:
+    """Why `t` is too heavy to lift by `member` (None: light enough)."""
+    edge = t.members[member].kind == "edge"
+    limit = EDGE_LIFT_LIMIT if edge else PAYLOAD * LIFT_FRACTION
+    if t.mass <= limit:
+        return None
+    if not why:
+        return REFUSED
+    kind = "pinch (edge)" if edge else "wrapping"
+    values = {"member": member, "mass": t.mass, "limit": limit, "kind": kind}
+    return Refusal("payload", {**values, "payload": PAYLOAD})
+
+
+def pick_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Refusal | None:
+    """Why `object_facts` grants no ``canGraspFrom`` with ``canLift`` for this grasp: the
+    gripper cannot close on it, the object is too heavy, or it turns out of the pads."""
+    return (
+        grasp_refusal(t, member, palm, f1, f2)
+        or lift_refusal(t, member)
+        or hold_refusal(t, member, palm)
+    )
 
 
 def object_facts(t: ObjectType) -> set[Fact]:

@@ -61,8 +61,23 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     else:
         print(f"{scene.name} [{args.method}]: not solved: {outcome.reason}")
         if explanation is not None:
-            print(f"  why not: {explanation['message']}")
+            _print_explanation(explanation)
     return 0
+
+
+def _print_explanation(explanation: dict[str, Any]) -> None:
+    """``why not:`` and, when the ground truth itself blocks the goal, each blocked goal atom
+    with one line a reason."""
+    blocks = explanation.get("blocking") or []
+    if not blocks:
+        print(f"  why not: {explanation['message']}")
+        return
+    print(f"  why not: {explanation['headline']}:")
+    for atom in dict.fromkeys(b["atom"] for b in blocks):
+        print(f"    {atom}:")
+        for b in blocks:
+            if b["atom"] == atom:
+                print(f"      {b['subject']}: {b['detail']} [{b['rule']}]")
 
 
 def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
@@ -104,6 +119,9 @@ def add_parser(sub: Any) -> None:
     plan.add_argument(
         "--explain",
         action="store_true",
-        help="if unsolved, name the missing affordance facts that block the scene",
+        help=(
+            "if unsolved, name the missing affordance facts that block the scene, or, when "
+            "even the ground truth blocks it, the goal atoms and the rules that refuse them"
+        ),
     )
     plan.set_defaults(func=_cmd_plan)

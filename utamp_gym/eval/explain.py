@@ -12,6 +12,10 @@ which even the full ground truth is unsolvable belongs to every solution: these 
 found first (one check each) and the search only tries the others on top. When the
 size or time budget runs out, a minimal (irreducible, not necessarily smallest) set is
 found by deleting corrections from the full set one by one.
+
+When even the ground truth leaves the scene unsolvable, no correction helps: the
+explanation then names the goal atoms the ground truth blocks and, for each, the rule that
+refuses with its numbers (`utamp_gym.eval.blocking`).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from utamp_gym.affordances.facts import Fact
+from utamp_gym.eval.blocking import Block, blocking_goals, format_fact
 from utamp_gym.eval.solvability import SolvabilityOracle
 from utamp_gym.planning.methods import (
     DEFAULT_NOISE,
@@ -34,11 +39,7 @@ from utamp_gym.scene.model import Scene
 
 NEGATIVELY_USED = ("canLift",)  # affordance predicates under `not` in utamp2.pddl
 Change = tuple[str, Fact]  # ("+", fact) to add, ("-", fact) to remove
-
-
-def format_fact(fact: Fact) -> str:
-    """``isP2PSupportive(on, frying-pan, under, cutting-board)``."""
-    return f"{fact[0]}({', '.join(fact[1:])})"
+NO_CORRECTION = "no set of ground-truth affordance corrections makes the scene solvable"
 
 
 @dataclass(frozen=True)
@@ -47,6 +48,9 @@ class Explanation:
 
     `found` is False when even the ground truth does not make it solvable (or no set was
     found in the budget); `smallest` is True when the search by size proved minimum size.
+    `blocking` then names why the ground truth itself is unsolvable (`blocking_goals`), and
+    `rest_solvable` whether the goal without the blocked atoms is solvable (None: not
+    checked).
     """
 
     scene: str
@@ -56,11 +60,35 @@ class Explanation:
     smallest: bool
     checks: int
     elapsed_s: float
+    blocking: tuple[Block, ...] = ()
+    rest_solvable: bool | None = None
+
+    @property
+    def blocked_atoms(self) -> tuple[str, ...]:
+        """The goal atoms the ground truth blocks (in the order of the scene's objects)."""
+        return tuple(dict.fromkeys(b.atom for b in self.blocking))
+
+    @property
+    def headline(self) -> str:
+        """The message without the blocks' reasons."""
+        if self.found or not self.blocking:
+            return self.message
+        atoms = self.blocked_atoms
+        head = f"{NO_CORRECTION}: even the ground truth cannot reach {', '.join(atoms)}"
+        if self.rest_solvable is not None and any(b.stage != "tower" for b in self.blocking):
+            rest = "solvable" if self.rest_solvable else "not solvable either"
+            head += f" (the rest of the goal is {rest})"
+        return head
 
     @property
     def message(self) -> str:
         if not self.found:
-            return "no set of ground-truth affordance corrections makes the scene solvable"
+            if not self.blocking:
+                return NO_CORRECTION
+            first: dict[tuple[str, str, str], str] = {}  # one reason per object and stage
+            for b in self.blocking:
+                first.setdefault((b.atom, b.object, b.stage), b.text)
+            return "; ".join([self.headline, *first.values()])
         parts = []
         if self.missing:
             parts.append("missing affordance facts: " + ", ".join(map(format_fact, self.missing)))
@@ -77,6 +105,9 @@ class Explanation:
             "smallest": self.smallest,
             "checks": self.checks,
             "message": self.message,
+            "headline": self.headline,
+            "blocking": [b.to_json() for b in self.blocking],
+            "rest_solvable": self.rest_solvable,
         }
 
 
@@ -126,19 +157,33 @@ def explain_unsolvable(
     changes += [("-", f) for f in sorted(det - gt) if f[0] in NEGATIVELY_USED]
     check = _Checker(SolvabilityOracle(scene, det | gt, timeout=timeout), budget_s)
 
-    def result(found: bool, chosen: Sequence[Change], smallest: bool) -> Explanation:
+    def result(
+        found: bool,
+        chosen: Sequence[Change],
+        smallest: bool,
+        blocks: tuple[Block, ...] = (),
+        rest: bool | None = None,
+    ) -> Explanation:
         return Explanation(
             scene=scene.name,
             found=found,
             missing=tuple(f for s, f in chosen if s == "+"),
             spurious=tuple(f for s, f in chosen if s == "-"),
             smallest=smallest,
-            checks=len(check.cache),
+            checks=len(check.cache) + extra_checks,
             elapsed_s=time.perf_counter() - start,
+            blocking=blocks,
+            rest_solvable=rest,
         )
 
+    extra_checks = 0
     if not changes or not check(_apply(det, changes)):
-        return result(False, (), False)
+        if check(gt):  # solvable under the ground truth: nothing blocks it (a time-out)
+            return result(False, (), False)
+        before = check.oracle.checks
+        blocks, rest = blocking_goals(scene, gt, check.oracle)
+        extra_checks = check.oracle.checks - before
+        return result(False, (), False, blocks, rest)
     # Adding positive facts only enables actions: a correction whose omission from the full
     # set leaves the task unsolvable is in every solution (exact without removals).
     required: list[Change] = []

@@ -93,17 +93,37 @@ class SolvabilityOracle:
 
         return [op for op, needs in self.ops if all(map(holds, needs))]
 
-    def __call__(self, facts: Iterable[Fact]) -> bool:
+    @property
+    def goal(self) -> tuple[str, ...]:
+        """The problem's goal atoms as text, ``(oc on slot2 air)``."""
+        return tuple(_text(lit.atom) for lit in self.problem.goal)
+
+    def __call__(self, facts: Iterable[Fact], goal: Iterable[str] | None = None) -> bool:
+        """Solvable under `facts`? `goal`: only these of the problem's goal atoms (`goal`)."""
         facts = frozenset(facts)
         if not facts <= self.union:
             raise ValueError("facts outside the grounded union")
+        literals = self.problem.goal
+        if goal is not None:
+            wanted = set(goal)
+            if not wanted <= set(self.goal):
+                raise ValueError(
+                    f"not goal atoms of the problem: {sorted(wanted - set(self.goal))}"
+                )
+            literals = tuple(lit for lit in literals if _text(lit.atom) in wanted)
         self.checks += 1
+        positive = [lit.atom for lit in literals if lit.positive]
+        if len(positive) == len(literals) and all(a in self.problem.init for a in positive):
+            return True  # the goal holds already (Fast Downward refuses a task without variables)
         ops = self.allowed(facts)
-        goal = [lit.atom for lit in self.problem.goal if lit.positive]
-        if not _relaxed_reachable(ops, self.problem.init, goal):
+        if not _relaxed_reachable(ops, self.problem.init, positive):
             return False
-        sas = to_sas(ops, self.problem.init, self.problem.goal)
+        sas = to_sas(ops, self.problem.init, literals)
         return sas is not None and _search(sas, self.timeout)
+
+
+def _text(atom: Atom) -> str:
+    return f"({' '.join((atom.predicate, *atom.args))})"
 
 
 def _relaxed_reachable(ops: list[GroundOp], init: Iterable[Atom], goal: list[Atom]) -> bool:

@@ -1,0 +1,239 @@
+"""Why a scene is unsolvable under its ground-truth affordances: the blocked goal atoms and
+the rules that refuse them, with their numbers.
+
+The goal is one tower on the base: every slot but the base's cleared (`goal_atoms`). An
+object joins the tower when it can be picked up (a ``canGraspFrom`` with its palm on the
+part facing up and a ``canLift`` of that member) and an object already in it carries it
+(``isSupportive`` of that object's top, ``isP2PSupportive`` onto it, ``isSupportable`` of
+the part it stands on). From the base's stack, objects join until none can: the slot of an
+object left out cannot be cleared. For each such object, each refused fact is asked of the
+rule that decides it (`utamp_gym.affordances.rules`, the ``*_refusal`` twins): the rule's
+name and the numbers it compared. A fact that the rules would grant but the hand-written
+ground truth lacks is named as such. Fast Downward then checks the rest of the goal without
+the blocked atoms (`SolvabilityOracle`). When every object can join the tower on its own but
+the planner finds no order that stacks them all, each object without which the others do
+stack is named, with its goal atom (rule ``one-tower``; an object above it takes its place).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any, NamedTuple
+
+from utamp_gym.affordances import rules
+from utamp_gym.affordances.facts import Fact, score
+from utamp_gym.affordances.why import Refusal
+from utamp_gym.eval.solvability import SolvabilityOracle
+from utamp_gym.planning.methods import plan_scene
+from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene, SceneObject
+from utamp_gym.symbolic.problem import goal_atoms
+
+#: rules of the grasp's later tests first: the closest the object came to being picked up
+_PICK_ORDER = ("ground-truth", "torque", "payload", "finger-room", "hand-room", "pinch")
+NO_ONE_HELPS = "leaving out any one object does not let the others stack"
+
+
+def format_fact(fact: Fact) -> str:
+    """``isP2PSupportive(on, frying-pan, under, cutting-board)``."""
+    return f"{fact[0]}({', '.join(fact[1:])})"
+
+
+class Block(NamedTuple):
+    """One reason a goal atom cannot be reached.
+
+    `stage` is ``pick`` (the object cannot be picked up by the grasp `subject` names),
+    ``stand`` (it cannot be put down on the part it stands on), ``place`` (the object in the
+    tower that `subject` names does not carry it) or ``tower`` (no order stacks everything).
+    """
+
+    atom: str
+    object: str
+    type: str
+    stage: str
+    subject: str
+    refusal: Refusal
+
+    @property
+    def text(self) -> str:
+        return f"{self.atom}: {self.subject}: {self.refusal.detail} [{self.refusal.rule}]"
+
+    def to_json(self) -> dict[str, Any]:
+        head = {"atom": self.atom, "object": self.object, "type": self.type}
+        head |= {"stage": self.stage, "subject": self.subject}
+        return head | self.refusal.to_json() | {"text": self.text}
+
+
+def _pickable(facts: frozenset[Fact], o: SceneObject) -> bool:
+    """A grasp with the palm on the part facing up, of a member it can be lifted by."""
+    t, palm = o.type, UP_PART[o.orientation]
+    return any(
+        f[0] == "canGraspFrom" and f[1] == t and f[3] == palm and ("canLift", t, f[2]) in facts
+        for f in facts
+    )
+
+
+def _carry_facts(y: SceneObject, o: SceneObject) -> tuple[Fact, ...]:
+    """The facts `y` carrying `o` (each in its scene orientation) needs."""
+    up, stand = UP_PART[y.orientation], STANDING_PART[o.orientation]
+    return (
+        ("isSupportive", y.type, up),
+        ("isP2PSupportive", up, y.type, stand, o.type),
+        ("isSupportable", o.type, stand),
+    )
+
+
+def _carries(facts: frozenset[Fact], y: SceneObject, o: SceneObject) -> bool:
+    return all(f in facts for f in _carry_facts(y, o))
+
+
+def tower(scene: Scene, facts: frozenset[Fact]) -> set[str]:
+    """The objects that can end in the goal tower (a delete-relaxed fixed point)."""
+    joined = set(scene.stacks.get(scene.slot_of(scene.tower_base), ()))
+    changed = True
+    while changed:
+        changed = False
+        for o in scene.objects:
+            if o.name in joined or not _pickable(facts, o):
+                continue
+            if any(_carries(facts, scene.object(y), o) for y in joined):
+                joined.add(o.name)
+                changed = True
+    return joined
+
+
+def _or_truth(refusal: Refusal | None, missing: Iterable[Fact]) -> Refusal:
+    """The rule's refusal, or (the rules grant it) the fact the ground truth lacks."""
+    if refusal is not None:
+        return refusal
+    return Refusal("ground-truth", {"fact": ", ".join(map(format_fact, missing))})
+
+
+def _pick_blocks(
+    facts: frozenset[Fact], t: ObjectType, o: SceneObject
+) -> list[tuple[str, Refusal]]:
+    """(grasps, refusal) for each distinct refusal of the grasps from the part facing up."""
+    palm = UP_PART[o.orientation]
+    grasps: dict[str, list[str]] = {}
+    refusals: dict[str, Refusal] = {}
+    for member in t.members:
+        for f1, f2 in rules.FINGER_PAIRS:
+            grasp = ("canGraspFrom", t.name, member, palm, f1, f2)
+            missing = [f for f in (grasp, ("canLift", t.name, member)) if f not in facts]
+            refusal = _or_truth(rules.pick_refusal(t, member, palm, f1, f2), missing)
+            # the same test with the same numbers (the mass, for every handle) is said once
+            refusals.setdefault(refusal.detail, refusal)
+            grasps.setdefault(refusal.detail, []).append(f"{member} ({f1}/{f2})")
+    rank = {r: i for i, r in enumerate(_PICK_ORDER)}
+    out = [(", ".join(grasps[d]), r) for d, r in refusals.items()]
+    return sorted(out, key=lambda sr: rank.get(sr[1].rule, len(rank)))
+
+
+def object_blocks(
+    scene: Scene, facts: frozenset[Fact], name: str, joined: set[str], atom: str
+) -> list[Block]:
+    """Why object `name` cannot join the tower `joined` (its goal atom `atom`)."""
+    o = scene.object(name)
+    t = scene.catalogue[o.type]
+    label = _label(o)
+    blocks: list[Block] = []
+
+    def block(stage: str, subject: str, refusal: Refusal) -> None:
+        blocks.append(Block(atom, name, o.type, stage, subject, refusal))
+
+    if not _pickable(facts, o):
+        for grasps, refusal in _pick_blocks(facts, t, o):
+            block("pick", f"{label} cannot be picked up by {grasps}", refusal)
+    stand = STANDING_PART[o.orientation]
+    supportable = ("isSupportable", o.type, stand)
+    if supportable not in facts:
+        refusal = _or_truth(rules.supportable_refusal(t, stand), [supportable])
+        block("stand", f"{label} cannot be put down on its {stand}", refusal)
+        return blocks
+    base = scene.tower_base  # the base first, then the others by name
+    supporters = [scene.object(y) for y in sorted(joined, key=lambda y: (y != base, y))]
+    supporters = [y for y in supporters if y.name != name]
+    if any(_carries(facts, y, o) for y in supporters):
+        return blocks
+    for y in supporters:
+        up = UP_PART[y.orientation]
+        ty = scene.catalogue[y.type]
+        missing = [f for f in _carry_facts(y, o) if f not in facts]
+        refusal = _or_truth(rules.p2p_refusal(ty, up, t, stand), missing)
+        block("place", f"{_label(y)} does not carry {label}", refusal)
+    for y in scene.objects:  # what would carry it, but cannot join the tower itself
+        if y.name != name and y.name not in joined and _carries(facts, y, o):
+            refusal = Refusal("off-tower", {"supporter": y.name, "type": o.type})
+            block("place", f"{_label(y)} would carry {label}", refusal)
+    return blocks
+
+
+def blocking_goals(
+    scene: Scene, facts: Iterable[Fact], oracle: SolvabilityOracle | None = None
+) -> tuple[tuple[Block, ...], bool | None]:
+    """The blocks of an unsolvable `scene` under `facts`, and whether the rest of the goal
+    is solvable without their atoms (None: not checked, no `oracle`)."""
+    facts = frozenset(facts)
+    joined = tower(scene, facts)
+    slot_atom = dict(zip((s.name for s in scene.slots), _slot_atoms(scene), strict=True))
+    blocks: list[Block] = []
+    for o in scene.objects:
+        if o.name not in joined:
+            atom = slot_atom[scene.slot_of(o.name)]
+            blocks += object_blocks(scene, facts, o.name, joined, atom)
+    if oracle is None:
+        return tuple(blocks), None
+    goal = oracle.goal
+    if blocks:
+        blocked = {b.atom for b in blocks}
+        return tuple(blocks), oracle(facts, [g for g in goal if g not in blocked])
+    # every object joins the tower on its own: no order stacks them all
+    return _one_tower(scene, facts, slot_atom, oracle.timeout), None
+
+
+def _without(scene: Scene, name: str) -> Scene:
+    """`scene` without object `name` (what stood on it takes its place)."""
+    gone = scene.object(name)
+    objects = tuple(
+        o._replace(on=gone.on, position=gone.position) if o.on == name else o
+        for o in scene.objects
+        if o.name != name
+    )
+    return scene._replace(objects=objects)
+
+
+def _one_tower(
+    scene: Scene, facts: frozenset[Fact], slot_atom: dict[str, str], timeout: float
+) -> tuple[Block, ...]:
+    """Objects without which the others stack under `facts` (all that must move if there
+    is none)."""
+    movable = [o for o in scene.objects if slot_atom[scene.slot_of(o.name)]]
+    given = (facts, score(facts, facts))
+
+    def stacks(rest: Scene) -> bool:
+        if all(not slot_atom[rest.slot_of(o.name)] for o in rest.objects):
+            return True  # only the base's stack is left: the goal holds already
+        return plan_scene(rest, timeout=timeout, affordances=given).solved
+
+    spoilers = [o for o in movable if stacks(_without(scene, o.name))]
+    blocks = []
+    for o in spoilers or movable:
+        rest = f"without {o.name}, the others stack" if spoilers else NO_ONE_HELPS
+        refusal = Refusal("one-tower", {"object": o.name, "rest": rest})
+        atom = slot_atom[scene.slot_of(o.name)]
+        blocks.append(Block(atom, o.name, o.type, "tower", _label(o), refusal))
+    return tuple(blocks)
+
+
+def _label(o: SceneObject) -> str:
+    """``pan (frying-pan)``, ``mug (glass-mug, upside down)``."""
+    return f"{o.name} ({o.type}{', upside down' if o.orientation == 'inverted' else ''})"
+
+
+def _slot_atoms(scene: Scene) -> list[str]:
+    """Each slot's goal atom, ``(oc on SLOT air)``, in slot order ("" for the base's slot,
+    which the goal does not clear)."""
+    atoms = set(goal_atoms(scene))
+    return [
+        f"(oc on {s.name} air)" if f"(oc on {s.name} air)" in atoms else "" for s in scene.slots
+    ]
