@@ -8,6 +8,7 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import re
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -195,3 +196,63 @@ def test_the_extras_are_pyprojects_and_their_modules_come_from_them() -> None:
         for module in modules:
             for dist in installed.get(module, []):
                 assert norm(dist) in requirements, (extra, module, dist)
+
+
+# ------------------------------------------------- the install the Makefile and the pages name
+CPU_INDEX = "https://download.pytorch.org/whl/cpu"
+INSTALL_PAGES = ("README.md", "docs/getting-started.md", "docs/dependencies.md")
+
+
+def _make_venv(*overrides: str) -> list[str]:
+    """The commands `make venv` runs (printed, not run: ``-n``; ``-B``: even if built)."""
+    out = subprocess.run(
+        ["make", "-C", str(ROOT), "-n", "-B", "--no-print-directory", "venv", *overrides],
+        capture_output=True, text=True, check=True, timeout=60,
+    )  # fmt: skip
+    return [line.rstrip() for line in out.stdout.splitlines()]
+
+
+def _torch_default() -> str:
+    """The Makefile's ``TORCH ?= ...`` (checking it declares ``TORCH_INDEX`` too)."""
+    makefile = (ROOT / "Makefile").read_text()
+    default = re.search(r"^TORCH\s*\?=\s*(\S+)$", makefile, re.M)
+    assert default and re.search(r"^TORCH_INDEX\s*\?=", makefile, re.M)
+    return default[1]
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
+def test_make_venv_installs_torch_first_from_the_index_given() -> None:
+    torch = _torch_default()
+    commands = _make_venv()
+    first = [line for line in commands if "pip install" in line and "torch" in line]
+    assert first == [f'.venv/bin/pip install --quiet "{torch}"'], commands  # no other index
+    extras = next(line for line in commands if "pip install" in line and "-e" in line)
+    assert commands.index(first[0]) < commands.index(extras)  # the extras find torch installed
+    cpu = _make_venv(f"TORCH_INDEX={CPU_INDEX}")
+    assert f'.venv/bin/pip install --quiet "{torch}" --index-url "{CPU_INDEX}"' in cpu, cpu
+    assert '.venv/bin/pip install --quiet "torch==2.14.1"' in _make_venv("TORCH=torch==2.14.1")
+
+
+def test_the_pages_say_what_make_venv_installs_and_how_to_get_the_cpu_build() -> None:
+    """The torch the pages name is the Makefile's default; each says that with stock pip it
+    is the CUDA build and gives the CPU index; they list the extras `make venv` installs."""
+    torch = _torch_default()
+    installed = re.search(
+        r'pip install --quiet -e "\.\[([\w,]+)\]"', (ROOT / "Makefile").read_text()
+    )
+    assert installed
+    extras = installed[1].split(",")
+    assert sorted(extras) == sorted(EXTRAS)  # every extra of pyproject.toml
+    for page in INSTALL_PAGES:
+        text = " ".join((ROOT / page).read_text().split())
+        assert f"`{torch}`" in text, page
+        assert "CUDA" in text and "stock settings" in text, page
+        assert f"make venv TORCH_INDEX={CPU_INDEX}" in text, page
+        for claim in ("never pulls a CUDA", "a **CPU** torch", "CPU build of torch"):
+            assert claim not in text, (page, claim)  # what pip does not do with stock settings
+    getting_started = " ".join((ROOT / "docs/getting-started.md").read_text().split())
+    listed = re.search(r"with every optional extra \(([^)]*)\)", getting_started)
+    assert listed and sorted(re.findall(r"`(\w+)`", listed[1])) == sorted(extras)
+    assert f'pip install "{torch}" --index-url {CPU_INDEX}' in getting_started
+    message = str(MissingExtraError("utamp train", "rl", "torch"))
+    assert f"`{message}`" in getting_started  # the error it quotes is the one printed
