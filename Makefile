@@ -11,12 +11,21 @@ MJ4    := .venv-mujoco4
 
 venv: $(STAMP)
 
-# torch is installed first and pinned to the CPU build (2.13.0's CPU wheel is on this
-# machine's disk); otherwise stable-baselines3 would pull a multi-GB CUDA build.
+# torch goes in first ($(TORCH), from $(TORCH_INDEX) when set), so that the rl extra's
+# `torch>=2.2` finds it installed and pip adds no other torch. Which build that is depends on
+# where pip looks:
+# - pip's stock settings (PyPI only): PyPI's Linux x86_64 wheel, the CUDA build, with its
+#   nvidia-* and cuda-* packages (a download of several GB; it runs on a CPU too);
+# - `make venv TORCH_INDEX=https://download.pytorch.org/whl/cpu`: the CPU build (+cpu);
+# - a pip configured with a find-links folder holding torch-2.13.0+cpu (as on the machine
+#   this is developed on: PIP_FIND_LINKS=/opt/wheels): that CPU build, from disk.
+TORCH       ?= torch==2.13.0
+TORCH_INDEX ?=
+
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet "torch==2.13.0"
+	$(BIN)/pip install --quiet "$(TORCH)" $(if $(TORCH_INDEX),--index-url "$(TORCH_INDEX)")
 	$(BIN)/pip install --quiet -e ".[rl,dm,video,dev,ray,docs,data,zoo]"
 	touch $(STAMP)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -279,3 +280,32 @@ def test_every_output_option_of_every_subcommand_is_tested() -> None:
         for action in subparser._actions:
             found |= {f"{name} {o}" for o in action.option_strings if o in ("--out", "--video")}
     assert found and found <= set(OUTPUTS), found - set(OUTPUTS)
+
+
+def test_every_utamp_command_named_in_help_docs_and_sources_exists() -> None:
+    """``utamp X`` in a help text, a page, a docstring or a comment is a subcommand."""
+    from utamp_gym.cli import SUBCOMMANDS
+
+    root = Path(__file__).resolve().parents[1]
+    texts = {
+        str(p.relative_to(root)): p.read_text()
+        for pattern in ("*.md", "docs/**/*.md", "utamp_gym/**/*.py", "examples/*.py",
+                        "benchmarks/*.py", "docs/_scripts/*.py", "Makefile")
+        for p in root.glob(pattern)
+        if "_generated" not in p.parts
+    }  # fmt: skip
+    parsers = [build_parser()]
+    while parsers:  # every parser's usage, description and option help, nested ones too
+        parser = parsers.pop()
+        texts[parser.prog] = parser.format_help()
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                parsers += action.choices.values()
+    names = {name for name, _, _ in SUBCOMMANDS}
+    named = {
+        (where, command)
+        for where, text in texts.items()
+        for command in re.findall(r"\butamp ([a-z][a-z-]*)", text)
+    }
+    assert {c for _, c in named} >= {"plan", "train", "demos"}  # the search finds them
+    assert not {(w, c) for w, c in named if c not in names}

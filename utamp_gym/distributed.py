@@ -30,10 +30,10 @@ from types import ModuleType
 from typing import Any, Protocol, TypeVar
 
 from utamp_gym.errors import UnknownNameError, UtampError
+from utamp_gym.extras import MissingExtraError
 
 EXECUTORS = ("local", "ray")
 WORKER_DIED = "crashed: the worker process died (killed or crashed hard) while running this"
-RAY_EXTRA = "pip install 'utamp-gym[ray]'"
 RAY_RETRIES = 3  # Ray's own default for tasks
 RAY_MIN_INFLIGHT = 64  # tasks submitted ahead of the results (at least 4 per cluster CPU)
 RAY_PROBE_TIMEOUT_S = 5.0  # ray.init itself waits minutes for an unreachable cluster
@@ -136,11 +136,11 @@ def _pool_pass(
 
 
 def import_ray() -> ModuleType:
-    """The `ray` module, or a `UtampError` that names the extra to install."""
+    """The `ray` module, or a `MissingExtraError` that names the extra to install."""
     try:
         import ray
     except ImportError as exc:
-        raise UtampError(f"--executor ray needs Ray ({exc}); install it: {RAY_EXTRA}") from None
+        raise MissingExtraError("--executor ray", "ray", "ray", str(exc)) from None
     return ray
 
 

@@ -3,8 +3,8 @@
 Exit codes: 0 success (also for `plan` when the scene is unsolvable or the planner timed out:
 see `solved` and `timed_out`), 1 an invalid plan (`validate`) or an `eval` sweep with crashed
 runs (named on stderr; their rows are in results.csv and run again on resume), 2 bad input
-(unknown scene, malformed file, bad option value, a failed training seed, ...), 130
-interrupted (Ctrl-C).
+(unknown scene, malformed file, bad option value, a missing optional extra, a failed training
+seed, ...), 130 interrupted (Ctrl-C).
 
 Each subcommand imports what it needs when it runs; `utamp plan` imports neither Gymnasium
 nor the physics stack (the RL parser and the env registration load only for the

@@ -12,6 +12,7 @@ from typing import Any
 from utamp_gym.cli import help_line
 from utamp_gym.cli.common import add_physics_options, timeout_seconds
 from utamp_gym.errors import UtampError
+from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
 
 
@@ -35,6 +36,10 @@ def _cmd_eval(args: argparse.Namespace) -> int:
             ) from None
     default = "utamp2-noisy" if args.sweep_noise else "utamp1,utamp2-gt,utamp2-rules,utamp2-noisy"
     methods = tuple(m.strip() for m in (args.methods or default).split(",") if m.strip())
+    if any(m.startswith("rl:") for m in methods):  # a saved agent: torch, stable-baselines3
+        require("utamp eval --methods rl:PATH", "rl")
+    if args.executor == "ray":
+        require("utamp eval --executor ray", "ray")
     cfg = SweepConfig(
         suite=args.suite,
         methods=methods,

@@ -23,12 +23,14 @@ import sys
 from typing import Any
 
 from utamp_gym.errors import UtampError
+from utamp_gym.extras import require
 
 
 def _cmd_demos(args: argparse.Namespace) -> int:
     from utamp_gym.outputs import new_output_dir, output_dir
 
     if args.demos_cmd == "export-lerobot":
+        require("utamp demos export-lerobot", "data")  # it reads the Minari dataset
         from utamp_gym.data.lerobot import export_lerobot
 
         new_output_dir(args.out, "--out")  # before the conversion starts
@@ -39,6 +41,11 @@ def _cmd_demos(args: argparse.Namespace) -> int:
     missing = [f for f, v in (("--suite", args.suite), ("--out", args.out)) if not v]
     if missing:
         args.demos_parser.error(f"the following arguments are required: {', '.join(missing)}")
+    require("utamp demos", "data")  # the episodes are written as a Minari dataset at the end
+    if args.track == "low-level":  # joint commands through utamp_gym.dm
+        require("utamp demos --track low-level", "dm")
+    if args.executor == "ray":
+        require("utamp demos --executor ray", "ray")
     output_dir(args.out, "--out")  # before any episode is recorded
     from utamp_gym.data.record import record_demos
     from utamp_gym.distributed import make_executor

@@ -19,6 +19,7 @@ targets and the gripper command at 50 Hz and whose reward follows tower progress
 
 from __future__ import annotations
 
+from utamp_gym.extras import MissingExtraError
 from utamp_gym.sim.gl import ensure_gl
 
 try:
@@ -27,10 +28,7 @@ try:
     ensure_gl()
     from dm_control.rl import control
 except ImportError as exc:  # pragma: no cover - depends on the installed extras
-    raise ModuleNotFoundError(
-        f"utamp_gym.dm needs dm_control ({exc}); install the extra: pip install 'utamp-gym[dm]'",
-        name="dm_control",
-    ) from exc
+    raise MissingExtraError("utamp_gym.dm", "dm", "dm_control", str(exc)) from exc
 
 from utamp_gym.dm.physics import KitchenPhysics
 from utamp_gym.dm.replay import JointTrajectory, ReplayPolicy, record_plan

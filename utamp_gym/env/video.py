@@ -18,17 +18,18 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.error import DependencyNotInstalled
 
+from utamp_gym.extras import MissingExtraError, require
+
 
 class RecordVideo(gym.wrappers.RecordVideo):
     """`gymnasium.wrappers.RecordVideo` that records every frame of a frame list."""
 
     def __init__(self, env: gym.Env[Any, Any], video_folder: str, **kwargs: Any) -> None:
-        try:
-            super().__init__(env, video_folder, **kwargs)
-        except DependencyNotInstalled as exc:
-            raise DependencyNotInstalled(
-                f"{exc}; for utamp_gym: pip install 'utamp-gym[video]'"
-            ) from exc
+        try:  # before Gymnasium's wrapper makes the folder and finds moviepy missing
+            require("RecordVideo", "video")
+        except MissingExtraError as exc:
+            raise DependencyNotInstalled(str(exc)) from exc
+        super().__init__(env, video_folder, **kwargs)
 
     def _capture_frame(self) -> None:
         if self.env.render_mode != "rgb_array_list":

@@ -19,6 +19,7 @@ import argparse
 from typing import Any
 
 from utamp_gym.errors import UtampError
+from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
@@ -34,6 +35,9 @@ def _positive(text: str) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
+    require("utamp train", "rl")
+    if args.algo == "bc":  # reads a Minari dataset
+        require("utamp train --algo bc", "data")
     from utamp_gym.rl.train import train, train_seeds
 
     kwargs: dict[str, Any] = {
@@ -61,6 +65,8 @@ def _cmd_train(args: argparse.Namespace) -> int:
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
         raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")
+    if args.executor == "ray":
+        require("utamp train --executor ray", "ray")
     output_dir(args.out, "--out")  # before training, not after
     if args.seeds > 1:
         from utamp_gym.distributed import make_executor
@@ -145,7 +151,7 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--init-from",
         metavar="MODEL",
-        help="start from this model zip's policy weights (e.g. from `utamp bc`: fine-tuning)",
+        help="start from this model zip's policy weights (e.g. one from `--algo bc`: fine-tuning)",
     )
     p.add_argument(
         "--num-objects",

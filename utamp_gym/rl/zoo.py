@@ -32,12 +32,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.extras import MissingExtraError, require
+
 HYPERPARAMS = Path(__file__).with_name("zoo_maskable_ppo.yml")
 ALGO = "maskable-ppo"
 
 
 def register() -> None:
     """MaskablePPO in the zoo's algorithm table; masked evaluation during training."""
+    require("utamp_gym.rl.zoo", "zoo", "rl")
     import rl_zoo3
     import rl_zoo3.exp_manager
     import rl_zoo3.utils
@@ -138,7 +141,13 @@ def evaluate(run: str | Path, episodes: int = 60, seed: int = 10_000) -> dict[st
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m utamp_gym.rl.zoo``; without the extra: one line naming it, exit code 2."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        require("python -m utamp_gym.rl.zoo", "zoo", "rl")
+    except MissingExtraError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     if argv[:1] == ["train"]:
         train(argv[1:])
         return 0
