@@ -107,6 +107,8 @@ def _follow_into_package(app, modname: str, fullname: str) -> str:
     MuJoCo enum ``mujoco._enums`` (compiled). Those have no source to show, yet Sphinx 9's
     ``_modules/index.html`` lists every module it tried, so each became a broken link.
     """
+    if not modname:
+        return modname
     try:
         value = importlib.import_module(modname)
         for attr in fullname.split("."):
@@ -118,6 +120,18 @@ def _follow_into_package(app, modname: str, fullname: str) -> str:
     return owner if is_ours else modname
 
 
+def _forget_unreadable_modules(app) -> list:
+    """Before viewcode writes ``_modules`` (its handler has the default priority, 500): drop
+    the modules it could not read. It remembers each as ``False``, writes no page for it,
+    lists it in ``_modules/index.html`` all the same, and keeps it across incremental builds
+    (a build directory from before `_follow_into_package` still has the 37)."""
+    modules = getattr(app.env, "_viewcode_modules", {})
+    for name in [name for name, entry in modules.items() if entry is False]:
+        del modules[name]
+    return []
+
+
 def setup(app) -> None:
     app.connect("autodoc-process-docstring", _drop_foreign_docstrings)
     app.connect("viewcode-follow-imported", _follow_into_package)
+    app.connect("html-collect-pages", _forget_unreadable_modules, priority=400)
