@@ -183,9 +183,12 @@ def test_plan_out_writes_files_unified_planning_accepts(capsys, tmp_path: Path) 
 @pytest.mark.slow
 @pytest.mark.parametrize("suite", ALL_SUITES)
 def test_unified_planning_on_every_scene(suite: str) -> None:
+    """Every U-TAMP-2 plan validates; every U-TAMP-1 problem parses (not planned: slow)."""
     for scene in suite_scenes(suite):
         _, task = exported(scene)
         assert up_validate(task) in (None, ValidationResultStatus.VALID), scene.name
+        utamp1 = build_problem(scene, (), "utamp1").text
+        assert up_validate(export_task(domain_text("utamp1"), utamp1)) is None, scene.name
 
 
 @pytest.mark.slow
