@@ -61,11 +61,13 @@ bench: $(STAMP)
 
 # The documentation site: the scripts in docs/_scripts write the generated pages (one per env
 # id, the CLI reference, figures from the code) into docs/_generated and docs/envs, then Sphinx
-# builds build/docs/html with warnings as errors. Nothing is fetched from the network.
+# builds build/docs/html with warnings as errors, and every local link of it must resolve
+# (docs/_scripts/check_links.py). Nothing is fetched from the network.
 DOCS_OUT ?= build/docs
 docs: $(STAMP)
 	$(BIN)/python docs/_scripts/generate.py
 	$(BIN)/python -m sphinx -W --keep-going -q -b html docs $(DOCS_OUT)/html
+	$(BIN)/python docs/_scripts/check_links.py $(DOCS_OUT)/html
 
 lint: $(STAMP)
 	$(BIN)/ruff check utamp_gym tests benchmarks examples

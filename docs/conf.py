@@ -10,6 +10,7 @@ the network.
 
 from __future__ import annotations
 
+import importlib
 import json
 import logging
 from pathlib import Path
@@ -94,5 +95,43 @@ def _drop_foreign_docstrings(app, what, name, obj, options, lines) -> None:
         lines[:] = []
 
 
+def _follow_into_package(app, modname: str, fullname: str) -> str:
+    """The module whose source page a documented name links to (viewcode's
+    ``viewcode-follow-imported``): its defining module if that is one of ours (a name
+    re-exported from another utamp_gym module links to where it is written), else the
+    module documenting it.
+
+    viewcode's own rule follows every name to its ``__module__``, which for a NamedTuple's
+    ``__new__`` is ``namedtuple_<Name>`` (the module name `collections.namedtuple` gives the
+    code it generates), for an alias such as ``tuple[str, int]`` is ``builtins`` and for a
+    MuJoCo enum ``mujoco._enums`` (compiled). Those have no source to show, yet Sphinx 9's
+    ``_modules/index.html`` lists every module it tried, so each became a broken link.
+    """
+    if not modname:
+        return modname
+    try:
+        value = importlib.import_module(modname)
+        for attr in fullname.split("."):
+            value = getattr(value, attr)
+    except (ImportError, AttributeError):  # e.g. an instance attribute: only its class has it
+        return modname
+    owner = getattr(value, "__module__", None)
+    is_ours = isinstance(owner, str) and owner.split(".")[0] == project
+    return owner if is_ours else modname
+
+
+def _forget_unreadable_modules(app) -> list:
+    """Before viewcode writes ``_modules`` (its handler has the default priority, 500): drop
+    the modules it could not read. It remembers each as ``False``, writes no page for it,
+    lists it in ``_modules/index.html`` all the same, and keeps it across incremental builds
+    (a build directory from before `_follow_into_package` still has the 37)."""
+    modules = getattr(app.env, "_viewcode_modules", {})
+    for name in [name for name, entry in modules.items() if entry is False]:
+        del modules[name]
+    return []
+
+
 def setup(app) -> None:
     app.connect("autodoc-process-docstring", _drop_foreign_docstrings)
+    app.connect("viewcode-follow-imported", _follow_into_package)
+    app.connect("html-collect-pages", _forget_unreadable_modules, priority=400)

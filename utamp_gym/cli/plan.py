@@ -39,10 +39,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             noise=args.noise,
             deadline=deadline,
         )
-    if out is not None:
-        (out / "domain.pddl").write_text(outcome.domain)
-        (out / "problem.pddl").write_text(outcome.problem)
-        (out / "plan.txt").write_text("".join(f"{a}\n" for a in outcome.plan))
+    if out is not None:  # names other planners accept (`utamp_gym.symbolic.export`)
+        from utamp_gym.symbolic.export import export_task
+
+        task = export_task(outcome.domain, outcome.problem, outcome.plan, scene.name)
+        (out / "domain.pddl").write_text(task.domain)
+        (out / "problem.pddl").write_text(task.problem)
+        (out / "plan.txt").write_text("".join(f"{a}\n" for a in task.plan))
     explanation = _explain(scene, outcome) if args.explain and not outcome.solved else None
     if args.json:
         data = outcome.to_json()
@@ -115,7 +118,11 @@ def add_parser(sub: Any) -> None:
         "--noise", type=float, default=DEFAULT_NOISE, help="attribute noise for utamp2-noisy"
     )
     plan.add_argument("--json", action="store_true", help="print one JSON object")
-    plan.add_argument("--out", help="write domain.pddl, problem.pddl and plan.txt here")
+    plan.add_argument(
+        "--out",
+        help="write domain.pddl, problem.pddl and plan.txt here (an object named like a domain "
+        "symbol is renamed, e.g. base -> base-obj, as a comment in problem.pddl records)",
+    )
     plan.add_argument(
         "--explain",
         action="store_true",
