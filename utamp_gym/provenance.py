@@ -15,6 +15,7 @@ benchmarks/x.py ...`` (a path relative to the repository) for a script.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 import shlex
@@ -32,8 +33,12 @@ FOOTER = re.compile(
 )
 
 
+@functools.cache
 def commit(root: Path = ROOT) -> str:
-    """The short commit of `root`'s checkout, ``-dirty`` if tracked files changed."""
+    """The short commit of `root`'s checkout, ``-dirty`` if tracked files changed.
+
+    Fixed by the first call in a process (the code it runs was imported by then): a long run
+    calls it at its start, so that editing the checkout meanwhile does not change it."""
     try:
         sha = _git(root, "rev-parse", "--short", "HEAD").strip()
         dirty = _git(root, "status", "--porcelain", "--untracked-files=no").strip()
