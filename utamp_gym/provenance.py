@@ -113,14 +113,18 @@ def with_footer(text: str, prov: dict[str, str] | None = None) -> str:
 
 def write_json(
     path: str | Path, data: dict[str, Any], *, indent: int | None = 2, **kw: Any
-) -> None:
-    """Write `data` as JSON to `path`, stamped with this process's provenance."""
-    Path(path).write_text(json.dumps(stamped(data), indent=indent, **kw) + "\n")
+) -> dict[str, str]:
+    """Write `data` as JSON to `path`, stamped with this process's provenance (or the one
+    `data` carries already, e.g. a table re-written from its own JSON); returns it."""
+    data = stamped(data)
+    Path(path).write_text(json.dumps(data, indent=indent, **kw) + "\n")
+    return {k: data[k] for k in ("commit", "command", "note") if k in data}
 
 
-def write_markdown(path: str | Path, text: str) -> None:
-    """Write Markdown `text` to `path`, ending with this process's provenance footer."""
-    Path(path).write_text(with_footer(text))
+def write_markdown(path: str | Path, text: str, prov: dict[str, str] | None = None) -> None:
+    """Write Markdown `text` to `path`, ending with the footer of `prov` (default: this
+    process's provenance)."""
+    Path(path).write_text(with_footer(text, prov))
 
 
 def png_metadata(prov: dict[str, Any] | None = None) -> dict[str, str]:
