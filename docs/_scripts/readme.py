@@ -83,7 +83,7 @@ def physics_speed() -> tuple[str, str, str]:
     return (
         f"physics per five-object episode vs `{d['base']}`, one run",
         f"wall {ratios}",
-        ("physics_speed.json"),
+        "physics_speed.md",
     )
 
 
@@ -96,7 +96,7 @@ def procedural_eval() -> tuple[str, str, str]:
         "procedural-v1, UTAMP-2-rules in physics, planned runs that succeed "
         f"({d['args']['seeds']} seeds)"
     )
-    return what, cells, "procedural_eval.json"
+    return what, cells, "procedural_eval.md"
 
 
 def procedural_outcomes() -> tuple[str, str, str]:
@@ -109,7 +109,7 @@ def procedural_outcomes() -> tuple[str, str, str]:
     figure = (
         f"{_short(_pct(rate), rate < target)} ({_pct(clean)} in states the rules lead to); {family}"
     )
-    return "rules against physics, allowed actions that succeed", figure, "procedural_outcomes.json"
+    return "rules against physics, allowed actions that succeed", figure, "procedural_outcomes.md"
 
 
 def perceived() -> tuple[str, str, str]:
@@ -128,7 +128,7 @@ def perceived() -> tuple[str, str, str]:
         f"{success} (target {bench.TARGET_SUCCESS:.2f}); affordance F1 {f1} "
         f"(target {bench.TARGET_F1:.2f})"
     )
-    return "`utamp2-perceived` (RGB-D) in physics", figure, "perceived.json"
+    return "`utamp2-perceived` (RGB-D) in physics", figure, "perceived.md"
 
 
 def closed_loop_rgbd() -> tuple[str, str, str]:
@@ -155,7 +155,7 @@ def perception_cost() -> tuple[str, str, str]:
     target = load_script("benchmarks/perception_cost.py").TARGET_MS
     ms = d["perception_ms_median"]
     figure = f"{_short(f'{ms:.1f} ms', ms > target)} (target {target:g} ms)"
-    return "perception cost per macro step (median)", figure, "perception_cost.json"
+    return "perception cost per macro step (median)", figure, "perception_cost.md"
 
 
 def agents() -> tuple[str, str, str]:
@@ -176,7 +176,7 @@ def agents() -> tuple[str, str, str]:
         )
     (n,) = seeds
     what = f"learned agents, {train} → {test} ({n} seeds)"
-    return what, f"{', '.join(cells)}; planner {planner:.2f}", "agents.json"
+    return what, f"{', '.join(cells)}; planner {planner:.2f}", "agents.md"
 
 
 #: the rows of the open-world table, in order
