@@ -140,10 +140,12 @@ def paper_conditions(results: Path) -> str:
         poses = f"object poses estimated with {noise * 1000:g} mm noise per axis{default}"
     first, n = same_field(summaries, "seed_offset") or 0, same_field(summaries, "seeds")
     seeds = f"seed {first}" if n == 1 else f"seeds {first}–{first + n - 1}"
-    made = "; ".join(f"`{s['command']}` at commit `{s['commit']}`" for s in summaries.values())
+    commits = sorted({s["commit"] for s in summaries.values()})
+    commands = " and ".join(f"`{s['command']}`" for s in summaries.values())
     return (
         f"each plan executed in MuJoCo physics with the robot acting on {poses}, {seeds} "
-        f"per scene; written by {made} (`docs/results/*-physics-summary.json`)"
+        f"per scene; written at commit {', '.join(f'`{c}`' for c in commits)} by {commands} "
+        "(`docs/results/*-physics-summary.json`)"
     )
 
 
