@@ -168,3 +168,25 @@ def test_footer_and_json_keep_a_provenance_they_are_given(tmp_path: Path) -> Non
     assert prov == old and json.loads((tmp_path / "a.json").read_text())["commit"] == "abc1234"
     prov = provenance.write_json(tmp_path / "b.json", {"x": 1})
     assert prov == provenance.provenance()
+
+
+def test_publish_copies_a_sweep_with_its_provenance_and_refuses_one_without(
+    tmp_path: Path,
+) -> None:
+    import publish_eval
+
+    out, results = tmp_path / "out", tmp_path / "results"
+    out.mkdir()
+    results.mkdir()
+    summary = {"suite": "pick-place", "grounding": "symbolic", "runs": 0, "methods": [],
+               "noise_sweep": []}  # fmt: skip
+    (out / "summary.json").write_text(json.dumps(summary))
+    (out / "summary.md").write_text("# t\n")
+    with pytest.raises(SystemExit, match="records no commit"):
+        publish_eval.publish(out, "x", results=results)
+    write_summary(out, summary)
+    copies = publish_eval.publish(out, "x", results=results)
+    assert sorted(p.name for p in copies) == ["x-summary.json", "x-summary.md"]
+    assert recorded(results / "x-summary.md") == recorded(results / "x-summary.json")
+    with pytest.raises(SystemExit, match="no such plot"):
+        publish_eval.publish(out, "x", plots=("success_vs_f1.png",), results=results)
