@@ -41,13 +41,13 @@ BLOCK = re.compile(
 
 def load_script(path: str | Path) -> ModuleType:
     """Import a script of the repository (``benchmarks/x.py``) as a module, without running
-    its ``main`` (its folder goes on ``sys.path``, as when it runs)."""
+    its ``main`` (its folder goes on ``sys.path`` for its sibling imports, as when it runs)."""
     path = (ROOT / path).resolve()
     name = f"_script_{path.parent.name}_{path.stem}"
     if name in sys.modules:
         return sys.modules[name]
-    if str(path.parent) not in sys.path:
-        sys.path.insert(0, str(path.parent))
+    if str(path.parent) not in sys.path:  # last: its names must not shadow installed ones
+        sys.path.append(str(path.parent))
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None, path
     module = importlib.util.module_from_spec(spec)
