@@ -56,8 +56,8 @@ def _git(root: Path, *args: str) -> str:
 def command(argv: Sequence[str] | None = None) -> str:
     """`argv` (default ``sys.argv``) as the shell line that re-runs it from the repository."""
     argv = list(sys.argv if argv is None else argv)
-    if not argv:
-        return "python"
+    if not argv or argv[0] == "-c":
+        return shlex.join(["python", *argv])
     prog = Path(argv[0])
     if prog.name == "utamp" or (prog.parent.name == "cli" and prog.name == "__main__.py"):
         head = ["utamp"]
