@@ -39,6 +39,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.provenance import commit, write_json, write_markdown
+
 T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571}  # Student t, 97.5 %, by dof
 PLANNERS = ("utamp2-rules", "utamp2-gt")
 
@@ -94,7 +96,8 @@ def evaluate(
     return report.rows
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--ppo-steps", type=int, default=24_576)
@@ -117,7 +120,12 @@ def main() -> None:
     p.add_argument(
         "--rewrite", action="store_true", help="only rewrite the docs from the measured agents.json"
     )
-    args = p.parse_args()
+    return p
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     if args.rewrite:
         write(json.loads((Path(args.docs) / "agents.json").read_text()), Path(args.docs))
         return
@@ -293,8 +301,8 @@ def write(table: dict[str, Any], docs: Path) -> None:
             else "."
         ),
     ]
-    (docs / "agents.md").write_text("\n".join(lines) + "\n")
-    (docs / "agents.json").write_text(json.dumps(table, indent=2, default=str) + "\n")
+    prov = write_json(docs / "agents.json", table, indent=2, default=str)
+    write_markdown(docs / "agents.md", "\n".join(lines) + "\n", prov)
     # the learning curves: success on the training split; BC's x axis counts samples seen
     plot_learning_curves(
         curves,

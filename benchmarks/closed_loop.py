@@ -30,6 +30,7 @@ from pathlib import Path
 
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
+from utamp_gym.provenance import commit, png_metadata, write_markdown
 from utamp_gym.suites import suite_scenes
 
 TARGET = 0.95  # closed-loop success at p = 0.1 on pick-place (Gaussian stand-in)
@@ -97,11 +98,12 @@ def plot(table: dict[tuple[str, float], dict], path: Path) -> None:
     ax.set_title("UTAMP-2-GT in physics under injected faults")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata=png_metadata())
     plt.close(fig)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suites", default="pick-place,sliding")
     ap.add_argument("--levels", default="0,0.05,0.1,0.2")
@@ -113,7 +115,12 @@ def main() -> None:
     ap.add_argument("--results", type=Path, help="also write the table here (markdown)")
     ap.add_argument("--skip-cost", action="store_true", help="skip the per-step cost sample")
     ap.add_argument("--modes", default="open,closed", help="open,closed (default) or one of them")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     levels = [float(p) for p in args.levels.split(",")]
     out = Path(args.out) / args.perception
     rows: list[ResultRow] = []
@@ -175,7 +182,7 @@ def main() -> None:
     if args.results is not None:
         args.results.mkdir(parents=True, exist_ok=True)
         path = args.results / f"closed_loop_{args.perception}.md"
-        path.write_text("\n".join(lines) + "\n")
+        write_markdown(path, "\n".join(lines) + "\n")
         print(f"wrote {path}")
     happy = [r for r in rows if r.disturbance == 0.0]
     for mode in (False, True):

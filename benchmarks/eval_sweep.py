@@ -86,7 +86,8 @@ def _print(res: dict[str, object]) -> None:
     )
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grounding", choices=("symbolic", "physics", "both"), default="symbolic")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
@@ -94,7 +95,11 @@ def main() -> None:
     ap.add_argument("--limit", type=int, help="only the first N scenes per suite")
     ap.add_argument("--keep", help="write the sweep outputs here (must not hold results yet)")
     ap.add_argument("--json", help="also write the measurements here")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     groundings = ("symbolic", "physics") if args.grounding == "both" else (args.grounding,)
     with tempfile.TemporaryDirectory(prefix="utamp_eval_bench_") as tmp:
         root = Path(args.keep or tmp)

@@ -32,6 +32,7 @@ from utamp_gym.perception.material import (
     shape_prior,
 )
 from utamp_gym.perception.objects import instance_pixels, perceive_objects
+from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.resources import asset_path
 from utamp_gym.scene.catalogue import load_catalogue
 from utamp_gym.scene.materials import MATERIALS
@@ -124,7 +125,8 @@ def confusion(truth: list[str], guess: list[str]) -> dict[str, dict[str, int]]:
     return {t: dict(c) for t, c in sorted(out.items())}
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", type=int, default=240)
     ap.add_argument("--seed", type=int, default=0)
@@ -134,7 +136,12 @@ def main() -> None:
         "--natural", type=int, default=20, help="scenes per suite for the in-context measure"
     )
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     t0 = time.perf_counter()
     if args.cache is not None and args.cache.is_file():
         data = np.load(args.cache)
@@ -237,7 +244,7 @@ def main() -> None:
         "in_context_accuracy": {k: round(v, 4) for k, v in in_context.items()},
         "in_context_confusion": nat_conf,
     }
-    (args.out / "material_model.json").write_text(json.dumps(summary, indent=2) + "\n")
+    prov = write_json(args.out / "material_model.json", summary, indent=2)
     lines = [
         f"Material from appearance: {len(yte)} held-out objects (every fourth of "
         f"{args.scenes} rendered scenes; {len(ytr)} objects to train), materials drawn at "
@@ -269,7 +276,7 @@ def main() -> None:
         lines.append(
             f"* {t}: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items(), key=lambda kv: -kv[1]))
         )
-    (args.out / "material_model.md").write_text("\n".join(lines) + "\n")
+    write_markdown(args.out / "material_model.md", "\n".join(lines) + "\n", prov)
     print("\n".join(lines))
     if args.write_model:
         full = MaterialModel.fit(x, y).with_prior(prior, model.temperature)

@@ -35,6 +35,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.provenance import commit, write_json, write_markdown
+
 ROOT = Path(__file__).resolve().parents[1]
 ENV_ID = "UTampKitchen-v0"
 TARGET_MB = 10.0
@@ -246,7 +248,8 @@ def to_markdown(data: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--resets", type=int, default=2000)
     ap.add_argument("--episodes", type=int, default=200)
@@ -255,7 +258,12 @@ def main() -> None:
     ap.add_argument("--vector-resets", type=int, default=100)
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
     ap.add_argument("--part", choices=PARTS, help=argparse.SUPPRESS)
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     if args.part:
         _run_part(args)
         return
@@ -263,8 +271,8 @@ def main() -> None:
     table = to_markdown(data)
     print(table, end="")
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "memory.json").write_text(json.dumps(data, indent=1) + "\n")
-    (args.out / "memory.md").write_text(table)
+    prov = write_json(args.out / "memory.json", data, indent=1)
+    write_markdown(args.out / "memory.md", table, prov)
     print(f"wrote {args.out / 'memory.json'} and {args.out / 'memory.md'}")
     if not all(r["met"] for r in data["rows"]):
         sys.exit(1)

@@ -33,6 +33,7 @@ import numpy as np
 
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.outcome import OutcomeModel, truth_atoms
+from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.suites import resolve_scene
 
 SUITES = ("pick-place", "sliding")
@@ -274,7 +275,8 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
     return "\n".join(out) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=600, help="pairs in all (split by suite)")
     ap.add_argument("--seed", type=int, default=0)
@@ -283,7 +285,12 @@ def main() -> None:
     ap.add_argument(
         "--from-json", action="store_true", help="re-summarize the pairs of <out>.json, no physics"
     )
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     out = Path(args.out)
     start = time.perf_counter()
     pairs: list[Pair] = []
@@ -308,9 +315,9 @@ def main() -> None:
         "wall_time_s": wall,
         "all_pairs": [{**asdict(p), "kind": p.kind} for p in pairs],
     }
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
+    prov = write_json(out.with_suffix(".json"), data, indent=1)
     text = to_markdown(summary, args, wall)
-    out.with_suffix(".md").write_text(text)
+    write_markdown(out.with_suffix(".md"), text, prov)
     print(text)
 
 

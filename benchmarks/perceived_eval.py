@@ -14,7 +14,6 @@ pick-place, 0.81 sliding, F1 0.98) beside them.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 from pathlib import Path
 
@@ -22,6 +21,7 @@ from utamp_gym.eval.intervals import wilson_interval
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS, ATTRIBUTES, STAGES
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
+from utamp_gym.provenance import commit, write_json, write_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ("utamp2-gt", "utamp2-noisy", "utamp2-perceived")
@@ -68,13 +68,19 @@ def _f(x: object, spec: str = ".3f") -> str:
     return "–" if x is None else format(x, spec)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suites", default="pick-place,sliding")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=Path("out/sweep"))
     ap.add_argument("--results", type=Path, default=ROOT / "docs" / "results")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     summary: dict[str, dict[str, object]] = {}
     for suite in args.suites.split(","):
         cfg = SweepConfig(suite, METHODS, grounding="physics", explain=False)
@@ -132,8 +138,8 @@ def main() -> None:
             lines += ["", f"`utamp2-perceived` failures on {suite}:", ""]
             lines += [f"* {f}" for f in fails]  # type: ignore[union-attr]
     args.results.mkdir(parents=True, exist_ok=True)
-    (args.results / "perceived.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (args.results / "perceived.md").write_text("\n".join(lines) + "\n")
+    prov = write_json(args.results / "perceived.json", summary, indent=2)
+    write_markdown(args.results / "perceived.md", "\n".join(lines) + "\n", prov)
     print("\n".join(lines))
 
 

@@ -18,7 +18,6 @@ executed in physics.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from perceived_eval import method_stats  # benchmarks/ is on sys.path when run as a script
@@ -27,6 +26,7 @@ from utamp_gym.eval.intervals import wilson_interval
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.stages import ATTRIBUTES
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
+from utamp_gym.provenance import commit, write_json, write_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 SPLITS = ("test-instances", "test-families", "test-count")
@@ -102,13 +102,19 @@ def _markdown(table: dict[str, dict[str, dict[str, object]]], shard: tuple[int, 
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--shard", default="1/3", help="I/N: this part of each split's runs")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--out", type=Path, default=Path("out/final/proc_perceived"))
     ap.add_argument("--results", type=Path, default=ROOT / "docs" / "results")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     i, n = (int(x) for x in args.shard.split("/"))
     from utamp_gym.suites import scene_summary
 
@@ -124,9 +130,9 @@ def main() -> None:
     md = _markdown(table, (i, n))
     print(md)
     args.results.mkdir(parents=True, exist_ok=True)
-    (args.results / "perceived-procedural.md").write_text(md)
+    write_markdown(args.results / "perceived-procedural.md", md)
     payload = {"shard": args.shard, "splits": table}
-    (args.results / "perceived-procedural.json").write_text(json.dumps(payload, indent=2) + "\n")
+    write_json(args.results / "perceived-procedural.json", payload, indent=2)
 
 
 if __name__ == "__main__":

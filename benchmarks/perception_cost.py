@@ -19,7 +19,6 @@ The machine's load is printed with the times (they are wall-clock on a shared ma
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import time
@@ -29,6 +28,7 @@ import numpy as np
 
 from utamp_gym.perception.objects import perceive_objects
 from utamp_gym.planning.methods import plan_scene
+from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.seeding import run_seed
 from utamp_gym.sim.backend import MujocoBackend
 from utamp_gym.sim.measure import obj_pose, pose_change
@@ -56,12 +56,18 @@ def _errors(backend: MujocoBackend) -> list[tuple[float, float]]:
     return out
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suite", default="pick-place")
     ap.add_argument("--scenes", type=int, default=8, help="every k-th scene, this many")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     pool = suite_scenes(args.suite)
     scenes = pool[:: max(1, len(pool) // args.scenes)][: args.scenes]
     load = os.getloadavg()
@@ -150,8 +156,8 @@ def main() -> None:
         f"object's attributes median {summary['survey_fit_ms_median']} ms.",
     ]
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "perception_cost.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (args.out / "perception_cost.md").write_text("\n".join(lines) + "\n")
+    prov = write_json(args.out / "perception_cost.json", summary, indent=2)
+    write_markdown(args.out / "perception_cost.md", "\n".join(lines) + "\n", prov)
     print("\n".join(lines))
 
 

@@ -22,9 +22,9 @@ data this script dumps, without importing utamp_gym:
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
-import sys
 import time
 from pathlib import Path
 
@@ -212,14 +212,26 @@ def report(path: Path, results_dir: Path = ROOT / "docs" / "results") -> None:
         "hulls and nearest-neighbour trees."
     )
     lines += ["", " ".join(why)]
+    # imported here: the open3d step runs this file in a Python without utamp_gym
+    from utamp_gym.provenance import write_json, write_markdown
+
     results_dir.mkdir(parents=True, exist_ok=True)
-    (results_dir / "libraries.json").write_text(
-        json.dumps({"ours": ours, "open3d": theirs}, indent=1) + "\n"
-    )
-    (results_dir / "libraries.md").write_text("\n".join(lines) + "\n")
+    prov = write_json(results_dir / "libraries.json", {"ours": ours, "open3d": theirs}, indent=1)
+    write_markdown(results_dir / "libraries.md", "\n".join(lines) + "\n", prov)
     print("\n".join(lines))
 
 
+STEPS = {"dump": dump, "open3d": with_open3d, "report": report}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("step", choices=tuple(STEPS), help="dump the data, time open3d, or report")
+    ap.add_argument("path", type=Path, help="the .npz the steps share")
+    return ap
+
+
 if __name__ == "__main__":
-    cmd, arg = sys.argv[1], Path(sys.argv[2])
-    {"dump": dump, "open3d": with_open3d, "report": report}[cmd](arg)
+    args = build_parser().parse_args()
+    STEPS[args.step](args.path)

@@ -268,7 +268,8 @@ def git(*args: str) -> str:
     ).stdout.strip()
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--base", default="f68ae5a", help="earlier commit to compare with")
@@ -278,10 +279,18 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--no-phases", action="store_true", help="skip the phase/determinism pass")
     ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "physics_speed"))
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     if args.worker:
         worker()
         return
+    # imported here, not at the top: a worker runs this file on the base commit's tree
+    from utamp_gym.provenance import commit, write_json, write_markdown
+
+    commit()  # the provenance of what this run writes: the code as it is now
 
     base = git("rev-parse", "--short", args.base)
     this = git("rev-parse", "--short", "HEAD")
@@ -371,7 +380,7 @@ def main() -> None:
 
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text(table)
+    write_markdown(out.with_suffix(".md"), table)
     report = {
         "base": base,
         "this": this,
@@ -383,11 +392,11 @@ def main() -> None:
         "episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in rows],
         "phase_episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in phase_rows],
     }
-    out.with_suffix(".json").write_text(json.dumps(_rounded(report)) + "\n")
+    write_json(out.with_suffix(".json"), _rounded(report), indent=None)
     written = [out.with_suffix(".md"), out.with_suffix(".json")]
     if phase_rows:
         phases_md = out.parent / "physics_phases.md"
-        phases_md.write_text(phases)
+        write_markdown(phases_md, phases)
         written.append(phases_md)
     print("wrote " + ", ".join(str(p) for p in written))
 

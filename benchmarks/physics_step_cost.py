@@ -29,6 +29,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco
 import numpy as np
 
+from utamp_gym.provenance import commit, write_markdown
+
 ROOT = Path(__file__).resolve().parent.parent
 STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 SLEEP = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
@@ -123,7 +125,8 @@ def measure(
     return 1e6 * wall / (n * steps), contacts / n, rows / n, iters / n
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="pick-place/105")
     ap.add_argument("--seed", type=int, default=0)
@@ -132,7 +135,12 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "physics_step_cost"))
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     load = os.getloadavg()
     model, states, arm_links = record(args.scene, args.seed, args.every)
     table = variants(arm_links)
@@ -168,7 +176,7 @@ def main() -> None:
     print("\n" + text)
     out = Path(args.out).with_suffix(".md")
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
+    write_markdown(out, text)
     print(f"wrote {out}")
 
 

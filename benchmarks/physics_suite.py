@@ -26,6 +26,7 @@ from pathlib import Path
 
 from utamp_gym.backend import DEFAULT_POSE_NOISE
 from utamp_gym.planning.crosscheck import affordance_violations
+from utamp_gym.provenance import commit, png_metadata, write_markdown
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.execute import EpisodeResult, run_episode
 from utamp_gym.suites import suite_scenes
@@ -94,7 +95,7 @@ def noise_sweep(args: argparse.Namespace) -> None:
     if args.results is not None:
         args.results.mkdir(parents=True, exist_ok=True)
         path = args.results / "pose_noise_relook.md"
-        path.write_text("\n".join(lines) + "\n")
+        write_markdown(path, "\n".join(lines) + "\n")
         print(f"wrote {path}")
     _plot_noise(table, out / "success_vs_pose_noise.png")
 
@@ -123,12 +124,13 @@ def _plot_noise(table: dict[tuple[str, float], list[bool]], path: Path) -> None:
     ax.set_title("UTAMP-2-GT in physics vs pose-estimation noise")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata=png_metadata())
     plt.close(fig)
     print(f"\nwrote {path}")
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suites", default="pick-place,sliding")
     ap.add_argument("--seeds", type=int, default=3)
@@ -141,7 +143,12 @@ def main() -> None:
     ap.add_argument("--out", default="out/bench/pose_noise", help="noise sweep: rows here")
     ap.add_argument("--levels", help="noise sweep: these levels (m, comma-separated)")
     ap.add_argument("--results", type=Path, help="noise sweep: also write the table here")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     if args.pose_noise:
         noise_sweep(args)
         return

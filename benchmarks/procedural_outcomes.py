@@ -40,6 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from outcome_model import _physics_class, consistent, symbolic_supports
 
+from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.suites import procedural
 
 TARGET = 0.98  # physics must succeed on this share of the actions the rules allow, per family
@@ -285,7 +286,8 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
     return "\n".join(out) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=1200, help="pairs in all (split by split)")
     ap.add_argument("--splits", default="train,test-families")
@@ -294,7 +296,12 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="docs/results/procedural_outcomes")
     ap.add_argument("--from-json", action="store_true", help="re-summarize <out>.json")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     out = Path(args.out)
     splits = [s.strip() for s in args.splits.split(",") if s.strip()]
     start = time.perf_counter()
@@ -326,9 +333,9 @@ def main() -> None:
         "wall_time_s": wall,
         "all_pairs": [asdict(p) for p in pairs],
     }
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
+    prov = write_json(out.with_suffix(".json"), data, indent=1)
     text = to_markdown(summary, args, wall)
-    out.with_suffix(".md").write_text(text)
+    write_markdown(out.with_suffix(".md"), text, prov)
     print(text)
 
 

@@ -18,13 +18,14 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import re
 import subprocess
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
 from typing import Any
+
+from utamp_gym.provenance import commit, write_json, write_markdown
 
 SPLITS = ("train", "test-instances", "test-families", "test-count")
 TARGET = 0.97  # planned runs that must succeed in physics on every split
@@ -151,7 +152,8 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
     return "\n".join(out) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
@@ -159,7 +161,12 @@ def main() -> None:
     ap.add_argument("--out", default="out/procedural")
     ap.add_argument("--results", default="docs/results")
     ap.add_argument("--summarize-only", action="store_true", help="read OUT, run nothing")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     splits = [s.strip() for s in args.splits.split(",") if s.strip()]
     summaries = []
     for split in splits:
@@ -167,11 +174,10 @@ def main() -> None:
         summaries.append(summarize_split(split, folder))
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
-    (results / "procedural_eval.json").write_text(
-        json.dumps({"args": vars(args), "splits": summaries}, indent=1) + "\n"
-    )
+    data = {"args": vars(args), "splits": summaries}
+    prov = write_json(results / "procedural_eval.json", data, indent=1)
     text = to_markdown(summaries, args)
-    (results / "procedural_eval.md").write_text(text)
+    write_markdown(results / "procedural_eval.md", text, prov)
     print(text)
     below = [s["split"] for s in summaries if (s["success_rate_of_planned"] or 0) < TARGET]
     if below:

@@ -23,6 +23,7 @@ import numpy as np
 from utamp_gym.kitchenware import FAMILIES, generate
 from utamp_gym.kitchenware.params import Param
 from utamp_gym.kitchenware.sources import SOURCES
+from utamp_gym.provenance import commit, write_markdown
 from utamp_gym.scene.catalogue import load_catalogue, type_to_dict
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.sim.gl import new_renderer
@@ -142,11 +143,17 @@ def splits_table() -> str:
     return "\n".join(out) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=8)
     ap.add_argument("--out", default="docs")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     out = Path(args.out)
     (out / "images" / "kitchenware").mkdir(parents=True, exist_ok=True)
     (out / "results").mkdir(parents=True, exist_ok=True)
@@ -154,8 +161,8 @@ def main() -> None:
         picture = grid([render_instance(name, s) for s in range(args.instances)])
         iio.imwrite(out / "images" / "kitchenware" / f"{name}.png", picture)
         print(f"{name}: {args.instances} instances", flush=True)
-    (out / "results" / "kitchenware_families.md").write_text(table())
-    (out / "results" / "procedural_splits.md").write_text(splits_table())
+    write_markdown(out / "results" / "kitchenware_families.md", table())
+    write_markdown(out / "results" / "procedural_splits.md", splits_table())
 
 
 if __name__ == "__main__":

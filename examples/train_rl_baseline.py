@@ -40,6 +40,7 @@ from utamp_gym.eval.plots import write_plots
 from utamp_gym.eval.records import ResultRow, ResultsFile
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.eval.summary import summarize, write_summary
+from utamp_gym.provenance import commit, write_markdown
 from utamp_gym.rl.callbacks import plot_learning_curves
 from utamp_gym.rl.train import train_seeds
 from utamp_gym.suites import suite_scenes
@@ -171,7 +172,8 @@ def table(
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out/rl/baselines")
     ap.add_argument("--seeds", type=int, default=3)
@@ -190,7 +192,12 @@ def main() -> None:
         help="agents also evaluated in physics (with the planner)",
     )
     ap.add_argument("--train-only", action="store_true", help="train (or reuse), no evaluation")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()  # the provenance of what this run writes: the code as it is now
     out = Path(args.out)
     names = [c.strip() for c in args.configs.split(",") if c.strip()]
     aggs, models = {}, {}
@@ -230,7 +237,7 @@ def main() -> None:
         subset = stratified(args.physics_per_count)
         phys = evaluate(phys_methods, subset, "physics", out / "eval-physics")
     text = table(aggs, sym, phys, models)
-    (out / "baselines.md").write_text(text)
+    write_markdown(out / "baselines.md", text)
     print(text)
 
 

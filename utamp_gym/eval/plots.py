@@ -15,6 +15,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from utamp_gym.provenance import png_metadata
+
 MIN_TIME = 1e-4  # s: the floor of the log axis (a band's lower edge may go below zero)
 
 
@@ -93,7 +95,7 @@ def plot_success(summary: dict[str, Any], path: str | Path) -> None:
     right.legend(fontsize=8)
     fig.suptitle(_title(summary))
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata=png_metadata(summary))
     plt.close(fig)
 
 
@@ -148,7 +150,7 @@ def plot_planning_time(summary: dict[str, Any], path: str | Path) -> None:
         right.legend(fontsize=8)
     fig.suptitle(_title(summary))
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata=png_metadata(summary))
     plt.close(fig)
 
 
@@ -180,7 +182,7 @@ def plot_success_vs_f1(summary: dict[str, Any], path: str | Path) -> None:
     ax.set_title(_title(summary))
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata=png_metadata(summary))
     plt.close(fig)
 
 

@@ -28,6 +28,7 @@ from utamp_gym.eval.intervals import (
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.runner import EVAL_METHODS
 from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS, ATTRIBUTES, STAGES
+from utamp_gym.provenance import provenance, with_footer
 from utamp_gym.suites import SUITES
 
 _PRECONDITION = re.compile(r"precondition \((\S+)")
@@ -289,12 +290,20 @@ def to_markdown(summary: dict[str, Any]) -> str:
         if m["failures"]:
             shown = ", ".join(f"{k} ×{v}" for k, v in m["failures"].items())
             out.append(f"- {m['label']}: {shown}")
-    return "\n".join(out) + "\n"
+    text = "\n".join(out) + "\n"
+    if "command" in summary and "commit" in summary:
+        text = with_footer(text, {"command": summary["command"], "commit": summary["commit"]})
+    return text
 
 
 def write_summary(out: str | Path, summary: dict[str, Any]) -> None:
-    """Write ``summary.json`` and ``summary.md`` into `out`."""
+    """Write ``summary.json`` and ``summary.md`` into `out`.
+
+    The provenance of this process (`utamp_gym.provenance`: ``commit``, ``command``) is added
+    to `summary` first, unless it has one already."""
     out = Path(out)
+    for key, value in provenance().items():
+        summary.setdefault(key, value)
     for name, text in (
         ("summary.json", json.dumps(summary, indent=2) + "\n"),
         ("summary.md", to_markdown(summary)),

@@ -31,6 +31,7 @@ from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile, key_shard
 from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EvalTask, check_method, failure_row, run_task
 from utamp_gym.eval.vlm_methods import VLM_METHODS
 from utamp_gym.planning.methods import DEFAULT_NOISE
+from utamp_gym.provenance import commit
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import suite_scenes
 
@@ -200,6 +201,7 @@ def run_sweep(
 
         VlmConfig.from_env()  # fail fast without an endpoint
     start = time.perf_counter()
+    commit()  # the provenance of this run's results: the code as it is now
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tasks, notes = plan_tasks(cfg)

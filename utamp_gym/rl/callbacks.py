@@ -17,6 +17,7 @@ from typing import Any
 import gymnasium as gym
 from stable_baselines3.common.callbacks import BaseCallback
 
+from utamp_gym.provenance import png_metadata
 from utamp_gym.rl.policy import RLPolicy, run_episodes
 
 
@@ -150,7 +151,7 @@ def plot_learning_curve(
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    fig.savefig(path, metadata=png_metadata())  # with the commit and command
 
 
 def _at(curve: Sequence[Mapping[str, Any]], steps: int) -> float:
@@ -192,4 +193,4 @@ def plot_learning_curves(
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    fig.savefig(path, metadata=png_metadata())  # with the commit and command
