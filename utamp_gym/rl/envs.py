@@ -30,6 +30,18 @@ OBJECT_OBS_KEYS = (
 EVAL_SEED_OFFSET = 10_000
 
 
+def default_interface(env_id: str, algo: str = "maskable-ppo") -> str:
+    """The interface `utamp_gym.rl.train.train` uses unless told: the env's own (its
+    ``interface`` option, as ``gym.make`` has it: ``objects`` for UTampKitchenProcedural-v0),
+    except ``grounded`` for PPO and DQN, which the objects interface cannot train."""
+    from utamp_gym.env.registry import env_definitions
+
+    own = next((d.kwargs.get("interface") for d in env_definitions() if d.id == env_id), None)
+    if algo not in ("maskable-ppo", "bc"):
+        return "grounded"
+    return str(own or "grounded")
+
+
 def make_env(
     env_id: str = "UTampKitchen-v0",
     *,

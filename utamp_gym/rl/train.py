@@ -44,6 +44,7 @@ from utamp_gym.rl.envs import (
     DEFAULT_OBS_KEYS,
     EVAL_SEED_OFFSET,
     OBJECT_OBS_KEYS,
+    default_interface,
     make_env,
     make_vec_env,
     n_fluents,
@@ -143,18 +144,6 @@ class TrainResult:
     steps_to_target: int | None
     time_to_target_s: float | None
     curve: list[dict[str, Any]]
-
-
-def default_interface(env_id: str, algo: str = "maskable-ppo") -> str:
-    """The interface `train` uses unless told: the env's own (its ``interface`` option, as
-    ``gym.make`` has it: ``objects`` for UTampKitchenProcedural-v0), except ``grounded`` for
-    PPO and DQN, which the objects interface cannot train."""
-    from utamp_gym.env.registry import env_definitions
-
-    own = next((d.kwargs.get("interface") for d in env_definitions() if d.id == env_id), None)
-    if algo not in ("maskable-ppo", "bc"):
-        return "grounded"
-    return str(own or "grounded")
 
 
 def default_hyperparams(algo: str, n_envs: int, interface: str = "grounded") -> dict[str, Any]:
