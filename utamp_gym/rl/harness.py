@@ -89,8 +89,9 @@ def _suite_choice(suite: str) -> dict[str, Any]:
 def shares_actions(meta: ModelMeta, suite: str | None) -> bool:
     """Whether a grounded model's action ids mean the same actions on `suite` as in training:
     its env on that suite grounds the same action universe (all procedural-v1 splits share
-    one). Decided from the env options alone, without grounding anything."""
-    if suite is None or suite == meta.suite:
+    one; an objects-interface model's ids mean the same everywhere). Decided from the env
+    options alone, without grounding anything."""
+    if suite is None or suite == meta.suite or meta.env_options.get("interface") == "objects":
         return True
     import gymnasium as gym
 
