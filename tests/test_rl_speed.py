@@ -169,3 +169,36 @@ def test_a_grounded_procedural_model_runs_on_another_split(tmp_path: Path) -> No
     rows = _rows(out / "results.csv")
     assert [r["scene"] for r in rows] == [f"procedural-v1/test-count/{i:04d}" for i in range(2)]
     assert all(r["crashed"] == "false" and int(r["plan_length"]) >= 1 for r in rows)
+
+
+def test_a_stored_universe_is_the_grounded_one(tmp_path: Path, monkeypatch) -> None:
+    """`universe_store`: the universe read back from disk equals the one grounded; an
+    unreadable file is ignored; keys naming scene files outside the package are not stored."""
+    from utamp_gym.env import universe as universe_mod
+    from utamp_gym.env import universe_store
+    from utamp_gym.env.universe import UniverseKey
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    key = UniverseKey("utamp2", "gt", "pick-place")
+    fresh = universe_mod._ground(key)
+    universe_store.save(key, *universe_mod._to_store(fresh))
+    path = universe_store.path_of(key)
+    assert path is not None and path.is_file() and path.parent == tmp_path / "utamp_gym"
+    stored = universe_store.load(key)
+    assert stored is not None
+    back = universe_mod._from_store(key, *stored)
+    for name in ("actions", "fluent_atoms", "static_atoms", "add_bits", "del_bits", "roles",
+                 "action_objects"):  # fmt: skip
+        assert getattr(back, name) == getattr(fresh, name), name
+    for name in ("check_ptr", "check_flat", "static_pre", "static_neg"):
+        a, b = getattr(back, name), getattr(fresh, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b) and not a.flags.writeable
+    assert dict(back.action_index) == dict(fresh.action_index)
+    assert back.domain == fresh.domain
+    other = UniverseKey("utamp2", "gt", "sliding")
+    assert universe_store.path_of(other) != path
+    path.write_bytes(b"not an npz")
+    assert universe_store.load(key) is None
+    assert universe_store.path_of(UniverseKey("utamp2", "gt", None, ("my_scene.json",))) is None
+    monkeypatch.setenv("UTAMP_UNIVERSE_CACHE", "0")
+    assert universe_store.path_of(key) is None
