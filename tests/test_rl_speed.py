@@ -6,6 +6,7 @@ models evaluated wherever their action ids keep their meaning."""
 from __future__ import annotations
 
 import csv
+import os
 import shlex
 from pathlib import Path
 
@@ -200,5 +201,13 @@ def test_a_stored_universe_is_the_grounded_one(tmp_path: Path, monkeypatch) -> N
     path.write_bytes(b"not an npz")
     assert universe_store.load(key) is None
     assert universe_store.path_of(UniverseKey("utamp2", "gt", None, ("my_scene.json",))) is None
+    older = [path.with_name(path.name.rsplit("-", 1)[0] + f"-old{i}.npz") for i in range(5)]
+    for i, p in enumerate(older):  # earlier package versions of the same key
+        p.write_bytes(b"x")
+        os.utime(p, (i, i))
+    universe_store.save(key, *universe_mod._to_store(fresh))
+    kept = sorted(q.name for q in path.parent.glob(path.name.rsplit("-", 1)[0] + "-*.npz"))
+    assert len(kept) == universe_store.KEPT and path.name in kept  # the oldest ones went
+    assert universe_store.load(key) is not None
     monkeypatch.setenv("UTAMP_UNIVERSE_CACHE", "0")
     assert universe_store.path_of(key) is None

@@ -5,9 +5,10 @@ most of a training run's start-up), and every `utamp train`, evaluation worker a
 process grounds the same few. A universe is a pure function of its `UniverseKey` and of this
 package (code, PDDL domains, scenes), so it is kept under a name made of both: the SHA-256 of
 the key and of every file of the package and its assets
-(``$XDG_CACHE_HOME/utamp_gym/universe-<sha256>.npz``, ``~/.cache`` without XDG_CACHE_HOME).
-Any change to the package names new files; a key that names scene files outside the package
-is never stored (their content is not part of the name). The file holds arrays and JSON
+(``$XDG_CACHE_HOME/utamp_gym/universe-<key>-<package>.npz``, ``~/.cache`` without
+XDG_CACHE_HOME). Any change to the package names new files (the `KEPT` newest per key stay);
+a key that names scene files outside the package is never stored (their content is not part
+of the name). The file holds arrays and JSON
 only (no pickle), is written whole and atomically, and one that cannot be read or written is
 simply ignored. ``UTAMP_UNIVERSE_CACHE=0`` turns the store off.
 """
@@ -29,6 +30,8 @@ from utamp_gym.resources import assets_dir
 _PACKAGE = Path(__file__).resolve().parent.parent
 #: bump when the stored layout changes
 LAYOUT = 1
+#: files kept per key (one per package version: a code change names a new file)
+KEPT = 4
 
 
 @lru_cache(maxsize=1)
@@ -49,9 +52,9 @@ def path_of(key: Any) -> Path | None:
     files whose content the name would not cover)."""
     if os.environ.get("UTAMP_UNIVERSE_CACHE", "1") == "0" or key.scenes:
         return None
-    digest = hashlib.sha256(f"{LAYOUT}|{key!r}|{package_digest()}".encode()).hexdigest()
+    of_key = hashlib.sha256(f"{LAYOUT}|{key!r}".encode()).hexdigest()[:16]
     root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(root) / "utamp_gym" / f"universe-{digest[:32]}.npz"
+    return Path(root) / "utamp_gym" / f"universe-{of_key}-{package_digest()[:16]}.npz"
 
 
 def load(key: Any) -> tuple[dict[str, Any], dict[str, np.ndarray]] | None:
@@ -86,5 +89,14 @@ def save(key: Any, fields: dict[str, Any], arrays: dict[str, np.ndarray]) -> Non
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
+        _prune(path)
     except OSError:
         pass
+
+
+def _prune(path: Path) -> None:
+    """Keep the `KEPT` newest files of `path`'s key (other versions of the package)."""
+    prefix = path.name.rsplit("-", 1)[0]
+    files = sorted(path.parent.glob(f"{prefix}-*.npz"), key=lambda p: p.stat().st_mtime)
+    for old in files[:-KEPT]:
+        old.unlink(missing_ok=True)
