@@ -187,11 +187,17 @@ class _SceneMap(NamedTuple):
         for s, space in enumerate(scene.spaces):
             if space.name in sid:
                 fixed[sid[space.name]] = _K + _R + s
-        midx = np.array([
-            member_order(types[t.symbols[o]]).index(m) if loc[o] >= 0
-            and m in types[t.symbols[o]].members else -1
-            for o, m in zip(t.obj, t.member, strict=True)
-        ])  # fmt: skip
+        slot_of = {  # per moved object of the scene: member name -> member index
+            o: {m: k for k, m in enumerate(member_order(typ)) if m in typ.members}
+            for o in set(t.obj.tolist())
+            if loc[o] >= 0 and (typ := types[t.symbols[o]]) is not None
+        }
+        midx = np.full(len(t.obj), -1)
+        moved = np.flatnonzero(loc[t.obj] >= 0)  # the actions of this scene's objects
+        owners = t.obj[moved].tolist()
+        midx[moved] = [
+            slot_of[o].get(t.member[i], -1) for i, o in zip(moved.tolist(), owners, strict=True)
+        ]
         space = np.where(fixed[t.space] >= _K + _R, fixed[t.space] - _K - _R, -1)
         part = {p: i for i, p in enumerate(PARTS)}
         n_atoms = len(t.atoms)
@@ -261,6 +267,14 @@ class _SceneMap(NamedTuple):
         return index, np.where(ok, pos, -1)
 
 
+@lru_cache(maxsize=16)
+def _shared_maps(key: UniverseKey) -> SceneCache[_SceneMap]:
+    """The scene maps of one universe under declared types, shared by every interface of a
+    process (the 8 envs of a training vector derive each scene once, not once each); a map is
+    never modified after it is made."""
+    return SceneCache()
+
+
 class ObjectInterface:
     """Translates between a kitchen env's ground universe and the fixed object-centric spaces
     for one episode at a time (`reset`); see the module docstring."""
@@ -273,17 +287,25 @@ class ObjectInterface:
         sizes = [int(np.prod(s)) for s in self._shapes.values()]
         self._offsets = dict(zip(_FLUENT_KEYS, np.cumsum([0, *sizes[:-1]]).tolist(), strict=True))
         self._size = sum(sizes)
+        self._fluent_slices = {  # key -> (start, end, shape) in the flat fluent vector
+            k: (self._offsets[k], self._offsets[k] + n, self._shapes[k])
+            for k, n in zip(_FLUENT_KEYS, sizes, strict=True)
+        }
         self.slots: dict[str, int] = {}  # object name -> slot, this episode
         self._static: dict[str, np.ndarray] = {}
-        self._maps: SceneCache[_SceneMap] = SceneCache()  # what does not depend on the slots
+        self._maps = _shared_maps(universe.key)  # what does not depend on the slots
+        self._up: tuple[frozenset[str], np.ndarray] | None = None
 
     def __getstate__(self) -> dict[str, object]:
         state = self.__dict__.copy()
         state["universe"] = self.universe.key
+        del state["_maps"]  # the process's shared cache, not this interface's
         return state
 
     def __setstate__(self, state: dict[str, object]) -> None:
-        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
+        key: UniverseKey = state["universe"]  # type: ignore[assignment]
+        state["universe"] = ground_universe(key)
+        state["_maps"] = _shared_maps(key)
         self.__dict__.update(state)
 
     # ------------------------------------------------------------------ episode
@@ -301,6 +323,7 @@ class ObjectInterface:
                 )
         order = rng.permutation(_K)[: len(names)]
         self.scene, self.slots = scene, {n: int(s) for n, s in zip(names, order, strict=True)}
+        self._up = None  # the up-facing sides of the episode's static atoms (`observation`)
 
         def scene_map() -> _SceneMap:
             return _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
@@ -389,16 +412,17 @@ class ObjectInterface:
         pos = self._atom_pos[fluent.astype(bool)]
         flat[pos[pos >= 0]] = 1
         obs = {k: v.copy() for k, v in self._static.items()}
-        for k in _FLUENT_KEYS:
-            n = int(np.prod(self._shapes[k]))
-            obs[k] = flat[self._offsets[k] : self._offsets[k] + n].reshape(self._shapes[k])
-        up = np.zeros((_K, len(SIDES)), np.int8)
-        for atom in static_atoms:
-            if atom.startswith("(force "):
-                _, name, side = atom[1:-1].split()
-                if name in self.slots and side in SIDES:
-                    up[self.slots[name], SIDES.index(side)] = 1
-        obs["up"] = up
+        for k, (start, end, shape) in self._fluent_slices.items():
+            obs[k] = flat[start:end].reshape(shape)
+        if self._up is None or self._up[0] is not static_atoms:  # new episode or perception
+            up = np.zeros((_K, len(SIDES)), np.int8)
+            for atom in static_atoms:
+                if atom.startswith("(force "):
+                    _, name, side = atom[1:-1].split()
+                    if name in self.slots and side in SIDES:
+                        up[self.slots[name], SIDES.index(side)] = 1
+            self._up = (static_atoms, up)
+        obs["up"] = self._up[1].copy()
         p = np.zeros((_K, 7), np.float32)
         for name, slot in self.slots.items():
             if name in poses:

@@ -88,6 +88,13 @@ def _truth_table(key: UniverseKey) -> _TruthTable:
     return _TruthTable(tuple(lits), atoms, pos, neg)
 
 
+@lru_cache(maxsize=4)
+def _shared_scenes(key: UniverseKey) -> SceneCache[tuple[frozenset[str], np.ndarray]]:
+    """Per scene of one universe, its ground truth (`OutcomeModel.reset`), shared by every
+    model of a process (a training vector's envs derive each scene once); read-only."""
+    return SceneCache()
+
+
 class OutcomeModel:
     """Decides a symbolic step by the ground-truth U-TAMP-2 precondition (module docstring)."""
 
@@ -95,7 +102,7 @@ class OutcomeModel:
         self.universe = universe
         self._table = _truth_table(universe.key)
         # scene name -> (ground-truth atoms, whether each action's affordances hold)
-        self._scenes: SceneCache[tuple[frozenset[str], np.ndarray]] = SceneCache()
+        self._scenes = _shared_scenes(universe.key)
         self._ok = np.ones(universe.n_actions, bool)
         self._truth: frozenset[str] = frozenset()
 
@@ -103,12 +110,14 @@ class OutcomeModel:
         """Pickle the universe (and its truth table) by key, as `SymbolicState` does."""
         state = self.__dict__.copy()
         state["universe"], state["_table"] = self.universe.key, None
+        del state["_scenes"]  # the process's shared cache
         return state
 
     def __setstate__(self, state: dict[str, object]) -> None:
         key = state["universe"]
         assert isinstance(key, UniverseKey)
         state["universe"], state["_table"] = ground_universe(key), _truth_table(key)
+        state["_scenes"] = _shared_scenes(key)
         self.__dict__.update(state)
 
     def reset(self, scene: Scene) -> None:

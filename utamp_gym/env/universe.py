@@ -26,7 +26,9 @@ are left exactly as they were: their action ids are fixed.
 Caching: `ground_universe` is a `functools.lru_cache` (bounded) on a pure function of the
 frozen, hashable `UniverseKey`; the result is immutable (read-only arrays, tuples, ints), so
 envs share it safely and pickle it by key. No registry or env holds a mutable cache of it;
-each process (e.g. an async vector env worker) grounds once per key, in 0.2-5 s.
+each process (e.g. an async vector env worker) grounds once per key, in 0.2-30 s, unless an
+earlier process stored it on disk (`utamp_gym.env.universe_store`: named by the key and the
+package's contents), which a new process reads instead.
 """
 
 from __future__ import annotations
@@ -35,10 +37,12 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
+from utamp_gym.env import universe_store
 from utamp_gym.env.atoms import parse_atom, scene_atoms, universe_facts
 from utamp_gym.env.geometric import geometric_domain, prune
 from utamp_gym.errors import PddlError, UnknownNameError
@@ -241,7 +245,52 @@ def _uniform_predicates(
 
 @lru_cache(maxsize=16)
 def ground_universe(key: UniverseKey) -> Universe:
-    """Ground the universe of `key` (cached: see the module docstring)."""
+    """The universe of `key`: grounded once per process (cached: see the module docstring),
+    and read from `universe_store` when an earlier process of this package stored it."""
+    stored = universe_store.load(key)
+    if stored is not None:
+        return _from_store(key, *stored)
+    universe = _ground(key)
+    universe_store.save(key, *_to_store(universe))
+    return universe
+
+
+_ARRAYS = ("check_ptr", "check_flat", "static_pre", "static_neg")
+
+
+def _to_store(u: Universe) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    fields = {
+        "actions": list(u.actions), "fluent_atoms": list(u.fluent_atoms),
+        "static_atoms": list(u.static_atoms), "add_bits": [f"{b:x}" for b in u.add_bits],
+        "del_bits": [f"{b:x}" for b in u.del_bits], "roles": [list(r) for r in u.roles],
+        "action_objects": [list(a) for a in u.action_objects],
+    }  # fmt: skip
+    return fields, {name: getattr(u, name) for name in _ARRAYS}
+
+
+def _from_store(
+    key: UniverseKey, fields: dict[str, Any], arrays: dict[str, np.ndarray]
+) -> Universe:
+    for a in arrays.values():
+        a.setflags(write=False)
+    actions, fluent, static = (tuple(fields[k]) for k in ("actions", "fluent_atoms",
+                                                          "static_atoms"))  # fmt: skip
+    return Universe(
+        key=key, domain=universe_domain(key), actions=actions, fluent_atoms=fluent,
+        static_atoms=static, add_bits=tuple(int(b, 16) for b in fields["add_bits"]),
+        del_bits=tuple(int(b, 16) for b in fields["del_bits"]),
+        check_ptr=arrays["check_ptr"], check_flat=arrays["check_flat"],
+        static_pre=arrays["static_pre"], static_neg=arrays["static_neg"],
+        roles=tuple(tuple(r) for r in fields["roles"]),  # type: ignore[misc]
+        action_objects=tuple(tuple(a) for a in fields["action_objects"]),
+        action_index=MappingProxyType({a: i for i, a in enumerate(actions)}),
+        fluent_index=MappingProxyType({a: j for j, a in enumerate(fluent)}),
+        static_index=MappingProxyType({a: j for j, a in enumerate(static)}),
+    )  # fmt: skip
+
+
+def _ground(key: UniverseKey) -> Universe:
+    """Ground the universe of `key` (module docstring)."""
     domain = universe_domain(key)
     fluent_preds = domain.fluent_predicates()
     non_static = fluent_preds | {"="}

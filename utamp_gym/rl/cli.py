@@ -143,10 +143,12 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--interface",
-        default="grounded",
+        default="",
         choices=("grounded", "objects"),
-        help="the env's spaces: the suite's ground actions (default), or object slots with "
-        "the slot-transformer policy (maskable-ppo only; the agent then acts on every suite)",
+        help="the env's spaces: the suite's ground actions, or object slots with the "
+        "slot-transformer policy (maskable-ppo and bc only; the agent then acts on every "
+        "suite); default: the env's own (objects for UTampKitchenProcedural-v0, else grounded; "
+        "grounded for ppo and dqn)",
     )
     p.add_argument(
         "--init-from",

@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 from gymnasium.wrappers import FilterObservation
 
 #: observation entries the RL agents see (None in `make_env` keeps them all)
@@ -27,6 +28,18 @@ OBJECT_OBS_KEYS = (
 )  # fmt: skip
 #: offset of the evaluation seeds from the training seed (distinct RNG streams)
 EVAL_SEED_OFFSET = 10_000
+
+
+def default_interface(env_id: str, algo: str = "maskable-ppo") -> str:
+    """The interface `utamp_gym.rl.train.train` uses unless told: the env's own (its
+    ``interface`` option, as ``gym.make`` has it: ``objects`` for UTampKitchenProcedural-v0),
+    except ``grounded`` for PPO and DQN, which the objects interface cannot train."""
+    from utamp_gym.env.registry import env_definitions
+
+    own = next((d.kwargs.get("interface") for d in env_definitions() if d.id == env_id), None)
+    if algo not in ("maskable-ppo", "bc"):
+        return "grounded"
+    return str(own or "grounded")
 
 
 def make_env(
@@ -54,6 +67,42 @@ def make_env(
     return env
 
 
+def _copied(x: Any) -> Any:
+    """`x` with its arrays, dicts and lists copied (what ``deepcopy`` of an info would give:
+    nothing else in an info is mutable)."""
+    if isinstance(x, np.ndarray):
+        return x.copy()
+    if isinstance(x, dict):
+        return {k: _copied(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_copied(v) for v in x]
+    return x
+
+
+class _Infos(list):  # type: ignore[type-arg]
+    """The info buffer of `_DummyVecEnv`: ``deepcopy`` of it copies only what can change."""
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> list[Any]:
+        return [_copied(info) for info in self]
+
+
+def _dummy_vec_env(fns: list[Callable[[], gym.Env]]) -> Any:
+    """SB3's ``DummyVecEnv``, without the generic ``deepcopy`` of every step's observations and
+    infos (a seventh of a symbolic objects-interface step): the same copies, made directly."""
+    from stable_baselines3.common.vec_env import DummyVecEnv
+    from stable_baselines3.common.vec_env.util import dict_to_obs
+
+    class _DummyVecEnv(DummyVecEnv):
+        def __init__(self, env_fns: list[Callable[[], gym.Env]]) -> None:
+            super().__init__(env_fns)
+            self.buf_infos = _Infos(self.buf_infos)
+
+        def _obs_from_buf(self) -> Any:
+            return dict_to_obs(self.observation_space, _copied(dict(self.buf_obs)))
+
+    return _DummyVecEnv(fns)
+
+
 def make_vec_env(
     env_id: str,
     n_envs: int,
@@ -67,12 +116,12 @@ def make_vec_env(
     The symbolic env steps at >20k/s, so in-process vectorisation is the fast choice there;
     subprocesses only pay off when each step is a physics simulation.
     """
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+    from stable_baselines3.common.vec_env import SubprocVecEnv
 
     fns: list[Callable[[], gym.Env]] = [
         functools.partial(make_env, env_id, monitor=True, **kwargs) for _ in range(n_envs)
     ]
-    vec = SubprocVecEnv(fns, start_method="spawn") if subproc else DummyVecEnv(fns)
+    vec = SubprocVecEnv(fns, start_method="spawn") if subproc else _dummy_vec_env(fns)
     vec.seed(seed)
     return vec
 

@@ -19,7 +19,7 @@ time spent in the env's steps (the simulator in physics grounding).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -52,7 +52,7 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
     (checked on the symbolic env: both groundings share the spaces); returns its metadata."""
     path = model_path(method)
     meta = read_meta(path)
-    check_model(meta, path, suite=suite)
+    check_model(meta, path, suite=suite, same_actions=shares_actions(meta, suite))
     if spaces:
         import gymnasium as gym
 
@@ -61,7 +61,7 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
         register_envs()  # explicitly: a worker process may have skipped it on import
 
         try:
-            env = gym.make(meta.env_id, grounding="symbolic", **meta.env_options)
+            env = gym.make(meta.env_id, grounding="symbolic", **meta.env_kwargs)
         except (gym.error.Error, ValueError) as exc:
             raise ModelError(f"{path}: cannot make its env {meta.env_id} ({exc})") from None
         check_spaces(meta, path, int(env.action_space.n), n_fluents(env))  # type: ignore[attr-defined]
@@ -69,22 +69,62 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
     return meta
 
 
+def _suite_of(scene: str) -> str | None:
+    """The suite (or procedural split) a scene name belongs to, if any."""
+    from utamp_gym import suites
+
+    every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
+    return max((s for s in every if scene.startswith(f"{s}/")), key=len, default=None)
+
+
+def _suite_choice(suite: str) -> dict[str, Any]:
+    """The env options that select `suite` (a procedural env takes its split, not a suite)."""
+    from utamp_gym import suites
+
+    if suite in getattr(suites, "PROCEDURAL_SUITES", ()):
+        return {"suite": None, "split": suite.rsplit("/", 1)[1]}
+    return {"suite": suite, "split": None}
+
+
+def shares_actions(meta: ModelMeta, suite: str | None) -> bool:
+    """Whether a grounded model's action ids mean the same actions on `suite` as in training:
+    its env on that suite grounds the same action universe (all procedural-v1 splits share
+    one; an objects-interface model's ids mean the same everywhere). Decided from the env
+    options alone, without grounding anything."""
+    if suite is None or suite == meta.suite or meta.env_options.get("interface") == "objects":
+        return True
+    import gymnasium as gym
+
+    from utamp_gym.env.options import EnvOptions
+    from utamp_gym.env.registry import register_envs
+
+    register_envs()
+    try:
+        spec = gym.spec(meta.env_id)
+    except gym.error.Error:
+        return False
+    base = {"suite": None, "objects": ("base",), **(spec.kwargs or {}), **meta.env_options}
+    base.pop("interface", None)
+    allowed = {f.name for f in fields(EnvOptions)}
+    try:
+        trained = EnvOptions(**{k: v for k, v in base.items() if k in allowed})
+        there = EnvOptions(**{k: v for k, v in {**base, **_suite_choice(suite)}.items()
+                              if k in allowed})  # fmt: skip
+    except (ValueError, TypeError):
+        return False
+    return trained.universe_key() == there.universe_key()
+
+
 def suite_options(scene: str) -> dict[str, Any]:
     """Env options that put `scene`'s suite under an objects-interface agent (it acts on any
     suite): the suite and, as pose rows, every object name of the suite's scenes."""
     from utamp_gym import suites
 
-    every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
-    suite = max((s for s in every if scene.startswith(f"{s}/")), key=len, default=None)
+    suite = _suite_of(scene)
     if suite is None:
         return {}
     names = list(dict.fromkeys(n for s in suites.suite_scenes(suite) for n in s.object_names))
-    procedural = getattr(suites, "PROCEDURAL_SUITES", None)
-    if procedural is None:
-        return {"suite": suite, "objects": names}
-    if suite in procedural:  # a procedural env takes its split, not a suite
-        return {"suite": None, "split": suite.rsplit("/", 1)[1], "objects": names}
-    return {"suite": suite, "split": None, "objects": names}
+    return {**_suite_choice(suite), "objects": names}
 
 
 def step_budget(n_objects: int) -> int:
@@ -133,9 +173,14 @@ def run_rl_episode(
     path = model_path(method)
     meta = check_rl_method(method, spaces=False)  # checked below on the env itself
     policy = _load(str(path.resolve()), path.stat().st_mtime_ns)
-    options: dict[str, Any] = {**meta.env_options, "disturbance": disturbance}
+    options: dict[str, Any] = {**meta.env_kwargs, "disturbance": disturbance}
     if meta.env_options.get("interface") == "objects":
         options.update(suite_options(scene))
+    else:  # a grounded model: on another suite of its action universe (checked), that suite
+        suite = _suite_of(scene)
+        check_model(meta, path, suite=suite, same_actions=shares_actions(meta, suite))
+        if suite is not None and suite != meta.suite:
+            options.update(_suite_choice(suite))
     if grounding == "physics" and pose_noise is not None:
         options["pose_noise"] = pose_noise
     env = gym.make(

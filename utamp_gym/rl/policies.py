@@ -19,6 +19,7 @@ from sb3_contrib.common.maskable.policies import MaskableMultiInputActorCriticPo
 from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 from stable_baselines3.dqn.policies import MultiInputPolicy as DQNMultiInputPolicy
 
+from utamp_gym.rl.distributions import use_fast_masked
 from utamp_gym.rl.saved import trained_entries
 
 
@@ -38,6 +39,10 @@ class MaskableKeysPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
     """MaskablePPO's multi-input policy on the trained observation entries only."""
 
     utamp_algo = "maskable-ppo"  # SB3 writes class attributes into the zip's "data"
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        use_fast_masked(self)  # the same distribution, normalised without a slow path
 
 
 class KeysActorCriticPolicy(_TrainedKeys, MultiInputActorCriticPolicy):

@@ -240,7 +240,7 @@ def evaluate_rl(
     kwargs = {
         "reward_shaping": False,
         "terminate_on_failure": False,
-        **(dict(meta.env_options) if meta is not None else {}),
+        **(meta.env_kwargs if meta is not None else {}),
         **(env_kwargs or {}),
     }
     env = gym.make(env_id, grounding=grounding, num_objects=num_objects, **kwargs)

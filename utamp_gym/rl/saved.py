@@ -50,6 +50,12 @@ class ModelMeta:
     def masks(self) -> str:
         return str(self.env_options.get("masks", "affordances"))
 
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """`env_options` with the interface explicit: a model saved without one is grounded
+        (the env id's own default may be the objects interface)."""
+        return {"interface": "grounded", **self.env_options}
+
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
         data["obs_keys"], data["env_options"] = list(self.obs_keys), dict(self.env_options)
@@ -143,15 +149,19 @@ def trained_entries(keys: Sequence[str], observation: Mapping[str, Any]) -> dict
     )
 
 
-def check_model(meta: ModelMeta, path: str | Path, *, suite: str | None = None) -> None:
+def check_model(
+    meta: ModelMeta, path: str | Path, *, suite: str | None = None, same_actions: bool = False
+) -> None:
     """Raise `ModelError` if the model cannot act on the suite's env (`suite` None: any; an
-    agent of the objects interface acts on every suite)."""
-    if meta.env_options.get("interface") == "objects":
+    agent of the objects interface acts on every suite, a grounded one on every suite whose
+    action universe is its own: `same_actions`, e.g. the splits of procedural-v1)."""
+    if meta.env_options.get("interface") == "objects" or same_actions:
         return
     if suite is not None and meta.suite != suite:
         raise ModelError(
-            f"{path} was trained on {meta.env_id} (suite '{meta.suite}'), but the evaluation "
-            f"runs the '{suite}' suite; its action ids would mean other actions"
+            f"{path} was trained on {meta.env_id} (suite '{meta.suite}'), whose action ids "
+            f"mean other actions than the '{suite}' suite's: evaluate it on '{meta.suite}', "
+            "or train with --interface objects (one policy for every suite)"
         )
 
 

@@ -37,10 +37,15 @@ from utamp_gym.env.objects import (
     N_ATTRIBUTES,
     N_ENTITIES,
 )
+from utamp_gym.rl.distributions import use_fast_masked
 from utamp_gym.rl.policies import _TrainedKeys
 from utamp_gym.scene.geometry import PARTS, SIDES
 
-D_MODEL = 64
+D_MODEL = 64  # the width of a slot policy saved without ``features_extractor_kwargs``
+#: the width `utamp train` builds (`train_policy_kwargs`): half of `D_MODEL` trains the
+#: objects interface several times faster per env step (benchmarks/train_speed.py) and learns
+#: as much per env step (benchmarks/train_speed_learning.py)
+TRAIN_D_MODEL = 32
 N_HEADS = 4
 N_LAYERS = 2
 _K, _R, _S, _M, _G = MAX_OBJECTS, MAX_REGIONS, MAX_SPACES, MAX_MEMBERS, len(GRASPS)
@@ -61,15 +66,30 @@ class _Block(nn.Module):
         self.bias = nn.Linear(pair_width, heads)
         self.mlp = nn.Sequential(nn.Linear(d, 2 * d), nn.ReLU(), nn.Linear(2 * d, d))
 
-    def forward(self, x: th.Tensor, pairs: th.Tensor, keep: th.Tensor) -> th.Tensor:
+    def forward(self, x: th.Tensor, bias: th.Tensor) -> th.Tensor:
+        """`bias` (b, heads, n, n): this block's pair bias, absent keys at −1e9 (`_pair_bias`)."""
         b, n, d = x.shape
-        q, k, v = self.qkv(self.norm1(x)).view(b, n, 3, self.heads, self.dh).unbind(2)
-        scores = th.einsum("bihd,bjhd->bhij", q, k) / math.sqrt(self.dh)
-        scores = scores + self.bias(pairs).permute(0, 3, 1, 2)
-        scores = scores.masked_fill(~keep[:, None, None, :], -1e9)
-        att = th.einsum("bhij,bjhd->bihd", scores.softmax(-1), v).reshape(b, n, d)
+        qkv = self.qkv(self.norm1(x)).view(b, n, 3, self.heads, self.dh).permute(2, 0, 3, 1, 4)
+        q, k, v = qkv.unbind(0)  # (b, heads, n, dh)
+        scores = (q @ k.transpose(-1, -2)) / math.sqrt(self.dh) + bias
+        att = (scores.softmax(-1) @ v).transpose(1, 2).reshape(b, n, d)
         x = x + self.out(att)
         return x + self.mlp(self.norm2(x))
+
+
+def _pair_bias(blocks: nn.ModuleList, contact: th.Tensor, keep: th.Tensor) -> th.Tensor:
+    """Every block's attention bias at once: ``block.bias`` of the pair features
+    ``[contact[i, j], contact[j, i]]``, computed from `contact` without building the pairs
+    (the two halves of the weight apply to `contact` and to its transpose), with the keys of
+    absent entities at −1e9. Returns (b, blocks · heads, n, n)."""
+    weight = th.cat([blk.bias.weight for blk in blocks])  # (blocks · heads, 2 · parts)
+    offset = th.cat([blk.bias.bias for blk in blocks])
+    p = contact.shape[-1]
+    direct = contact @ weight[:, :p].T  # (b, i, j, blocks · heads)
+    reverse = contact @ weight[:, p:].T
+    bias = direct + reverse.transpose(1, 2) + offset
+    absent = (~keep)[:, None, None, :] * -1e9
+    return bias.permute(0, 3, 1, 2) + absent
 
 
 class SlotEncoder(BaseFeaturesExtractor):
@@ -103,10 +123,9 @@ class SlotEncoder(BaseFeaturesExtractor):
                        self.kind[2].expand(_S, -1)])  # fmt: skip
         x = x + kind
         keep = th.cat([obs["present"], obs["regions"][..., 0], obs["spaces"][..., 0]], 1) > 0.5
-        contact = obs["contact"]
-        pairs = th.cat([contact, contact.transpose(1, 2)], -1)
-        for block in self.blocks:
-            x = block(x, pairs, keep)
+        bias = _pair_bias(self.blocks, obs["contact"], keep)
+        for block, block_bias in zip(self.blocks, bias.split(N_HEADS, 1), strict=True):
+            x = block(x, block_bias)
         x = self.norm(x) * keep[..., None]
         pooled = x.sum(1) / keep.sum(1, keepdim=True).clamp(min=1)
         return th.cat([x.reshape(b, -1), pooled], 1)
@@ -117,8 +136,28 @@ def _split(features: th.Tensor, d: int) -> tuple[th.Tensor, th.Tensor]:
     return features[:, : N_ENTITIES * d].reshape(b, N_ENTITIES, d), features[:, N_ENTITIES * d :]
 
 
+def _first_layer(layer: nn.Linear, *parts: th.Tensor) -> th.Tensor:
+    """``layer(cat(parts, -1))`` without the concatenation: each part through its block of the
+    weight (the parts broadcast against each other only after the product)."""
+    out = None
+    start = 0
+    for x in parts:
+        w = layer.weight[:, start : start + x.shape[-1]]
+        start += x.shape[-1]
+        y = x @ w.T
+        out = y if out is None else out + y
+    assert out is not None and start == layer.in_features
+    return out + layer.bias
+
+
 class SlotActionHead(nn.Module):
-    """Logits of every objects-interface index from the tokens it names (module docstring)."""
+    """Logits of every objects-interface index from the tokens it names (module docstring).
+
+    Each head's first layer reads a concatenation of tokens (object, support or space, their
+    product, the pooled context); it is computed per token and broadcast over the pairs
+    (`_first_layer`), the same function as on the concatenation at a fraction of the cost:
+    a place scores K·(K+R) pairs, but only the product term is per pair.
+    """
 
     def __init__(self, d: int) -> None:
         super().__init__()
@@ -129,18 +168,16 @@ class SlotActionHead(nn.Module):
 
     def forward(self, features: th.Tensor) -> th.Tensor:
         x, g = _split(features, self.d)
-        b, d = x.shape[0], self.d
+        b = x.shape[0]
         obj, supports, space = x[:, :_K], x[:, : _K + _R], x[:, _K + _R :]
-        ctx = g[:, None].expand(b, _K, d)
-        pick = self.pick(th.cat([obj, ctx], -1)).reshape(b, -1)  # (i, m, g)
-        oi = obj[:, :, None].expand(b, _K, _K + _R, d)
-        sj = supports[:, None].expand(b, _K, _K + _R, d)
-        gp = g[:, None, None].expand(b, _K, _K + _R, d)
-        place = self.place(th.cat([oi, sj, oi * sj, gp], -1)).reshape(b, -1)  # (i, j)
-        oi = obj[:, :, None].expand(b, _K, _S, d)
-        sp = space[:, None].expand(b, _K, _S, d)
-        gs = g[:, None, None].expand(b, _K, _S, d)
-        slide = self.slide(th.cat([oi, sp, gs], -1))  # (i, s, m*g) -> (i, m, g, s)
+        ctx = g[:, None]  # (b, 1, d)
+        hidden = _first_layer(self.pick[0], obj, ctx).relu()
+        pick = self.pick[2](hidden).reshape(b, -1)  # (i, m, g)
+        oi, sj = obj[:, :, None], supports[:, None]  # (b, K, 1, d), (b, 1, K + R, d)
+        hidden = _first_layer(self.place[0], oi, sj, oi * sj, ctx[:, None]).relu()
+        place = self.place[2](hidden).reshape(b, -1)  # (i, j)
+        hidden = _first_layer(self.slide[0], oi, space[:, None], ctx[:, None]).relu()
+        slide = self.slide[2](hidden)  # (i, s, m*g) -> (i, m, g, s)
         slide = slide.permute(0, 1, 3, 2).reshape(b, -1)
         logits = th.cat([pick, place, slide], 1)
         assert logits.shape[1] == N_ACTIONS
@@ -157,6 +194,12 @@ class _Value(nn.Module):
         return self.net(_split(features, self.d)[1])
 
 
+def train_policy_kwargs() -> dict[str, Any]:
+    """The slot policy's ``policy_kwargs`` for `utamp train` (saved with the model, so it
+    loads at the width it was trained with)."""
+    return {"features_extractor_kwargs": {"d_model": TRAIN_D_MODEL}}
+
+
 class SlotPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
     """MaskablePPO's policy over the objects interface: `SlotEncoder` and the slot heads."""
 
@@ -166,6 +209,7 @@ class SlotPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
         kwargs.setdefault("features_extractor_class", SlotEncoder)
         kwargs["net_arch"] = []  # the heads read the tokens themselves
         super().__init__(*args, **kwargs)
+        use_fast_masked(self)  # the same distribution, normalised without a slow path
 
     def _build(self, lr_schedule: Any) -> None:
         super()._build(lr_schedule)

@@ -44,6 +44,7 @@ from utamp_gym.rl.envs import (
     DEFAULT_OBS_KEYS,
     EVAL_SEED_OFFSET,
     OBJECT_OBS_KEYS,
+    default_interface,
     make_env,
     make_vec_env,
     n_fluents,
@@ -66,8 +67,9 @@ class TrainConfig:
     `num_objects` None trains on every scene of the suite (2–5 objects); `hyperparams`
     overrides `default_hyperparams`; `obs_keys` are the observation entries the agent sees;
     `interface` is the env option (``objects``: MaskablePPO with `utamp_gym.rl.slots.SlotPolicy`
-    over all of the objects interface's entries); `init_from` is a model zip whose policy
-    weights the run starts from (fine-tuning a behaviour-cloned policy).
+    over all of the objects interface's entries; ``""``: the env's own, `default_interface`);
+    `init_from` is a model zip whose policy weights the run starts from (fine-tuning a
+    behaviour-cloned policy).
     """
 
     env_id: str = "UTampKitchen-v0"
@@ -87,12 +89,15 @@ class TrainConfig:
     terminate_on_failure: bool = False
     obs_keys: tuple[str, ...] = DEFAULT_OBS_KEYS
     hyperparams: dict[str, Any] = field(default_factory=dict)
-    interface: str = "grounded"
+    interface: str = ""
     init_from: str = ""
     demos: str = ""
 
     def __post_init__(self) -> None:
         from utamp_gym.env.options import INTERFACES
+
+        if not self.interface:
+            object.__setattr__(self, "interface", default_interface(self.env_id, self.algo))
 
         if self.interface not in INTERFACES:
             raise ValueError(f"unknown interface {self.interface!r}; valid: grounded, objects")
@@ -143,8 +148,11 @@ class TrainResult:
 
 def default_hyperparams(algo: str, n_envs: int, interface: str = "grounded") -> dict[str, Any]:
     """The algorithm settings used unless `TrainConfig.hyperparams` overrides them (the slot
-    policy of the objects interface sizes its own network: `utamp_gym.rl.slots`)."""
-    net: dict[str, Any] = {"net_arch": [128, 128]} if interface == "grounded" else {}
+    policy of the objects interface at `utamp_gym.rl.slots.train_policy_kwargs`)."""
+    from utamp_gym.rl.slots import train_policy_kwargs
+
+    objects = interface == "objects"
+    net: dict[str, Any] = train_policy_kwargs() if objects else {"net_arch": [128, 128]}
     if algo == "dqn":
         return {
             "learning_rate": 1e-4, "buffer_size": 100_000, "learning_starts": 1_000,
@@ -161,9 +169,7 @@ def default_hyperparams(algo: str, n_envs: int, interface: str = "grounded") -> 
 def model_meta(config: TrainConfig, env: Any) -> ModelMeta:
     """The `ModelMeta` of a run, read from its (unfiltered) evaluation env."""
     kitchen = env.unwrapped
-    options: dict[str, Any] = {"masks": config.masks}
-    if config.interface != "grounded":
-        options["interface"] = config.interface
+    options: dict[str, Any] = {"masks": config.masks, "interface": config.interface}
     return ModelMeta(
         env_id=config.env_id,
         suite=str(kitchen.options.suite),
@@ -184,9 +190,10 @@ def save_model(model: Any, path: str | Path, meta: ModelMeta) -> None:
 
 def eval_episodes_of(config: TrainConfig) -> list[tuple[str, int]]:
     """The (scene, seed) pairs of every evaluation: the env's scenes in turn."""
-    # every observation entry: the env's default interface may have no ``symbolic`` entry
+    # every observation entry: the env's default interface may have no ``symbolic`` entry;
+    # the run's masks, so that the env reuses the run's (cached) action universe
     env = make_env(config.env_id, grounding="symbolic", num_objects=config.num_objects,
-                   obs_keys=None)  # fmt: skip
+                   obs_keys=None, masks=config.masks)  # fmt: skip
     names = [s.name for s in env.unwrapped.scenes]  # type: ignore[attr-defined]
     env.close()
     base = config.seed + EVAL_SEED_OFFSET
@@ -252,6 +259,11 @@ def train(
     meta = model_meta(config, eval_env)
     save = functools.partial(save_model, meta=meta)
     hyper = {**default_hyperparams(algo, n_envs, config.interface), **config.hyperparams}
+    start_from = None
+    if config.init_from:  # fine-tuning: the saved policy's network, then its weights
+        start_from = algo_class(algo).load(config.init_from, device="cpu")
+        if "policy_kwargs" not in config.hyperparams:
+            hyper["policy_kwargs"] = dict(start_from.policy_kwargs)
     policy_class = POLICY_CLASSES[algo]
     if config.interface == "objects":
         from utamp_gym.rl.slots import SlotPolicy
@@ -260,8 +272,7 @@ def train(
     model = algo_class(algo)(policy_class, vec, seed=seed, verbose=verbose, **hyper)
     # given no logger, SB3 makes an empty /tmp/SB3-<time> folder per run: log to stdout only
     model.set_logger(Logger(None, [HumanOutputFormat(sys.stdout)] if verbose else []))
-    if config.init_from:  # fine-tuning: start from a saved policy (e.g. behaviour cloning)
-        start_from = algo_class(algo).load(config.init_from, device="cpu")
+    if start_from is not None:  # fine-tuning: start from a saved policy (e.g. behaviour cloning)
         model.policy.load_state_dict(start_from.policy.state_dict())
     evaluator = PeriodicEval(
         eval_env, eval_episodes_of(config), out, eval_every, save=save,
