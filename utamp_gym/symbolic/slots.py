@@ -48,19 +48,33 @@ def slot_spots(scene: Scene, slot: Slot) -> tuple[tuple[float, float], ...]:
     return _spots(usable_region(scene, slot), (float(slot.position[0]), float(slot.position[1])))
 
 
+def _steps(p: float, lo: float, hi: float, n: int) -> list[tuple[int, float]]:
+    """(i, p + i * SPOT_STEP) for i in -n..n, ascending, of the points within [lo, hi]."""
+    out = []
+    for i in range(-n, n + 1):
+        v = p + i * SPOT_STEP
+        if lo - 1e-9 <= v <= hi + 1e-9:
+            out.append((i, v))
+    return out
+
+
+def _grid_size(region: Box) -> int:
+    """How many `SPOT_STEP`s the grid reaches out from the position along each axis."""
+    size = math.hypot(region.max[0] - region.min[0], region.max[1] - region.min[1])
+    return int(size / SPOT_STEP) + 1
+
+
 @lru_cache(maxsize=64)
 def _spots(region: Box, position: tuple[float, float]) -> tuple[tuple[float, float], ...]:
     px, py = position
-    size = math.hypot(region.max[0] - region.min[0], region.max[1] - region.min[1])
-    n = int(size / SPOT_STEP) + 1
-    spots = []
-    for i in range(-n, n + 1):
-        for j in range(-n, n + 1):
-            x, y = px + i * SPOT_STEP, py + j * SPOT_STEP
-            if (i or j) and all(
-                region.min[k] - 1e-9 <= v <= region.max[k] + 1e-9 for k, v in ((0, x), (1, y))
-            ):
-                spots.append((round(math.hypot(i, j) * SPOT_STEP, 6), x, (x, y)))
+    n = _grid_size(region)
+    xs = _steps(px, region.min[0], region.max[0], n)
+    ys = _steps(py, region.min[1], region.max[1], n)
+    # a grid point lies in the region when each of its coordinates does: the axes' points in
+    # ascending order, i outer, j inner (the stable sort keeps this order between ties)
+    spots = [
+        (round(math.hypot(i, j) * SPOT_STEP, 6), x, (x, y)) for i, x in xs for j, y in ys if i or j
+    ]
     spots.sort(key=lambda s: (s[0], s[1]))
     return ((px, py), *(s[2] for s in spots))
 
@@ -104,15 +118,28 @@ def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
     sign = 1.0 if upright else -1.0  # a half turn about x mirrors y
     centres = [m.box.center_xy for m in t.members.values()]  # plain floats: no numpy here
     members = [(mx - cx, sign * my - cy) for mx, my in centres]
-    for x, y in slot_spots(scene, slot):
-        foot = Box((x + box.min[0] - cx, y + box.min[1] - cy, 0.0),
-                   (x + box.max[0] - cx, y + box.max[1] - cy, 0.0))  # fmt: skip
-        if (
-            region.contains_xy(foot, tol=1e-6)
-            and beyond_reach_cm((x + mx, y + my) for mx, my in members) == 0
-        ):
-            return True
-    return False
+
+    def reach(x: float, y: float) -> bool:
+        return beyond_reach_cm((x + mx, y + my) for mx, my in members) == 0
+
+    fx = (box.min[0], box.max[0], cx, region.min[0], region.max[0])
+    fy = (box.min[1], box.max[1], cy, region.min[1], region.max[1])
+    # `slot_spots` in another order: the position, then the grid points in the region. The
+    # footprint lies inside the region (`Box.contains_xy`, tol 1e-6) when it does along x
+    # and along y, so of the grid only the points whose x and y both pass are tried.
+    px, py = float(slot.position[0]), float(slot.position[1])
+    if _inside(px, *fx) and _inside(py, *fy) and reach(px, py):
+        return True
+    n = _grid_size(region)
+    xs = [x for _, x in _steps(px, region.min[0], region.max[0], n) if _inside(x, *fx)]
+    ys = [y for _, y in _steps(py, region.min[1], region.max[1], n) if _inside(y, *fy)]
+    return any(reach(x, y) for x in xs for y in ys)
+
+
+def _inside(v: float, lo: float, hi: float, c: float, r_lo: float, r_hi: float) -> bool:
+    """Along one axis, whether the footprint [lo, hi] of a box centred on `c`, moved to
+    centre on `v`, lies within the region [r_lo, r_hi] (`Box.contains_xy`, tol 1e-6)."""
+    return r_lo - 1e-6 <= v + lo - c and v + hi - c <= r_hi + 1e-6
 
 
 __all__ = [
