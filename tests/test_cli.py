@@ -183,6 +183,8 @@ def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
     assert not {m for m in imported if m.split(".")[0] in heavy}
     # nor the dataclasses machinery (it imports inspect, and each class execs its methods)
     assert not imported & {"dataclasses", "inspect"}
+    # nor tempfile (shutil, lzma, bz2, random): only an --out probe needs it
+    assert not imported & {"tempfile", "shutil"}
 
 
 def test_help_lists_every_subcommand_and_each_subcommand_help_is_complete(capsys) -> None:

@@ -14,6 +14,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from collections import deque
 from pathlib import Path
 
@@ -262,20 +263,95 @@ def test_timeout_kills_driver_process_group(tmp_path):
             assert not (int(fields[2]) == pgid and fields[0] != "Z"), "driver group survived"
 
 
-def test_interrupt_kills_search_process():
-    # a real Ctrl-C (SIGINT to this process) while the search binary runs. Python leaves
-    # SIGINT ignored if it started ignored (a background job of a non-interactive shell,
-    # as under `nohup make test &`), so install the interactive handler for the test.
+def live_children() -> set[int]:
+    """Pids of this process's live (non-zombie) children, of any command."""
+    found = set()
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == os.getpid() and fields[0] != "Z":
+                found.add(int(entry.name))
+    return found
+
+
+@pytest.fixture
+def ctrl_c():
+    """Python's own SIGINT handler for the test. Python leaves SIGINT ignored if it started
+    ignored (a background job of a non-interactive shell, as under `nohup make test &`)."""
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_interrupt_kills_search_process(ctrl_c):
+    """A real Ctrl-C (SIGINT to this process) once the search binary runs. It is sent when
+    the search is seen, not after a fixed delay: on a machine loaded to 15-19 a delay of
+    0.5 s could fall anywhere between grounding and search. The limit is far off, so a lost
+    interrupt fails as a time-out."""
+    sent: list[float] = []
+    started = threading.Event()
+
+    def interrupt_once_searching() -> None:
+        limit = time.monotonic() + 60
+        while not downward_children() and time.monotonic() < limit and not started.is_set():
+            time.sleep(0.005)
+        if downward_children():
+            sent.append(time.monotonic())
+            os.kill(os.getpid(), signal.SIGINT)
+
+    watcher = threading.Thread(target=interrupt_once_searching, daemon=True)
+    watcher.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            fd.solve(DOMAIN, BIG_PROBLEM, search="astar-blind", timeout=30)
+            fd.solve(DOMAIN, BIG_PROBLEM, search="astar-blind", timeout=120)
+            started.set()  # only if it returned
     finally:
-        timer.cancel()
-        signal.signal(signal.SIGINT, previous)
+        started.set()
+        watcher.join()
+    assert sent, "the search never started"
+    assert time.monotonic() - sent[0] < 20  # the interrupt, not the time limit, ended it
     assert downward_children() == []
+
+
+class _InterruptedStart(subprocess.Popen):
+    """A `Popen` hit by Ctrl-C just after it forked, before it returns to its caller."""
+
+    def _execute_child(self, *args, **kwargs):
+        super()._execute_child(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)
+
+
+def test_interrupt_while_a_planner_process_starts_kills_it(ctrl_c, monkeypatch, tmp_path):
+    """Raised inside `Popen`, the KeyboardInterrupt used to leave the child unkilled (its pid
+    went with the exception): the driver searched on for minutes."""
+    (tmp_path / "domain.pddl").write_text(DOMAIN)
+    (tmp_path / "big.pddl").write_text(BIG_PROBLEM)
+    before = live_children()
+    monkeypatch.setattr(fd.subprocess, "Popen", _InterruptedStart)
+    with pytest.raises(KeyboardInterrupt):
+        fd.solve_with_driver(tmp_path / "domain.pddl", tmp_path / "big.pddl", timeout=60)
+    with pytest.raises(KeyboardInterrupt):
+        fd.solve(DOMAIN, BIG_PROBLEM, search="astar-blind", timeout=60)
+    assert live_children() <= before
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_interrupt_handled_by_another_thread_ends_the_wait(ctrl_c):
+    """A SIGINT may be taken by any thread that does not block it (the main thread blocks
+    every signal while `subprocess` forks); its Python handler then runs in the main thread
+    only when that thread next runs Python code, which the wait on a silent planner process
+    used to postpone to the process's end or the time limit."""
+    threading.Timer(0.3, lambda: signal.pthread_kill(threading.get_ident(), signal.SIGINT)).start()
+    start = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        fd._run(["sleep", "40"], stdin=None, timeout=40, what="sleep", limit=40)
+    assert time.monotonic() - start < 20
+    assert not any(
+        Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"sleep") for pid in live_children()
+    )
 
 
 def test_tiny_budget_is_used_up_by_translation():

@@ -8,7 +8,6 @@ prints as one line naming the path (exit code 2).
 
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 
 from utamp_gym.errors import UtampError
@@ -52,6 +51,10 @@ def _writable_dir(p: Path, named: Path, what: str) -> Path:
     if blocker is not None:
         where = "is a file" if blocker == named else f"lies under {blocker}, which is a file"
         raise OutputPathError(f"{what}: {where}, not a directory")
+    # here, not at the top: `utamp plan` loads this module on every run, --out or not, and
+    # tempfile brings shutil, lzma, bz2 and random
+    import tempfile
+
     try:
         p.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=p):

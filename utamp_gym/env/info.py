@@ -38,6 +38,7 @@ unchanged): before, ``action``, ``failure_reason`` and ``fault`` were None when 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -79,7 +80,15 @@ def split_atoms(text: str) -> list[str]:
 
 def anomalies_info(objects: Iterable[str], anomalies: Mapping[str, str]) -> dict[str, str]:
     """``info["anomalies"]``: every object of the scene -> its anomaly (``""``: none)."""
+    if not anomalies:  # every step of symbolic grounding
+        return _no_anomalies(tuple(objects)).copy()
     return {name: str(anomalies.get(name, "")) for name in objects}
+
+
+@lru_cache(maxsize=1024)
+def _no_anomalies(objects: tuple[str, ...]) -> dict[str, str]:
+    """``info["anomalies"]`` without any (copied by the caller: copying beats building)."""
+    return dict.fromkeys(objects, "")
 
 
 def step_info(

@@ -2,10 +2,14 @@
 
 Why: this is the env's fast path, and on small arrays numpy's per-call overhead, not the
 arithmetic, dominates. So the state is a Python int (bit j = fluent atom j; effects are two
-int operations) and the mask over *all* actions is a handful of numpy calls: unpack the bits
-``[s, 1 - s]``, gather every op's fluent literals, `np.add.reduceat` them into per-op counts
-of violated literals, compare with 0. There is no Python loop over actions per step. Ops
-whose static precondition fails in the episode's scene (fixed at `reset`) are reduced to one
+int operations) and the mask over *all* actions is a handful of numpy calls: the bits
+``[s, 1 - s]`` as 64-bit words, each op's fluent literals as bits of the same words (an op
+applies when none of its literals' bits is set), AND, OR over the words, compare with 0.
+When those words outnumber the ops' literals (the procedural universe: 10 words x 3,770
+ops against 31,000 literals), the bits are unpacked instead, every op's literals gathered
+and `np.add.reduceat` counts the violated ones (on the kitchen universes that took a third
+more than the words). There is no Python loop over actions per step. Ops whose static
+precondition fails in the episode's scene (fixed at `reset`) are reduced to one
 always-violated literal. Explaining a failure walks one op's precondition in Python, which
 only happens on a failing step.
 
@@ -28,6 +32,22 @@ from utamp_gym.env.universe import Universe, ground_universe
 MASK_MODES = ("affordances", "geometric", "none")
 
 
+_WORD = np.dtype("<u8")
+#: every op's fluent literals: (n_words, n_ops) words, or (literal bits, row starts)
+Checks = np.ndarray | tuple[np.ndarray, np.ndarray]
+
+
+def _words(flat: np.ndarray, ptr: np.ndarray, n_words: int) -> np.ndarray:
+    """(n_words, n_ops) words: bit b of word w of op i set when op i has a literal on the
+    extended bit ``64 w + b`` (`flat`, rows starting at `ptr`, the last entry its end)."""
+    lengths = np.diff(ptr)
+    row = np.repeat(np.arange(len(lengths)), lengths)
+    out = np.zeros((n_words, len(lengths)), _WORD)
+    bits = np.left_shift(np.uint64(1), (flat % 64).astype(np.uint64))
+    np.bitwise_or.at(out, (flat // 64, row), bits)
+    return out
+
+
 class SymbolicState:
     """Fluent state over `universe.fluent_atoms`, the per-episode static filter and the mask."""
 
@@ -41,13 +61,14 @@ class SymbolicState:
         self.bits = 0
         self._goal = 0
         self._invert = (1 << half) - 1
-        self._nbytes = 2 * half // 8
+        self._nbytes = 8 * -(-2 * half // 64)  # [s, 1 - s] in whole 64-bit words
         self._static: frozenset[str] = frozenset()
-        self._ptr = universe.check_ptr[:-1]
-        self._flat = universe.check_flat
-        self._ext = np.zeros(2 * half, np.intp)
+        n_words = self._nbytes // 8
+        self._by_words = n_words * universe.n_actions <= len(universe.check_flat)
+        self._literals = self._checks(universe.check_flat, universe.check_ptr)
+        self._hits = np.empty((n_words, universe.n_actions) if self._by_words else 0, _WORD)
         self._mask = np.zeros(universe.n_actions, bool)
-        self._tables: SceneCache[tuple[np.ndarray, np.ndarray]] = SceneCache()
+        self._tables: SceneCache[Checks] = SceneCache()
         self._present = np.zeros(universe.n_actions, bool)  # masks "none": objects in scene
         self._presence: SceneCache[np.ndarray] = SceneCache()
         self.unrepresented: tuple[str, ...] = ()  # perceived atoms outside the universe
@@ -60,9 +81,9 @@ class SymbolicState:
         """
         static = atoms.static
         if cache_key is None:
-            self._flat, self._ptr = self._table(static)
+            self._literals = self._table(static)
         else:
-            self._flat, self._ptr = self._tables.get(cache_key, lambda: self._table(static))
+            self._literals = self._tables.get(cache_key, lambda: self._table(static))
         self._static = static
         if self.masks == "none":
             if cache_key is None:
@@ -82,7 +103,7 @@ class SymbolicState:
         are left out (`unrepresented` lists them).
         """
         if static != self._static:
-            self._flat, self._ptr = self._table(static)
+            self._literals = self._table(static)
             self._static = static
         index = self.universe.fluent_index
         bits, extra = 0, []
@@ -95,9 +116,9 @@ class SymbolicState:
         self.bits, self.unrepresented = bits, tuple(sorted(extra))
         self._refresh()
 
-    def _table(self, static: frozenset[str]) -> tuple[np.ndarray, np.ndarray]:
-        """(flat literal indices, row starts): statically impossible ops get one literal on an
-        always-1 bit (the inverted pad bit)."""
+    def _table(self, static: frozenset[str]) -> Checks:
+        """Every op's literals as words (`_words`): statically impossible ops get one literal
+        on an always-1 bit (the inverted pad bit)."""
         u = self.universe
         ok = u.static_ok(u.pack_static(static))
         lengths = np.where(ok, np.diff(u.check_ptr), 1)
@@ -106,7 +127,12 @@ class SymbolicState:
         row = np.repeat(np.arange(len(lengths)), lengths)
         src = u.check_ptr[row] + (np.arange(ptr[-1]) - ptr[row])
         flat = np.where(ok[row], u.check_flat[src], u.half + len(u.fluent_atoms))
-        return flat, ptr[:-1]
+        return self._checks(flat, ptr)
+
+    def _checks(self, flat: np.ndarray, ptr: np.ndarray) -> Checks:
+        """The ops' literals (`flat`, rows starting at `ptr`, its last entry the end) as
+        `_refresh` reads them: words (`_words`), or the literals and the row starts."""
+        return _words(flat, ptr, self._nbytes // 8) if self._by_words else (flat, ptr[:-1])
 
     def _objects_present(self, static: frozenset[str]) -> np.ndarray:
         """Read-only bool array: the ops all of whose scene symbols are in the scene (every
@@ -122,9 +148,14 @@ class SymbolicState:
 
     def _refresh(self) -> None:
         x = self.bits | ((~self.bits & self._invert) << self.universe.half)
-        raw = np.frombuffer(x.to_bytes(self._nbytes, "little"), np.uint8)
-        self._ext = np.unpackbits(raw, bitorder="little").astype(np.intp)  # intp: fast reduceat
-        self._mask = np.add.reduceat(self._ext[self._flat], self._ptr) == 0
+        data = x.to_bytes(self._nbytes, "little")
+        if isinstance(self._literals, np.ndarray):
+            np.bitwise_and(self._literals, np.frombuffer(data, _WORD)[:, None], out=self._hits)
+            self._mask = np.bitwise_or.reduce(self._hits, axis=0) == 0
+        else:
+            flat, starts = self._literals
+            ext = np.unpackbits(np.frombuffer(data, np.uint8), bitorder="little").astype(np.intp)
+            self._mask = np.add.reduceat(ext[flat], starts) == 0
 
     # ------------------------------------------------------------------ queries
     def mask(self) -> np.ndarray:
@@ -148,14 +179,17 @@ class SymbolicState:
     def dead_end(self) -> bool:
         """No action is applicable (possible with noisy or rule-based affordances); with masks
         "none" too this looks at the preconditions, not at what the agent is shown."""
-        return not self._mask.any()
+        m = self._mask
+        return not (m.size and m[m.argmax()])  # argmax (the first True): 4x faster than any()
 
     def goal_reached(self) -> bool:
         return self._goal & ~self.bits == 0
 
     def vector(self) -> np.ndarray:
         """A fresh int8 0/1 vector over `universe.fluent_atoms`."""
-        return self._ext[: len(self.universe.fluent_atoms)].astype(np.int8)
+        n = len(self.universe.fluent_atoms)
+        raw = np.frombuffer(self.bits.to_bytes(self.universe.half // 8, "little"), np.uint8)
+        return np.unpackbits(raw, count=n, bitorder="little").view(np.int8)
 
     def true_atoms(self) -> list[str]:
         """The fluent atoms that hold, as lower-case PDDL (`unrepresented` ones last)."""

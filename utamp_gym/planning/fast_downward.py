@@ -25,10 +25,10 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import lru_cache
 from pathlib import Path
-from types import ModuleType
+from types import FrameType, ModuleType
 from typing import NamedTuple
 
 from utamp_gym.deadline import Deadline, check_timeout
@@ -249,6 +249,54 @@ def _roomy_pipe() -> tuple[int, int, bool]:
     return r, w, roomy
 
 
+#: s between two returns to Python while a subprocess runs: a Ctrl-C whose C handler ran in
+#: another thread (the main thread had SIGINT blocked, as `subprocess` does around vfork)
+#: is only acted on by the main thread once it runs Python code again
+_WAIT_SLICE = 0.1
+
+
+class _HeldSigint:
+    """Hold Ctrl-C back while a subprocess starts, until `release`.
+
+    A KeyboardInterrupt raised inside `subprocess.Popen` after the fork loses the child: no
+    `Popen` object comes back, so nothing kills it (its pid is gone with the exception). In
+    the main thread, with a Python SIGINT handler, this swaps in one that only notes the
+    signal; `release` puts the handler back and runs it if a signal came meanwhile (the
+    default handler raises KeyboardInterrupt), once the caller holds the process to kill."""
+
+    def __init__(self) -> None:
+        self._previous: Callable[[int, FrameType | None], object] | None = None
+        self._frames: list[FrameType | None] = []
+        if threading.current_thread() is threading.main_thread():
+            handler = signal.getsignal(signal.SIGINT)
+            if callable(handler):
+                self._previous = handler
+                signal.signal(signal.SIGINT, lambda _, frame: self._frames.append(frame))
+
+    def release(self) -> None:
+        previous, self._previous = self._previous, None
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+            if self._frames:
+                previous(signal.SIGINT, self._frames[0])
+
+
+def _communicate(
+    proc: subprocess.Popen, stdin: bytes | None, timeout: float
+) -> tuple[bytes, bytes]:
+    """`proc.communicate(stdin, timeout)`, in slices of `_WAIT_SLICE` s (see there)."""
+    end = time.monotonic() + max(timeout, 0.0)
+    while True:
+        try:
+            return proc.communicate(
+                stdin, timeout=min(_WAIT_SLICE, max(end - time.monotonic(), 0.0))
+            )
+        except subprocess.TimeoutExpired:
+            if time.monotonic() >= end:
+                raise
+            stdin = None  # the rest of the input is sent by the next call
+
+
 def _run(
     cmd: Sequence[str],
     *,
@@ -270,16 +318,23 @@ def _run(
     chunks: list[bytes] = []
     reader = None
     try:
-        with subprocess.Popen(
-            cmd,
-            cwd=cwd,
-            stdin=subprocess.DEVNULL if stdin is None else subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            pass_fds=(plan_w,) if plan_pipe else (),
-            start_new_session=True,
-        ) as proc:
+        held = _HeldSigint()
+        try:
+            proc = subprocess.Popen(
+                cmd,
+                cwd=cwd,
+                stdin=subprocess.DEVNULL if stdin is None else subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                pass_fds=(plan_w,) if plan_pipe else (),
+                start_new_session=True,
+            )
+        except BaseException:
+            held.release()
+            raise
+        with proc:
             try:
+                held.release()  # a Ctrl-C during the start is raised here: the group is killed
                 if plan_pipe:
                     os.close(plan_w)
                     plan_w = -1
@@ -287,7 +342,7 @@ def _run(
                         reader = threading.Thread(target=_drain, args=(plan_r, chunks), daemon=True)
                         reader.start()
                 try:
-                    out, err = proc.communicate(stdin, timeout=max(timeout, 0.0))
+                    out, err = _communicate(proc, stdin, timeout)
                 except subprocess.TimeoutExpired:
                     _kill_group(proc)
                     raise PlanningTimeout(

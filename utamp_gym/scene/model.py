@@ -155,9 +155,10 @@ class Scene:
         """A copy with the fields in `changes` replaced (as on the named tuples)."""
         return Scene(**{f: changes.pop(f, self.__dict__[f]) for f in Scene._FIELDS}, **changes)
 
-    @property
+    @cached_property
     def tower_base(self) -> str:
-        """The object the goal tower stands on: `goal_base`, else the scene's wooden tray."""
+        """The object the goal tower stands on: `goal_base`, else the scene's wooden tray
+        (computed once: an env asks on every step)."""
         if self.goal_base is not None:
             return self.goal_base
         trays = [o.name for o in self.objects if o.type == "wooden-tray"]
@@ -177,8 +178,9 @@ class Scene:
                 return o
         raise UnknownNameError("object", name, self.object_names)
 
-    @property
+    @cached_property
     def object_names(self) -> tuple[str, ...]:
+        """The objects' names in order (computed once: every env step's info lists them)."""
         return tuple(o.name for o in self.objects)
 
     def type_of(self, name: str) -> ObjectType:

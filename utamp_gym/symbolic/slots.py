@@ -21,7 +21,7 @@ from collections.abc import Iterable
 from functools import lru_cache
 
 from utamp_gym.scene.catalogue import ObjectType
-from utamp_gym.scene.geometry import Box, axis_of
+from utamp_gym.scene.geometry import SIDES, Box, axis_of
 from utamp_gym.scene.model import STANDING_PART, Scene, Slot
 
 #: m between two spots of a slot: its position, then a grid this fine over its region
@@ -36,10 +36,9 @@ MEMBER_REACH = 0.74
 
 def usable_region(scene: Scene, slot: Slot) -> Box:
     """The slot's region within the workspace, on the table top (z = 0)."""
-    r, ws = slot.region, scene.workspace
-    lo = [max(r.min[k], ws.min[k]) for k in (0, 1)]
-    hi = [min(r.max[k], ws.max[k]) for k in (0, 1)]
-    return Box((lo[0], lo[1], 0.0), (hi[0], hi[1], 0.0))
+    (rx0, ry0, _), (rx1, ry1, _) = slot.region
+    (wx0, wy0, _), (wx1, wy1, _) = scene.workspace
+    return Box((max(rx0, wx0), max(ry0, wy0), 0.0), (min(rx1, wx1), min(ry1, wy1), 0.0))
 
 
 def slot_spots(scene: Scene, slot: Slot) -> tuple[tuple[float, float], ...]:
@@ -48,19 +47,33 @@ def slot_spots(scene: Scene, slot: Slot) -> tuple[tuple[float, float], ...]:
     return _spots(usable_region(scene, slot), (float(slot.position[0]), float(slot.position[1])))
 
 
+def _steps(p: float, lo: float, hi: float, n: int) -> list[tuple[int, float]]:
+    """(i, p + i * SPOT_STEP) for i in -n..n, ascending, of the points within [lo, hi]."""
+    out = []
+    for i in range(-n, n + 1):
+        v = p + i * SPOT_STEP
+        if lo - 1e-9 <= v <= hi + 1e-9:
+            out.append((i, v))
+    return out
+
+
+def _grid_size(region: Box) -> int:
+    """How many `SPOT_STEP`s the grid reaches out from the position along each axis."""
+    size = math.hypot(region.max[0] - region.min[0], region.max[1] - region.min[1])
+    return int(size / SPOT_STEP) + 1
+
+
 @lru_cache(maxsize=64)
 def _spots(region: Box, position: tuple[float, float]) -> tuple[tuple[float, float], ...]:
     px, py = position
-    size = math.hypot(region.max[0] - region.min[0], region.max[1] - region.min[1])
-    n = int(size / SPOT_STEP) + 1
-    spots = []
-    for i in range(-n, n + 1):
-        for j in range(-n, n + 1):
-            x, y = px + i * SPOT_STEP, py + j * SPOT_STEP
-            if (i or j) and all(
-                region.min[k] - 1e-9 <= v <= region.max[k] + 1e-9 for k, v in ((0, x), (1, y))
-            ):
-                spots.append((round(math.hypot(i, j) * SPOT_STEP, 6), x, (x, y)))
+    n = _grid_size(region)
+    xs = _steps(px, region.min[0], region.max[0], n)
+    ys = _steps(py, region.min[1], region.max[1], n)
+    # a grid point lies in the region when each of its coordinates does: the axes' points in
+    # ascending order, i outer, j inner (the stable sort keeps this order between ties)
+    spots = [
+        (round(math.hypot(i, j) * SPOT_STEP, 6), x, (x, y)) for i, x in xs for j, y in ys if i or j
+    ]
     spots.sort(key=lambda s: (s[0], s[1]))
     return ((px, py), *(s[2] for s in spots))
 
@@ -77,11 +90,15 @@ def footprint_size(box: Box, part: str) -> tuple[float, float]:
 
     Objects keep their yaw; on ``under`` or ``on`` the footprint is the box's own; on a side
     the object has tipped over that side's edge, so its height lies along the side's axis."""
-    sx, sy, sz = (float(hi - lo) for lo, hi in zip(box.min, box.max, strict=True))
-    axis = axis_of(part)
+    lo, hi = box
+    sx, sy, sz = float(hi[0] - lo[0]), float(hi[1] - lo[1]), float(hi[2] - lo[2])
+    axis = _AXIS[part]
     if axis == 2:
         return sx, sy
     return (sz, sy) if axis == 0 else (sx, sz)
+
+
+_AXIS = {side: axis_of(side) for side in SIDES}
 
 
 def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
@@ -93,26 +110,43 @@ def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
     for a side (an object tipped over, which no action does) only the footprint's size counts.
     """
     region = usable_region(scene, slot)
-    w, d = footprint_size(t.bbox, part)
-    if w > region.max[0] - region.min[0] + 1e-6 or d > region.max[1] - region.min[1] + 1e-6:
+    (rx0, ry0, _), (rx1, ry1, _) = region
+    bbox = t.bbox
+    w, d = footprint_size(bbox, part)
+    if w > rx1 - rx0 + 1e-6 or d > ry1 - ry0 + 1e-6:
         return False
     upright = part == STANDING_PART["upright"]
     if not upright and part != STANDING_PART["inverted"]:
         return True
-    box = t.bbox if upright else t.bbox.flipped()
+    box = bbox if upright else bbox.flipped()
     cx, cy = box.center_xy
     sign = 1.0 if upright else -1.0  # a half turn about x mirrors y
     centres = [m.box.center_xy for m in t.members.values()]  # plain floats: no numpy here
     members = [(mx - cx, sign * my - cy) for mx, my in centres]
-    for x, y in slot_spots(scene, slot):
-        foot = Box((x + box.min[0] - cx, y + box.min[1] - cy, 0.0),
-                   (x + box.max[0] - cx, y + box.max[1] - cy, 0.0))  # fmt: skip
-        if (
-            region.contains_xy(foot, tol=1e-6)
-            and beyond_reach_cm((x + mx, y + my) for mx, my in members) == 0
-        ):
-            return True
-    return False
+    fx = (box.min[0], box.max[0], cx, rx0, rx1)
+    fy = (box.min[1], box.max[1], cy, ry0, ry1)
+    # `slot_spots` in another order: the position, then the grid points in the region. The
+    # footprint lies inside the region (`Box.contains_xy`, tol 1e-6) when it does along x
+    # and along y, so of the grid only the points whose x and y both pass are tried.
+    px, py = float(slot.position[0]), float(slot.position[1])
+    if _inside(px, *fx) and _inside(py, *fy) and _reached(px, py, members):
+        return True
+    n = _grid_size(region)
+    xs = [x for _, x in _steps(px, rx0, rx1, n) if _inside(x, *fx)]
+    ys = [y for _, y in _steps(py, ry0, ry1, n) if _inside(y, *fy)]
+    return any(_reached(x, y, members) for x in xs for y in ys)
+
+
+def _reached(x: float, y: float, members: list[tuple[float, float]]) -> bool:
+    """Whether every member (offsets from the footprint's centre) is in reach with the
+    footprint centred on (x, y)."""
+    return beyond_reach_cm([(x + mx, y + my) for mx, my in members]) == 0
+
+
+def _inside(v: float, lo: float, hi: float, c: float, r_lo: float, r_hi: float) -> bool:
+    """Along one axis, whether the footprint [lo, hi] of a box centred on `c`, moved to
+    centre on `v`, lies within the region [r_lo, r_hi] (`Box.contains_xy`, tol 1e-6)."""
+    return r_lo - 1e-6 <= v + lo - c and v + hi - c <= r_hi + 1e-6
 
 
 __all__ = [

@@ -1,0 +1,528 @@
+"""Planning speed: this code against an earlier commit and Fast Downward's driver, in one run.
+
+The earlier commit (``--base``, default f68ae5a) is checked out with ``git worktree add
+--detach`` into a temporary folder. Worker processes (this script with ``--worker``) run the
+same venv, each with one tree first on ``PYTHONPATH``; every measurement alternates between
+the two trees (ABBA...), so the load of a shared machine hits both alike. Four figures:
+
+* **cold**: `plan_scene` (UTAMP-2-GT: affordances, problem, grounding, SAS, search) with a
+  fresh `StatePlanner`, in a **fresh process**: the worker (imports done, nothing planned)
+  forks a child per measurement, so no cache of any earlier plan is warm, as in a
+  ``utamp plan`` process. Beside it **cold, warm process**: the earlier benchmark's
+  definition (`benchmarks/planning.py --sections suite`: a fresh `StatePlanner` per call in
+  one long-lived process, median of ``--repeats`` calls per scene).
+* **driver**: ``fast-downward.py`` running the same search on the same PDDL files
+  (`solve_with_driver`, as `benchmarks/planning.py` measures it); cold / driver.
+* **process**: whole processes, ``utamp plan SCENE --json`` of each tree against
+  ``fast-downward.py --alias lama-first domain.pddl problem.pddl``
+  (`benchmarks/planning.py --sections process`).
+* **env steps/s**: the raw symbolic `UTampKitchenEnv` (pick-place), masked random actions,
+  steps per second inside `env.step` (`benchmarks/env_throughput.py`), in alternating rounds.
+
+All on the five-object scenes of ``--suite``. Targets: cold median <= the base's and <= 0.15x
+the driver; ``utamp plan`` <= 0.5x the driver; env steps/s >= the base's. Writes ``<out>.md``
+(the table) and ``<out>.json`` (every measurement), with both commits and the command.
+
+    python benchmarks/planning_speed.py [--base f68ae5a] [--suite pick-place] [--repeats 3]
+        [--process-scenes 5] [--process-runs 5] [--env-rounds 20] [--env-steps 3000]
+        [--out docs/results/planning_speed]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shlex
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterable
+from pathlib import Path
+from typing import IO, Any
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+VERSIONS = ("this", "base")
+TARGETS = {"cold_vs_base": 1.0, "cold_vs_driver": 0.15, "process_vs_driver": 0.5, "env": 1.0}
+
+
+# --------------------------------------------------------------------------- worker
+def _cpu(who: int = resource.RUSAGE_SELF) -> float:
+    own = resource.getrusage(who)
+    return own.ru_utime + own.ru_stime
+
+
+def _plan(name: str) -> dict[str, Any]:
+    """Plan a scene with a fresh `StatePlanner` in this process; its figures."""
+    from utamp_gym.planning.methods import plan_scene
+    from utamp_gym.planning.state_planner import StatePlanner
+    from utamp_gym.suites import resolve_scene
+
+    scene = resolve_scene(name)
+    cpu = _cpu() + _cpu(resource.RUSAGE_CHILDREN)
+    out = plan_scene(scene, "utamp2-gt", planner=StatePlanner("utamp2"))
+    cpu = _cpu() + _cpu(resource.RUSAGE_CHILDREN) - cpu
+    return {
+        "s": out.planning_time_s,
+        "cpu_s": cpu,
+        "solved": out.solved,
+        "length": out.plan_length,
+        "domain": out.domain,
+        "problem": out.problem,
+    }
+
+
+def _cold(name: str) -> dict[str, Any]:
+    """`_plan` in a forked child: a fresh process state, imports done."""
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: plan, answer, leave without clean-up
+        os.close(read)
+        try:
+            data = json.dumps(_plan(name)).encode()
+        except BaseException as exc:  # the parent reports it
+            data = json.dumps({"error": repr(exc)}).encode()
+        with os.fdopen(write, "wb") as f:
+            f.write(data)
+        os._exit(0)
+    os.close(write)
+    with os.fdopen(read, "rb") as f:
+        data = f.read()
+    os.waitpid(pid, 0)
+    out = json.loads(data)
+    if "error" in out:
+        raise RuntimeError(f"cold plan of {name}: {out['error']}")
+    return out
+
+
+def _warm(name: str, repeats: int) -> dict[str, Any]:
+    """`_plan` `repeats` times in this (long-lived) process: medians."""
+    runs = [_plan(name) for _ in range(repeats)]
+    return {
+        "s": statistics.median(r["s"] for r in runs),
+        "cpu_s": statistics.median(r["cpu_s"] for r in runs),
+    }
+
+
+class _Env:
+    """The raw symbolic env of `benchmarks/env_throughput.py`, kept across rounds."""
+
+    def __init__(self, suite: str) -> None:
+        from utamp_gym.env.kitchen import UTampKitchenEnv
+
+        self.env = UTampKitchenEnv(suite=suite, grounding="symbolic")
+        self.run(2_000, 0)  # warm-up
+
+    def run(self, steps: int, seed: int) -> dict[str, Any]:
+        """Masked random steps (`env_throughput.run`): steps/s inside `env.step`."""
+        import numpy as np
+
+        draws = np.random.default_rng(seed).random(steps)
+        _, info = self.env.reset(seed=seed)
+        in_step, cpu = 0.0, time.process_time()
+        for k in range(steps):
+            valid = np.flatnonzero(info["action_mask"])
+            action = valid[int(draws[k] * len(valid))] if len(valid) else np.int64(0)
+            t = time.perf_counter()
+            _, _, terminated, truncated, info = self.env.step(action)
+            in_step += time.perf_counter() - t
+            if terminated or truncated:
+                _, info = self.env.reset()
+        return {
+            "steps_per_s": steps / in_step,
+            "cpu_steps_per_s": steps / (time.process_time() - cpu),
+        }
+
+
+def worker(kind: str) -> None:
+    """Serve measurements: one JSON request per stdin line, one JSON answer per stdout line.
+
+    ``plan`` workers import the planner and plan nothing before the first request (the cold
+    forks see a fresh process); ``env`` workers build the env on their first request."""
+    import utamp_gym
+
+    out = sys.stdout
+    sys.stdout = sys.stderr  # nothing else may write to the answer stream
+    if kind == "plan":
+        import utamp_gym.planning.methods
+        import utamp_gym.planning.state_planner
+        import utamp_gym.suites
+    env: _Env | None = None
+    print(json.dumps({"ready": utamp_gym.__file__}), file=out, flush=True)
+    for line in sys.stdin:
+        req = json.loads(line)
+        if req["op"] == "cold":
+            ans = _cold(req["scene"])
+        elif req["op"] == "warm":
+            ans = _warm(req["scene"], req["repeats"])
+        else:
+            env = env or _Env(req["suite"])
+            ans = env.run(req["steps"], req["seed"])
+        print(json.dumps(ans), file=out, flush=True)
+
+
+# --------------------------------------------------------------------------- driver side
+class Worker:
+    """A worker process of one kind running the code of one tree."""
+
+    def __init__(self, label: str, tree: Path, kind: str):
+        self.label, self.tree = label, tree
+        env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1")
+        self.proc = subprocess.Popen(
+            [sys.executable, str(Path(__file__).resolve()), "--worker", kind],
+            cwd=tree,
+            env=env,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        ready = json.loads(self._read())
+        if not Path(ready["ready"]).resolve().is_relative_to(tree.resolve()):
+            raise RuntimeError(f"{label}: imported {ready['ready']}, not from {tree}")
+
+    def _read(self) -> str:
+        assert self.proc.stdout is not None
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f"worker '{self.label}' ({self.tree}) exited")
+        return line
+
+    def ask(self, **req: Any) -> dict[str, Any]:
+        stdin: IO[str] | None = self.proc.stdin
+        assert stdin is not None
+        stdin.write(json.dumps(req) + "\n")
+        stdin.flush()
+        return json.loads(self._read())
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+
+
+def med(xs: Iterable[float]) -> float:
+    xs = list(xs)
+    return statistics.median(xs) if xs else float("nan")
+
+
+def wall_cpu(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
+    """(wall s, CPU s of the child) of one whole command."""
+    c, t = _cpu(resource.RUSAGE_CHILDREN), time.perf_counter()
+    subprocess.run(cmd, env=env, cwd=cwd, check=True, capture_output=True)
+    return time.perf_counter() - t, _cpu(resource.RUSAGE_CHILDREN) - c
+
+
+def bench_plans(
+    workers: dict[str, Worker], names: list[str], repeats: int, tmp: Path
+) -> list[dict[str, Any]]:
+    """Cold (fresh process) and driver times per scene, then cold in a warm process (after
+    every fresh-process plan: the workers have planned nothing until then)."""
+    from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, solve_with_driver
+
+    rows = []
+    for i, name in enumerate(names):
+        row: dict[str, Any] = {"scene": name}
+        order = VERSIONS if i % 2 == 0 else VERSIONS[::-1]
+        cold: dict[str, list[dict[str, Any]]] = {v: [] for v in VERSIONS}
+        for k in range(repeats):
+            for v in order if k % 2 == 0 else order[::-1]:
+                cold[v].append(workers[v].ask(op="cold", scene=name))
+        for v in VERSIONS:
+            row[v] = {
+                "cold_s": med(r["s"] for r in cold[v]),
+                "cold_cpu_s": med(r["cpu_s"] for r in cold[v]),
+                "solved": cold[v][0]["solved"],
+                "length": cold[v][0]["length"],
+            }
+        d, p = tmp / "domain.pddl", tmp / "problem.pddl"
+        d.write_text(cold["this"][0]["domain"])
+        p.write_text(cold["this"][0]["problem"])
+        drv = []
+        for _ in range(repeats):
+            c = _cpu(resource.RUSAGE_CHILDREN)
+            res = solve_with_driver(d, p, search=DEFAULT_SEARCH)
+            drv.append((res.planning_time_s, _cpu(resource.RUSAGE_CHILDREN) - c))
+        row["driver"] = {
+            "s": med(w for w, _ in drv),
+            "cpu_s": med(c for _, c in drv),
+            "length": len(res.plan),
+        }
+        rows.append(row)
+        print(
+            f"{name}: cold this {1000 * row['this']['cold_s']:.1f} ms, base "
+            f"{1000 * row['base']['cold_s']:.1f} ms; driver {1000 * row['driver']['s']:.1f} ms",
+            flush=True,
+        )
+    for i, row in enumerate(rows):
+        for v in VERSIONS if i % 2 == 0 else VERSIONS[::-1]:
+            warm = workers[v].ask(op="warm", scene=row["scene"], repeats=repeats)
+            row[v].update(warm_s=warm["s"], warm_cpu_s=warm["cpu_s"])
+    print(
+        "warm process: this "
+        f"{1000 * med(r['this']['warm_s'] for r in rows):.1f} ms, base "
+        f"{1000 * med(r['base']['warm_s'] for r in rows):.1f} ms",
+        flush=True,
+    )
+    return rows
+
+
+def bench_process(
+    trees: dict[str, Path], names: list[str], runs: int, tmp: Path
+) -> list[dict[str, Any]]:
+    """Whole ``utamp plan`` processes of both trees and the driver, interleaved."""
+    from utamp_gym.planning.fast_downward import downward_paths
+
+    _, driver = downward_paths()
+    utamp = Path(sys.executable).with_name("utamp")
+    base_env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    envs = {v: dict(base_env, PYTHONPATH=str(trees[v])) for v in VERSIONS}
+    envs["driver"] = base_env
+    rows = []
+    for name in names:
+        out = tmp / name.replace("/", "-")
+        ours = [str(utamp), "plan", name, "--json"]
+        subprocess.run([*ours, "--out", str(out)], env=envs["this"], check=True,
+                       capture_output=True)  # fmt: skip
+        cmds = {v: ours for v in VERSIONS}
+        cmds["driver"] = [sys.executable, str(driver), "--alias", "lama-first",
+                          str(out / "domain.pddl"), str(out / "problem.pddl")]  # fmt: skip
+        for key, cmd in cmds.items():  # warm-up (byte-code caches, page cache)
+            subprocess.run(cmd, env=envs[key], cwd=out, check=True, capture_output=True)
+        times: dict[str, list[tuple[float, float]]] = {k: [] for k in cmds}
+        keys = list(cmds)
+        for k in range(runs):
+            for key in keys if k % 2 == 0 else keys[::-1]:
+                times[key].append(wall_cpu(cmds[key], envs[key], out))
+        row: dict[str, Any] = {"scene": name}
+        for key, xs in times.items():
+            row[key] = {"s": med(w for w, _ in xs), "cpu_s": med(c for _, c in xs)}
+        rows.append(row)
+        print(
+            f"{name}: utamp plan this {1000 * row['this']['s']:.0f} ms, base "
+            f"{1000 * row['base']['s']:.0f} ms, driver {1000 * row['driver']['s']:.0f} ms",
+            flush=True,
+        )
+    return rows
+
+
+def bench_env(workers: dict[str, Worker], suite: str, rounds: int, steps: int) -> list[dict]:
+    """Symbolic env steps/s of both trees in alternating rounds (same seed per round)."""
+    rows = []
+    for k in range(rounds):
+        row: dict[str, Any] = {"round": k}
+        for v in VERSIONS if k % 2 == 0 else VERSIONS[::-1]:
+            ans = workers[v].ask(op="env", suite=suite, steps=steps, seed=k)
+            row[v], row[f"{v}_cpu"] = ans["steps_per_s"], ans["cpu_steps_per_s"]
+        rows.append(row)
+        print(f"env round {k}: this {row['this']:,.0f}/s, base {row['base']:,.0f}/s", flush=True)
+    return rows
+
+
+# --------------------------------------------------------------------------- report
+def summarise(plans: list[dict], procs: list[dict], env: list[dict]) -> dict[str, Any]:
+    s: dict[str, Any] = {}
+    for v in VERSIONS:
+        s[v] = {
+            "cold_s": med(r[v]["cold_s"] for r in plans),
+            "cold_cpu_s": med(r[v]["cold_cpu_s"] for r in plans),
+            "warm_s": med(r[v]["warm_s"] for r in plans),
+            "warm_cpu_s": med(r[v]["warm_cpu_s"] for r in plans),
+            "process_s": med(r[v]["s"] for r in procs),
+            "process_cpu_s": med(r[v]["cpu_s"] for r in procs),
+            "env_steps_per_s": med(r[v] for r in env),
+            "env_cpu_steps_per_s": med(r[f"{v}_cpu"] for r in env),
+        }
+    s["driver"] = {
+        "s": med(r["driver"]["s"] for r in plans),
+        "cpu_s": med(r["driver"]["cpu_s"] for r in plans),
+        "process_s": med(r["driver"]["s"] for r in procs),
+        "process_cpu_s": med(r["driver"]["cpu_s"] for r in procs),
+    }
+    t, b, d = s["this"], s["base"], s["driver"]
+    s["ratio"] = {
+        "cold_vs_base": t["cold_s"] / b["cold_s"],
+        "cold_vs_base_per_scene": med(r["this"]["cold_s"] / r["base"]["cold_s"] for r in plans),
+        "cold_cpu_vs_base": t["cold_cpu_s"] / b["cold_cpu_s"],
+        "cold_cpu_vs_base_per_scene": med(
+            r["this"]["cold_cpu_s"] / r["base"]["cold_cpu_s"] for r in plans
+        ),
+        "warm_vs_base_per_scene": med(r["this"]["warm_s"] / r["base"]["warm_s"] for r in plans),
+        "process_vs_base_per_scene": med(r["this"]["s"] / r["base"]["s"] for r in procs),
+        "warm_vs_base": t["warm_s"] / b["warm_s"],
+        "cold_vs_driver": t["cold_s"] / d["s"],
+        "base_cold_vs_driver": b["cold_s"] / d["s"],
+        "warm_vs_driver": t["warm_s"] / d["s"],
+        "process_vs_driver": t["process_s"] / d["process_s"],
+        "base_process_vs_driver": b["process_s"] / d["process_s"],
+        "process_cpu_vs_driver": t["process_cpu_s"] / d["process_cpu_s"],
+        "process_vs_base": t["process_s"] / b["process_s"],
+        "env": t["env_steps_per_s"] / b["env_steps_per_s"],
+        "env_cpu": t["env_cpu_steps_per_s"] / b["env_cpu_steps_per_s"],
+        "env_per_round": med(r["this"] / r["base"] for r in env),
+        "env_cpu_per_round": med(r["this_cpu"] / r["base_cpu"] for r in env),
+    }
+    same = [r["scene"] for r in plans if r["this"]["length"] != r["driver"]["length"]]
+    s["plan_length_differs_from_driver"] = same
+    return s
+
+
+def table(s: dict[str, Any], base: str, this: str, n_plans: int, n_procs: int, args: Any,
+          run: str, command: str) -> str:  # fmt: skip
+    t, b, d, q = s["this"], s["base"], s["driver"], s["ratio"]
+
+    def ms(x: float) -> str:
+        return f"{1000 * x:.1f}"
+
+    def met(key: str, value: float, below: bool = True) -> str:
+        ok = value <= TARGETS[key] if below else value >= TARGETS[key]
+        return f"{'met' if ok else 'NOT met'} ({'<=' if below else '>='} {TARGETS[key]})"
+
+    lines = [
+        f"| figure | base `{base}` | this `{this}` | this / base | paired | driver "
+        "| this / driver | target |",
+        "|---|---|---|---|---|---|---|---|",
+        f"| cold planning, fresh process (ms) | {ms(b['cold_s'])} | {ms(t['cold_s'])} "
+        f"| **{q['cold_vs_base']:.2f}** | {q['cold_vs_base_per_scene']:.2f} | {ms(d['s'])} "
+        f"| **{q['cold_vs_driver']:.2f}** "
+        f"| this / base {met('cold_vs_base', q['cold_vs_base'])}; this / driver "
+        f"{met('cold_vs_driver', q['cold_vs_driver'])} |",
+        f"| cold planning, fresh process, CPU (ms) | {ms(b['cold_cpu_s'])} "
+        f"| {ms(t['cold_cpu_s'])} | {q['cold_cpu_vs_base']:.2f} "
+        f"| {q['cold_cpu_vs_base_per_scene']:.2f} | {ms(d['cpu_s'])} "
+        f"| {t['cold_cpu_s'] / d['cpu_s']:.2f} | |",
+        f"| cold planning, warm process (ms) | {ms(b['warm_s'])} | {ms(t['warm_s'])} "
+        f"| {q['warm_vs_base']:.2f} | {q['warm_vs_base_per_scene']:.2f} | {ms(d['s'])} "
+        f"| {q['warm_vs_driver']:.2f} | |",
+        f"| `utamp plan SCENE --json`, whole process (ms) | {ms(b['process_s'])} "
+        f"| {ms(t['process_s'])} | {q['process_vs_base']:.2f} "
+        f"| {q['process_vs_base_per_scene']:.2f} | {ms(d['process_s'])} "
+        f"| **{q['process_vs_driver']:.2f}** "
+        f"| {met('process_vs_driver', q['process_vs_driver'])} |",
+        f"| symbolic env steps/s | {b['env_steps_per_s']:,.0f} | {t['env_steps_per_s']:,.0f} "
+        f"| **{q['env']:.2f}** | {q['env_per_round']:.2f} | | "
+        f"| {met('env', q['env'], below=False)} |",
+        f"| symbolic env steps/s, CPU (whole loop) | {b['env_cpu_steps_per_s']:,.0f} "
+        f"| {t['env_cpu_steps_per_s']:,.0f} | {q['env_cpu']:.2f} | {q['env_cpu_per_round']:.2f} "
+        "| | | |",
+        "",
+        f"Five-object {args.suite} scenes, UTAMP-2-GT, search `astar-blind`; medians over "
+        "scenes of per-scene medians; *this / base* divides the two medians, *paired* is the "
+        "median of the per-scene (env: per-round) ratios, steadier when the load drifts. "
+        f"Cold: {n_plans} scenes x {args.repeats} plans per tree, "
+        "each in a process forked from a worker that has imported the planner and planned "
+        "nothing (warm process: the same scenes planned again and again in one process, a fresh "
+        "`StatePlanner` each time). Driver: `fast-downward.py` with the same search on the "
+        "same PDDL files (whole process: `--alias lama-first`, "
+        f"{n_procs} scenes x {args.process_runs} runs). Env: the raw symbolic env, "
+        f"{args.env_rounds} alternating rounds of {args.env_steps:,} masked random steps, "
+        "steps/s inside `env.step` (CPU: steps per CPU second of the whole loop, the agent's "
+        "choice and resets included). "
+        f"The base's `utamp plan` takes {q['base_process_vs_driver']:.2f}x the driver's whole "
+        f"process, its cold planning {q['base_cold_vs_driver']:.2f}x the driver. {run}",
+        "",
+        f"_Written by `{command}` at commit `{this}`._",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def git(*args: str) -> str:
+    return subprocess.run(
+        ["git", "-C", str(ROOT), *args], check=True, capture_output=True, text=True
+    ).stdout.strip()
+
+
+def _rounded(x: Any) -> Any:
+    if isinstance(x, float):
+        return float(f"{x:.4g}")
+    if isinstance(x, dict):
+        return {k: _rounded(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_rounded(v) for v in x]
+    return x
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--worker", choices=("plan", "env"), help=argparse.SUPPRESS)
+    ap.add_argument("--base", default="f68ae5a", help="earlier commit to compare with")
+    ap.add_argument("--suite", default="pick-place")
+    ap.add_argument("--stride", type=int, default=1, help="every k-th five-object scene")
+    ap.add_argument("--repeats", type=int, default=3, help="plans per scene and tree")
+    ap.add_argument("--process-scenes", type=int, default=5)
+    ap.add_argument("--process-runs", type=int, default=5)
+    ap.add_argument("--env-rounds", type=int, default=20)
+    ap.add_argument("--env-steps", type=int, default=3_000)
+    ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "planning_speed"))
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    if args.worker:
+        worker(args.worker)
+        return
+    command = shlex.join(["python", "benchmarks/planning_speed.py", *sys.argv[1:]])
+
+    from utamp_gym.suites import suite_scenes
+
+    base = git("rev-parse", "--short", args.base)
+    this = git("rev-parse", "--short", "HEAD")
+    if git("status", "--porcelain", "--untracked-files=no"):
+        this += "-dirty"
+    five = [s.name for s in suite_scenes(args.suite) if s.n_objects == 5]
+    names = five[:: args.stride]
+    procs = five[:: max(1, len(five) // args.process_scenes)][: args.process_scenes]
+    load0 = os.getloadavg()[0]
+    print(f"base {base} vs this {this}; {len(names)} scenes; load {load0:.1f}", flush=True)
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="planning_speed_") as tmp:
+        trees = {"this": ROOT, "base": Path(tmp) / "base"}
+        git("worktree", "add", "--detach", str(trees["base"]), base)
+        workers: dict[str, Worker] = {}
+        try:
+            workers = {v: Worker(v, trees[v], "plan") for v in VERSIONS}
+            plans = bench_plans(workers, names, args.repeats, Path(tmp))
+            for w in workers.values():
+                w.close()
+            process = bench_process(trees, procs, args.process_runs, Path(tmp))
+            workers = {v: Worker(v, trees[v], "env") for v in VERSIONS}
+            env = bench_env(workers, args.suite, args.env_rounds, args.env_steps)
+        finally:
+            for w in workers.values():
+                if w.proc.poll() is None:
+                    w.close()
+            git("worktree", "remove", "--force", str(trees["base"]))
+    elapsed = time.perf_counter() - started
+    summary = summarise(plans, process, env)
+    run = (
+        f"One run, {elapsed / 60:.1f} min, load average {load0:.1f} at the start and "
+        f"{os.getloadavg()[0]:.1f} at the end ({os.cpu_count()} cores)."
+    )
+    md = table(summary, base, this, len(names), len(procs), args, run, command)
+    print("\n" + md)
+    differ = summary["plan_length_differs_from_driver"]
+    print(f"our plans as long as the driver's (same optimal search): {differ or 'all'}")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".md").write_text(md)
+    report = {
+        "commit": this,
+        "command": command,
+        "base": base,
+        "load_average": [load0, os.getloadavg()[0]],
+        "elapsed_s": elapsed,
+        "summary": summary,
+        "plans": plans,
+        "process": process,
+        "env": env,
+    }
+    out.with_suffix(".json").write_text(json.dumps(_rounded(report), indent=1) + "\n")
+    print(f"wrote {out.with_suffix('.md')}, {out.with_suffix('.json')}")
+
+
+if __name__ == "__main__":
+    main()
