@@ -264,7 +264,8 @@ def git(*args: str) -> str:
     ).stdout.strip()
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check the command a results file recorded)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", choices=tuple(CONFIGS), help=argparse.SUPPRESS)
     ap.add_argument("--steps", type=int, default=4096, help=argparse.SUPPRESS)
@@ -275,16 +276,21 @@ def main() -> None:
     ap.add_argument("--steps-grounded", type=int, default=8192)
     ap.add_argument("--steps-objects", type=int, default=4096)
     ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "train_speed"))
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     if args.worker:
         row = worker(args.worker, args.steps, args.seed)
         print(json.dumps(row))
         return
+    # here, not at the top: a worker runs this file against the base tree, which has no
+    # utamp_gym.provenance
+    from utamp_gym.provenance import commit, write_json, write_markdown
 
     base = git("rev-parse", "--short", args.base)
-    this = git("rev-parse", "--short", "HEAD")
-    if git("status", "--porcelain", "--untracked-files=no"):
-        this += "+changes"
+    this = commit()  # the provenance of what this run writes: the code as it is now
     configs = args.configs.split(",")
     steps = {"grounded": args.steps_grounded, "objects": args.steps_objects}
     load0 = os.getloadavg()
@@ -326,9 +332,9 @@ def main() -> None:
     print(text)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".md").write_text(text)
+    write_markdown(out.with_suffix(".md"), text)
     data = {"base": base, "this": this, "summary": summary, "runs": rows, "run": run}
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
+    write_json(out.with_suffix(".json"), data, indent=1)
     if "objects" in configs:
         q = next(s for s in summary if s["config"] == "objects")["ratio"]["steps_per_s"]
         print(f"objects configuration: {q:.2f}x the base's env steps/s (target {TARGET:.0f}x)")
