@@ -18,7 +18,7 @@ from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, Box, is_adjacent
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
-from utamp_gym.symbolic.slots import admits
+from utamp_gym.symbolic.slots import Footprint, fits, usable_region
 
 DOMAINS = ("utamp2", "utamp1")
 AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False}
@@ -162,7 +162,9 @@ def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[st
         by_type.setdefault(o.type, []).append(o.name)
     by_type.setdefault(scene.table_type, []).extend(s.name for s in scene.slots)
     slots = {s.name: s for s in scene.slots}
-    admitted: dict[tuple[str, str, str], bool] = {}  # (slot, type, part)
+    admitted: dict[tuple[str, str, str], bool] = {}  # (slot, type, part): `slots.admits`
+    regions: dict[str, Box] = {}  # slot -> its usable region
+    footprints: dict[tuple[str, str], Footprint] = {}  # (type, part)
     out: set[str] = set()
     for f in affordances:
         pred = f[0]
@@ -178,7 +180,11 @@ def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[st
                     if i2 in slots:
                         key = (i2, t1, p1)
                         if key not in admitted:
-                            admitted[key] = admits(scene, slots[i2], scene.type_of(i1), p1)
+                            if i2 not in regions:
+                                regions[i2] = usable_region(scene, slots[i2])
+                            if (t1, p1) not in footprints:
+                                footprints[t1, p1] = Footprint.of(scene.type_of(i1), p1)
+                            admitted[key] = fits(regions[i2], slots[i2], footprints[t1, p1])
                         if not admitted[key]:
                             continue
                     out.add(_atom(pred, p2, i2, p1, i1))

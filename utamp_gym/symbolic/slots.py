@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from functools import lru_cache
+from typing import NamedTuple
 
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box, axis_of
@@ -101,6 +102,32 @@ def footprint_size(box: Box, part: str) -> tuple[float, float]:
 _AXIS = {side: axis_of(side) for side in SIDES}
 
 
+class Footprint(NamedTuple):
+    """What `admits` asks of an object type resting on a part: the footprint's extent and,
+    for an object kept upright or upside down, the footprint's x and y bounds about its
+    centre and its members' centres as offsets from it (None for a side)."""
+
+    width: float
+    depth: float
+    fx: tuple[float, float, float] | None  # (min x, max x, centre x) of the footprint
+    fy: tuple[float, float, float] | None
+    members: tuple[tuple[float, float], ...]
+
+    @classmethod
+    def of(cls, t: ObjectType, part: str) -> Footprint:
+        bbox = t.bbox
+        w, d = footprint_size(bbox, part)
+        upright = part == STANDING_PART["upright"]
+        if not upright and part != STANDING_PART["inverted"]:
+            return cls(w, d, None, None, ())
+        box = bbox if upright else bbox.flipped()
+        cx, cy = box.center_xy
+        sign = 1.0 if upright else -1.0  # a half turn about x mirrors y
+        centres = [m.box.center_xy for m in t.members.values()]  # plain floats: no numpy here
+        members = tuple((mx - cx, sign * my - cy) for mx, my in centres)
+        return cls(w, d, (box.min[0], box.max[0], cx), (box.min[1], box.max[1], cy), members)
+
+
 def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
     """Whether an object of type `t` resting on `part` can stand in the slot: at one of its
     `slot_spots` (footprint centred there, the object square to the table) it lies inside
@@ -109,22 +136,19 @@ def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
     Pick and place keep an object upright or upside down, so it rests on ``under`` or ``on``;
     for a side (an object tipped over, which no action does) only the footprint's size counts.
     """
-    region = usable_region(scene, slot)
+    return fits(usable_region(scene, slot), slot, Footprint.of(t, part))
+
+
+def fits(region: Box, slot: Slot, fp: Footprint) -> bool:
+    """`admits` for a slot's `usable_region` and a type's `Footprint` (each made once when
+    many slots and types are paired: `symbolic.problem.instantiate_affordances`)."""
     (rx0, ry0, _), (rx1, ry1, _) = region
-    bbox = t.bbox
-    w, d = footprint_size(bbox, part)
-    if w > rx1 - rx0 + 1e-6 or d > ry1 - ry0 + 1e-6:
+    if fp.width > rx1 - rx0 + 1e-6 or fp.depth > ry1 - ry0 + 1e-6:
         return False
-    upright = part == STANDING_PART["upright"]
-    if not upright and part != STANDING_PART["inverted"]:
+    if fp.fx is None or fp.fy is None:
         return True
-    box = bbox if upright else bbox.flipped()
-    cx, cy = box.center_xy
-    sign = 1.0 if upright else -1.0  # a half turn about x mirrors y
-    centres = [m.box.center_xy for m in t.members.values()]  # plain floats: no numpy here
-    members = [(mx - cx, sign * my - cy) for mx, my in centres]
-    fx = (box.min[0], box.max[0], cx, rx0, rx1)
-    fy = (box.min[1], box.max[1], cy, ry0, ry1)
+    members = fp.members
+    fx, fy = (*fp.fx, rx0, rx1), (*fp.fy, ry0, ry1)
     # `slot_spots` in another order: the position, then the grid points in the region. The
     # footprint lies inside the region (`Box.contains_xy`, tol 1e-6) when it does along x
     # and along y, so of the grid only the points whose x and y both pass are tried.
@@ -137,7 +161,7 @@ def admits(scene: Scene, slot: Slot, t: ObjectType, part: str) -> bool:
     return any(_reached(x, y, members) for x in xs for y in ys)
 
 
-def _reached(x: float, y: float, members: list[tuple[float, float]]) -> bool:
+def _reached(x: float, y: float, members: tuple[tuple[float, float], ...]) -> bool:
     """Whether every member (offsets from the footprint's centre) is in reach with the
     footprint centred on (x, y)."""
     return beyond_reach_cm([(x + mx, y + my) for mx, my in members]) == 0
@@ -152,8 +176,10 @@ def _inside(v: float, lo: float, hi: float, c: float, r_lo: float, r_hi: float) 
 __all__ = [
     "MEMBER_REACH",
     "SPOT_STEP",
+    "Footprint",
     "admits",
     "beyond_reach_cm",
+    "fits",
     "footprint_size",
     "slot_spots",
     "usable_region",
