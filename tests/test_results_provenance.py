@@ -190,3 +190,22 @@ def test_publish_copies_a_sweep_with_its_provenance_and_refuses_one_without(
     assert recorded(results / "x-summary.md") == recorded(results / "x-summary.json")
     with pytest.raises(SystemExit, match="no such plot"):
         publish_eval.publish(out, "x", plots=("success_vs_f1.png",), results=results)
+
+
+def test_a_checkout_is_dirty_for_changed_code_not_for_results_being_written(
+    tmp_path: Path,
+) -> None:
+    def git(*args: str) -> None:
+        subprocess.run(["git", "-C", str(tmp_path), *args], check=True, capture_output=True)
+
+    (tmp_path / "docs" / "results").mkdir(parents=True)
+    (tmp_path / "code.py").write_text("x = 1\n")
+    (tmp_path / "docs" / "results" / "speed.md").write_text("| a |\n")
+    git("init", "-q")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "one")
+    (tmp_path / "docs" / "results" / "speed.md").write_text("| b |\n")  # a run's output
+    clean = provenance.commit.__wrapped__(tmp_path)
+    assert re.fullmatch(r"[0-9a-f]{7,40}", clean), clean
+    (tmp_path / "code.py").write_text("x = 2\n")
+    assert provenance.commit.__wrapped__(tmp_path) == f"{clean}-dirty"

@@ -35,13 +35,17 @@ FOOTER = re.compile(
 
 @functools.cache
 def commit(root: Path = ROOT) -> str:
-    """The short commit of `root`'s checkout, ``-dirty`` if tracked files changed.
+    """The short commit of `root`'s checkout, ``-dirty`` if tracked files changed (files
+    under ``docs/results/`` aside: a run that writes them leaves the code as it was).
 
     Fixed by the first call in a process (the code it runs was imported by then): a long run
     calls it at its start, so that editing the checkout meanwhile does not change it."""
     try:
         sha = _git(root, "rev-parse", "--short", "HEAD").strip()
-        dirty = _git(root, "status", "--porcelain", "--untracked-files=no").strip()
+        # results being written (one run after another in one checkout) are not the code
+        dirty = _git(
+            root, "status", "--porcelain", "--untracked-files=no", "--", ".", ":!docs/results"
+        ).strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
     return f"{sha}-dirty" if dirty else sha
