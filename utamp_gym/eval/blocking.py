@@ -49,7 +49,7 @@ class Block(NamedTuple):
 
     atom: str
     object: str
-    type: str
+    type_name: str  # the object's type ("type" in the JSON)
     stage: str
     subject: str
     refusal: Refusal
@@ -59,7 +59,7 @@ class Block(NamedTuple):
         return f"{self.atom}: {self.subject}: {self.refusal.detail} [{self.refusal.rule}]"
 
     def to_json(self) -> dict[str, Any]:
-        head = {"atom": self.atom, "object": self.object, "type": self.type}
+        head = {"atom": self.atom, "object": self.object, "type": self.type_name}
         head |= {"stage": self.stage, "subject": self.subject}
         return head | self.refusal.to_json() | {"text": self.text}
 
