@@ -290,12 +290,8 @@ def main() -> None:
     # imported here, not at the top: a worker runs this file on the base commit's tree
     from utamp_gym.provenance import commit, write_json, write_markdown
 
-    commit()  # the provenance of what this run writes: the code as it is now
-
+    this = commit()  # the provenance of what this run writes: the code as it is now
     base = git("rev-parse", "--short", args.base)
-    this = git("rev-parse", "--short", "HEAD")
-    if git("status", "--porcelain", "--untracked-files=no"):
-        this += "+changes"
     jobs = episodes(
         args.suites.split(","), {int(n) for n in args.objects.split(",")}, args.stride, args.seeds
     )

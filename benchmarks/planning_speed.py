@@ -467,12 +467,12 @@ def main() -> None:
         return
     command = shlex.join(["python", "benchmarks/planning_speed.py", *sys.argv[1:]])
 
+    # here, not at the top: a worker runs this file against the base tree
+    from utamp_gym.provenance import commit
     from utamp_gym.suites import suite_scenes
 
     base = git("rev-parse", "--short", args.base)
-    this = git("rev-parse", "--short", "HEAD")
-    if git("status", "--porcelain", "--untracked-files=no"):
-        this += "-dirty"
+    this = commit()  # as the footer records it (results files being written do not count)
     five = [s.name for s in suite_scenes(args.suite) if s.n_objects == 5]
     names = five[:: args.stride]
     procs = five[:: max(1, len(five) // args.process_scenes)][: args.process_scenes]
