@@ -33,11 +33,12 @@ import resource
 import statistics
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import IO, Any
+
+from compare import base_worktree, git  # benchmarks/ is on sys.path when run
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -262,12 +263,6 @@ def _rounded(x: Any) -> Any:
     return x
 
 
-def git(*args: str) -> str:
-    return subprocess.run(
-        ["git", "-C", str(ROOT), *args], check=True, capture_output=True, text=True
-    ).stdout.strip()
-
-
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -301,9 +296,7 @@ def main() -> None:
     rows: list[dict[str, Any]] = []
     phase_rows: list[dict[str, Any]] = []
     deterministic: list[str] = []
-    with tempfile.TemporaryDirectory(prefix="physics_speed_") as tmp:
-        tree = Path(tmp) / "base"
-        git("worktree", "add", "--detach", str(tree), base)
+    with base_worktree(base, "physics_speed_") as tree:
         workers: dict[str, Worker] = {}
         try:
             workers = {"this": Worker("this", ROOT), "base": Worker("base", tree)}
@@ -336,7 +329,6 @@ def main() -> None:
         finally:
             for w in workers.values():
                 w.close()
-            git("worktree", "remove", "--force", str(tree))
     elapsed = time.perf_counter() - started
 
     summary = summarise(rows)

@@ -38,11 +38,12 @@ import shlex
 import statistics
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any
+
+from compare import base_worktree, git  # benchmarks/ is on sys.path when run
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -429,12 +430,6 @@ def table(s: dict[str, Any], base: str, this: str, n_plans: int, n_procs: int, a
     return "\n".join(lines) + "\n"
 
 
-def git(*args: str) -> str:
-    return subprocess.run(
-        ["git", "-C", str(ROOT), *args], check=True, capture_output=True, text=True
-    ).stdout.strip()
-
-
 def _rounded(x: Any) -> Any:
     if isinstance(x, float):
         return float(f"{x:.4g}")
@@ -479,9 +474,9 @@ def main() -> None:
     load0 = os.getloadavg()[0]
     print(f"base {base} vs this {this}; {len(names)} scenes; load {load0:.1f}", flush=True)
     started = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="planning_speed_") as tmp:
-        trees = {"this": ROOT, "base": Path(tmp) / "base"}
-        git("worktree", "add", "--detach", str(trees["base"]), base)
+    with base_worktree(base, "planning_speed_") as tree:
+        tmp = tree.parent  # the run's scratch files sit beside the worktree
+        trees = {"this": ROOT, "base": tree}
         workers: dict[str, Worker] = {}
         try:
             workers = {v: Worker(v, trees[v], "plan") for v in VERSIONS}
@@ -495,7 +490,6 @@ def main() -> None:
             for w in workers.values():
                 if w.proc.poll() is None:
                     w.close()
-            git("worktree", "remove", "--force", str(trees["base"]))
     elapsed = time.perf_counter() - started
     summary = summarise(plans, process, env)
     run = (

@@ -44,6 +44,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from compare import base_worktree, git  # benchmarks/ is on sys.path when run
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 TARGET = 5.0  # objects configuration: env steps per second, this / base
@@ -258,12 +260,6 @@ def table(summary: list[dict[str, Any]], base: str, this: str, run: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def git(*args: str) -> str:
-    return subprocess.run(
-        ["git", "-C", str(ROOT), *args], check=True, capture_output=True, text=True
-    ).stdout.strip()
-
-
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check the command a results file recorded)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -297,28 +293,23 @@ def main() -> None:
     print(f"base {base} vs this {this}; load {load0[0]:.1f}", flush=True)
     rows: list[dict[str, Any]] = []
     started = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="train_speed_") as tmp:
-        tree = Path(tmp) / "base"
-        git("worktree", "add", "--detach", str(tree), base)
-        try:
-            trees = {"this": ROOT, "base": tree}
-            for t in trees.values():  # warm the caches on disk of each tree alike
-                for config in configs:
-                    warm_caches(t, config)
-            for k in range(args.rounds):
-                for config in configs:
-                    order = ("this", "base") if k % 2 == 0 else ("base", "this")
-                    for v in order:
-                        r = run_worker(trees[v], config, steps[config], args.seed)
-                        rows.append({**r, "version": v})
-                        print(
-                            f"round {k} {config} {v}: {r['steps'] / r['learn_s']:.0f} steps/s "
-                            f"training, start-up {r['startup_s']:.1f} s, "
-                            + ", ".join(f"{p} {s:.1f} s" for p, s in r["parts_s"].items()),
-                            flush=True,
-                        )
-        finally:
-            git("worktree", "remove", "--force", str(tree))
+    with base_worktree(base, "train_speed_") as tree:
+        trees = {"this": ROOT, "base": tree}
+        for t in trees.values():  # warm the caches on disk of each tree alike
+            for config in configs:
+                warm_caches(t, config)
+        for k in range(args.rounds):
+            for config in configs:
+                order = ("this", "base") if k % 2 == 0 else ("base", "this")
+                for v in order:
+                    r = run_worker(trees[v], config, steps[config], args.seed)
+                    rows.append({**r, "version": v})
+                    print(
+                        f"round {k} {config} {v}: {r['steps'] / r['learn_s']:.0f} steps/s "
+                        f"training, start-up {r['startup_s']:.1f} s, "
+                        + ", ".join(f"{p} {s:.1f} s" for p, s in r["parts_s"].items()),
+                        flush=True,
+                    )
     load1 = os.getloadavg()
     summary = summarise(rows)
     run = (
