@@ -115,6 +115,7 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
             f"the wrist camera saw the {sym.member} of {sym.obj} {relook.describe(off)} "
             "before the fingers closed"
         )
+    arm.expect_width(g.width)
     gap = arm.close_gripper()
     hand_t_world = np.linalg.inv(arm.tcp())
     tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)
