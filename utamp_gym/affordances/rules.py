@@ -52,6 +52,7 @@ from utamp_gym.affordances.hand import (
     stand_refusal,
     width_fits,
 )
+from utamp_gym.affordances.rim import rim_pinches
 from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
@@ -355,8 +356,9 @@ def pick_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Ref
     )
 
 
-def object_facts(t: ObjectType) -> set[Fact]:
-    """Unary facts of one type: supportive/supportable parts, grasps, lifting."""
+def object_facts(t: ObjectType, extended: bool = False) -> set[Fact]:
+    """Unary facts of one type: supportive/supportable parts, grasps, lifting. `extended`:
+    with the grasps of the extended domain ``utamp2x`` (`utamp_gym.affordances.rim`)."""
     facts: set[Fact] = set()
     for part in SIDES:
         if is_supportive(t, part):
@@ -373,15 +375,19 @@ def object_facts(t: ObjectType) -> set[Fact]:
         facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
         if liftable_via(t, member):
             facts.add(("canLift", t.name, member))
+    if extended:
+        for member, palm, f1, f2 in rim_pinches(t):
+            facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
+            facts.add(("canLift", t.name, member))
     return facts
 
 
-def derive_affordances(types: Iterable[ObjectType]) -> frozenset[Fact]:
-    """All affordance facts among the given object types."""
+def derive_affordances(types: Iterable[ObjectType], extended: bool = False) -> frozenset[Fact]:
+    """All affordance facts among the given object types (`extended`: see `object_facts`)."""
     types = list(types)
     facts: set[Fact] = set()
     for t in types:
-        facts |= object_facts(t)
+        facts |= object_facts(t, extended)
     for t2 in types:
         for p2 in SIDES:
             for t1 in types:

@@ -69,6 +69,17 @@ TEMPLATES: dict[str, str] = {
         "held by {member}, its weight turns it between the pads: {moment:.2f} N m "
         "({mass:.2f} kg at {lever:cm} cm) > {limit:.1f} N m"
     ),
+    "rim": "{member} is no rim pinched from above: {what}",
+    "rim-across": (
+        "{member} is {width:cm} cm across ({fingers}), wider than its {lateral:cm} cm along "
+        "the rim: the fingers would not straddle the wall"
+    ),
+    "rim-width": "{member} is {width:cm} cm across ({fingers}), outside {limits:cm2} cm",
+    "rim-finger-room": (
+        "pinching {member} ({fingers}), a finger would stop {shortfall:cm} cm above its "
+        "target ({tolerance:cm} cm allowed, pad on the rim {pad_overlap:cm} cm)"
+    ),
+    "rim-payload": "mass {mass:.2f} kg > {limit:.2f} kg, what a rim pinch lifts",
     "ground-truth": "{fact} is not in the hand-written ground truth (the rules grant it)",
     "off-tower": "{supporter} cannot join the tower itself",
     "one-tower": "every object can join the tower on its own, but not all together: {rest}",

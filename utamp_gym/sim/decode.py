@@ -22,6 +22,7 @@ from utamp_gym.robot.kinematics import quat_wxyz_to_matrix
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, SIDES, Box, axis_of
 from utamp_gym.scene.model import Scene
+from utamp_gym.scene.shapes import rim_strip
 from utamp_gym.sim.bodies import object_prims
 
 GRASP_DEPTH = 0.025  # m, deepest grasp below the member's palm face
@@ -156,8 +157,16 @@ def grasp_point(t: ObjectType, member: str, palm: str, finger: str) -> np.ndarra
     """Object-frame TCP position: member middle, `GRASP_DEPTH` below the palm face.
 
     If the member's middle is hollow at that depth (a loop handle), the point moves
-    along the remaining lateral axis to the nearest solid primitive of the member.
+    along the remaining lateral axis to the nearest solid primitive of the member. A body
+    too wide for the hand with an open top is pinched at its wall on `finger`'s side
+    (`utamp_gym.scene.shapes.rim_strip`): the point is that strip's.
     """
+    strip = rim_strip(t, member, palm, finger)
+    if strip is not None:
+        lo, hi = np.asarray(strip.min), np.asarray(strip.max)
+        point = (lo + hi) / 2
+        point[2] = hi[2] - min(GRASP_DEPTH, (hi[2] - lo[2]) / 2)
+        return point
     box = t.members[member].box
     lo, hi = np.asarray(box.min), np.asarray(box.max)
     point = (lo + hi) / 2
@@ -198,7 +207,9 @@ def grasp_candidates(
     if approach[2] < -0.5:  # from above: fingertips must not reach the support
         bottom = world_aabb(t.bbox, obj_pose)[0][2]
         point[2] = max(point[2], bottom + TIP_CLEARANCE - approach[2] * TIP_BELOW_TCP)
-    width = float(t.members[symbols.member].box.size[axis_of(symbols.finger1)])
+    strip = rim_strip(t, symbols.member, symbols.palm, symbols.finger1)
+    box = t.members[symbols.member].box if strip is None else strip
+    width = float(box.size[axis_of(symbols.finger1)])
     opening = min(MAX_OPENING, width + 2 * FINGER_CLEARANCE)
     out = []
     for y in (finger, -finger):

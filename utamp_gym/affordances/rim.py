@@ -1,0 +1,171 @@
+"""Rim pinches: the grasps the extended domain (``utamp2x``) adds to the paper's rules.
+
+A real Panda takes a bowl, a pot without a usable handle or a plate by pinching its wall at
+the rim from above: one finger inside, one outside, the pads straddling the wall. The
+paper's rules (`utamp_gym.affordances.rules`) refuse most of these: a wall thinner than
+`hand.MIN_PINCH` was squirted out of the pads by the full 70 N squeeze, and an edge grasp
+carries at most 0.5 kg. The simulator now pinches a wall thinner than `hand.MIN_PINCH` with
+`PINCH_FORCE` and reads a thin wall as held (`utamp_gym.sim.control.ArmDriver.expect_width`),
+and these rules grant what was measured to hold (`benchmarks/grasp_coverage.py`). They
+decide from geometry and mass alone, never from a family or a type name:
+
+* the member is an edge realised by the body's own wall or rim, reaching the body's top
+  (a rim), taken from above (palm on ``on``) with the object standing on its ``under``;
+* no other member stands over it, and the fingers close across its thickness (the smaller
+  horizontal extent): at least `RIM_MIN_WIDTH`, within the hand's opening;
+* each finger reaches its place beside the wall (`hand.finger_room`): a finger may land on
+  the object's own body up to `RIM_STOP_TOLERANCE` early (a plate's well beside its rim:
+  the approach guard stops the hand 1 cm short at most, `sim.skills.APPROACH_STOP`) while
+  its pad keeps `hand.MIN_PAD_OVERLAP` on the rim; the hand above comes down freely;
+* the object weighs at most `RIM_LIFT_LIMIT` and the moment of its weight about the pinch
+  stays within `hand.TORQUE_LIMIT` (`THIN_TORQUE_LIMIT` for a wall squeezed with the
+  reduced `PINCH_FORCE`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from utamp_gym.affordances.hand import (
+    GRIPPER_OPENING,
+    MIN_PAD_OVERLAP,
+    MIN_PINCH,
+    TORQUE_LIMIT,
+    TOUCH,
+    G,
+    centre_of_mass,
+    finger_room,
+    hand_blocker,
+    realised_by_body,
+    stand_refusal,
+)
+from utamp_gym.affordances.why import REFUSED, Refusal
+from utamp_gym.scene.catalogue import Member, ObjectType
+from utamp_gym.scene.geometry import axis_of
+from utamp_gym.scene.shapes import rim_strip
+
+RIM_MIN_WIDTH = 0.001  # m: the thinnest wall pinched (steel bowls of 1.1 mm held)
+RIM_STOP_TOLERANCE = 0.005  # m a finger may land early on the object's own body
+RIM_LIFT_LIMIT = 1.1  # kg a rim pinch carries (plates of 1.05 kg were lifted and placed)
+#: N m about the pinch for a wall thinner than `hand.MIN_PINCH`, squeezed with the reduced
+#: force (the heaviest bowl measured, 0.57 N m, held)
+THIN_TORQUE_LIMIT = 0.6
+PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
+
+
+def _covered(t: ObjectType, member: str) -> str | None:
+    """A sibling member over the rim (reaching above its top where it lies)."""
+    box = t.members[member].box
+    for name, m in t.members.items():
+        other = m.box
+        if name == member or other.max[2] <= box.max[2] + 1e-9:
+            continue
+        if all(
+            box.min[i] < other.max[i] - 1e-9 and other.min[i] < box.max[i] - 1e-9 for i in (0, 1)
+        ):
+            return name
+    return None
+
+
+#: the name of the wall strip a body's pinch takes, as a member of the type it is judged on
+STRIP = "rim-strip"
+
+
+def _strip_type(t: ObjectType, member: str, palm: str, f1: str) -> ObjectType | None:
+    """`t` with the body's wall strip (`utamp_gym.scene.shapes.rim_strip`) as an edge member
+    `STRIP`, if a grasp of the body `member` is decoded as a pinch of it, else None."""
+    strip = rim_strip(t, member, palm, f1)
+    if strip is None:
+        return None
+    return t._replace(members={**t.members, STRIP: Member(STRIP, "edge", strip)})
+
+
+def rim_pinch_refusal(
+    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+) -> Refusal | None:
+    """Why the hand cannot pinch `member` as a rim from above and lift the object by it
+    (None: it can; `REFUSED` if not `why`). A body too wide for the hand with an open top
+    is judged by the wall strip the decoder pinches (`utamp_gym.scene.shapes.rim_strip`).
+    See the module docstring."""
+    if t.members[member].kind == "body":
+        strip = _strip_type(t, member, palm, f1)
+        if strip is None:
+            values = {"member": member, "what": "a body the hand wraps, or without an open top"}
+            return Refusal("rim", values) if why else REFUSED
+        return _rim_refusal(strip, STRIP, palm, f1, f2, why)
+    return _rim_refusal(t, member, palm, f1, f2, why)
+
+
+def _rim_refusal(
+    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+) -> Refusal | None:
+
+    def no(rule: str, **values: object) -> Refusal:
+        return Refusal(rule, {"member": member, **values}) if why else REFUSED
+
+    m = t.members[member]
+    if not t.movable:
+        return Refusal("fixed", {"type": t.name}) if why else REFUSED
+    if palm != "on" or m.kind != "edge" or not realised_by_body(t, m):
+        return no("rim", what=f"a {m.kind} taken with the palm on {palm}")
+    if m.box.max[2] < t.body.box.max[2] - 1e-6:
+        return no("rim", what="an edge below the body's top")
+    under = t.parts["under"]
+    if under.shape not in ("flat", "open") or under.food_surface:
+        return no("rim", what=f"on an object whose under ({under.shape}) never stands")
+    stands = stand_refusal(t, "under", why)
+    if stands is not None:
+        return stands
+    other = _covered(t, member)
+    if other is not None:
+        return no("covered", palm=palm, other=other)  # a sibling over the rim
+    ax = axis_of(f1)
+    if ax == 2:
+        return no("rim", what="with the fingers along the approach")
+    width, lateral = float(m.box.size[ax]), float(m.box.size[1 - ax])
+    if width > lateral + 1e-9:
+        return no("rim-across", width=width, lateral=lateral, fingers=f"{f1}/{f2}")
+    if not RIM_MIN_WIDTH <= width <= GRIPPER_OPENING:
+        limits = (RIM_MIN_WIDTH, GRIPPER_OPENING)
+        return no("rim-width", width=width, limits=limits, fingers=f"{f1}/{f2}")
+    blocker = hand_blocker(t, member, palm, f1)
+    if blocker is not None:
+        return no("hand-room", other=blocker, fingers=f"{f1}/{f2}")
+    room = finger_room(t, member, palm, f1)
+    for short, body, overlap in zip(room.shortfall, room.on_body, room.overlap, strict=True):
+        if short <= TOUCH:
+            continue
+        if not (body and short <= RIM_STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
+            values = {"shortfall": short, "tolerance": RIM_STOP_TOLERANCE, "pad_overlap": overlap}
+            return no("rim-finger-room", fingers=f"{f1}/{f2}", **values)
+    if t.mass > RIM_LIFT_LIMIT:
+        return no("rim-payload", mass=t.mass, limit=RIM_LIFT_LIMIT)
+    gx, gy = m.box.center_xy
+    bx, by = centre_of_mass(t)
+    lever = math.hypot(gx - bx, gy - by)
+    moment = t.mass * G * lever
+    limit = THIN_TORQUE_LIMIT if width < MIN_PINCH else TORQUE_LIMIT
+    if moment > limit:
+        return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
+    return None
+
+
+def rim_pinches(t: ObjectType) -> list[tuple[str, str, str, str]]:
+    """(member, palm, finger1, finger2) rim pinches that lift `t` (`rim_pinch_refusal`)."""
+    out = []
+    for name, m in t.members.items():
+        if m.kind not in ("edge", "body"):
+            continue
+        for f1, f2 in (("left", "right"), ("front", "back")):
+            if rim_pinch_refusal(t, name, "on", f1, f2, why=False) is None:
+                out.append((name, "on", f1, f2))
+    return out
+
+
+__all__ = [
+    "RIM_LIFT_LIMIT",
+    "RIM_MIN_WIDTH",
+    "RIM_STOP_TOLERANCE",
+    "rim_pinch_refusal",
+    "rim_pinches",
+]
