@@ -17,6 +17,8 @@ decide from geometry and mass alone, never from a family or a type name:
   the object's own body up to `RIM_STOP_TOLERANCE` early (a plate's well beside its rim:
   the approach guard stops the hand 1 cm short at most, `sim.skills.APPROACH_STOP`) while
   its pad keeps `hand.MIN_PAD_OVERLAP` on the rim; the hand above comes down freely;
+* the wall stands upright: its foot (the ``under`` surface) lies at most `FLARE_LIMIT`
+  inside its rim;
 * the object weighs at most `RIM_LIFT_LIMIT` and the moment of its weight about the pinch
   stays within `hand.TORQUE_LIMIT` (`THIN_TORQUE_LIMIT` for a wall squeezed with the
   reduced `PINCH_FORCE`).
@@ -50,6 +52,9 @@ RIM_LIFT_LIMIT = 1.1  # kg a rim pinch carries (plates of 1.05 kg were lifted an
 #: N m about the pinch for a wall thinner than `hand.MIN_PINCH`, squeezed with the reduced
 #: force (the heaviest bowl measured, 0.57 N m, held)
 THIN_TORQUE_LIMIT = 0.6
+#: m a wall may slope out from its foot to its rim: flat pads meet a flared wall (a frying
+#: pan's) along a line and it pivots between them (6 of 6 light frying pans fell)
+FLARE_LIMIT = 0.003
 PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
 
 
@@ -116,10 +121,15 @@ def _rim_refusal(
     stands = stand_refusal(t, "under", why)
     if stands is not None:
         return stands
+    ax = axis_of(f1)
+    body = t.body.box
+    if under.size is not None and ax != 2 and body.min[2] <= t.bbox.min[2] + 1e-9:
+        flare = (body.size[ax] - under.size[ax]) / 2  # the wall slopes out by this
+        if flare > FLARE_LIMIT:
+            return no("rim-flare", flare=flare, limit=FLARE_LIMIT)
     other = _covered(t, member)
     if other is not None:
         return no("covered", palm=palm, other=other)  # a sibling over the rim
-    ax = axis_of(f1)
     if ax == 2:
         return no("rim", what="with the fingers along the approach")
     width, lateral = float(m.box.size[ax]), float(m.box.size[1 - ax])

@@ -79,6 +79,10 @@ TEMPLATES: dict[str, str] = {
         "pinching {member} ({fingers}), a finger would stop {shortfall:cm} cm above its "
         "target ({tolerance:cm} cm allowed, pad on the rim {pad_overlap:cm} cm)"
     ),
+    "rim-flare": (
+        "{member}'s wall slopes out {flare:cm} cm from its foot to its rim (> {limit:cm} cm): "
+        "the pads would meet it along a line and it would pivot between them"
+    ),
     "rim-payload": "mass {mass:.2f} kg > {limit:.2f} kg, what a rim pinch lifts",
     "ground-truth": "{fact} is not in the hand-written ground truth (the rules grant it)",
     "off-tower": "{supporter} cannot join the tower itself",

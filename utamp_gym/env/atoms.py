@@ -75,14 +75,15 @@ def scene_atoms(
     return frozenset(static_atoms), frozenset(fluent_atoms), problem.objects
 
 
-def universe_facts(scene: Scene, affordances: str) -> frozenset[Fact]:
+def universe_facts(scene: Scene, affordances: str, domain: str = "utamp2") -> frozenset[Fact]:
     """The affordance facts a scene contributes to the universe of an affordance source."""
     if affordances == "none":
         return frozenset()
     rng = np.random.default_rng(0)  # unused by "gt" and "rules"
     if affordances == "noisy":
-        return possible_affordances(scene_types(scene)) | affordances_for(scene, "gt", rng)[0]
-    return affordances_for(scene, affordances, rng)[0]
+        gt = affordances_for(scene, "gt", rng, domain=domain)[0]
+        return possible_affordances(scene_types(scene)) | gt
+    return affordances_for(scene, affordances, rng, domain=domain)[0]
 
 
 @dataclass(frozen=True)
@@ -111,7 +112,11 @@ class InitialAtoms:
 
     def __call__(self, scene: Scene, rng: np.random.Generator) -> EpisodeAtoms:
         def derive() -> EpisodeAtoms:
-            facts = () if self.noisy else affordances_for(scene, self.source, rng)[0]  # no draws
+            facts = (  # no draws
+                ()
+                if self.noisy
+                else affordances_for(scene, self.source, rng, domain=self.domain_name)[0]
+            )
             static, fluent, _ = scene_atoms(scene, facts, self.domain_name, self.fluent)
             goal = frozenset(str(parse_atom(g)) for g in goal_atoms(scene))
             return EpisodeAtoms(static, fluent, goal)

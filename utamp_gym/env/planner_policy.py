@@ -157,7 +157,7 @@ class PlannerPolicy:
             return self.env.static_atoms
         if scene.name not in self._facts:
             self._facts[scene.name] = affordances_for(
-                scene, self.spec.affordances, self._rng, self.noise
+                scene, self.spec.affordances, self._rng, self.noise, self.spec.domain
             )[0]
         facts = self._facts[scene.name]
         static = scene_atoms(scene, facts, self.spec.domain, self._fluent)[0]

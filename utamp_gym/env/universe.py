@@ -304,7 +304,7 @@ def _ground(key: UniverseKey) -> Universe:
     objects: dict[str, str] = {}
     for scene in key.resolve():
         static, fluent, objs = scene_atoms(
-            scene, universe_facts(scene, key.affordances), key.domain, fluent_preds
+            scene, universe_facts(scene, key.affordances, key.domain), key.domain, fluent_preds
         )
         per_scene.append((static, frozenset(objs)))
         inits.append((fluent, frozenset(objs) | set(domain.constants) | set(PARTS)))

@@ -23,12 +23,15 @@ from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
 from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import Scene
-from utamp_gym.symbolic.problem import build_problem, domain_text
+from utamp_gym.symbolic.problem import EXTENDED_DOMAINS, build_problem, domain_text
 
 if TYPE_CHECKING:  # numpy, the rule parser and the noisy detector load only when used
     import numpy as np
 
-METHODS = ("utamp2-gt", "utamp2-rules", "utamp2-noisy", "utamp2-perceived", "utamp1")
+METHODS = (
+    "utamp2-gt", "utamp2-rules", "utamp2-noisy", "utamp2-perceived", "utamp1",
+    "utamp2x-gt", "utamp2x-rules",
+)  # fmt: skip
 #: where an env's affordances come from (env option ``affordances``)
 AFFORDANCE_SOURCES = ("gt", "rules", "noisy")
 #: ... and a method's: ``perceived`` are the rules on a planning scene's perceived types
@@ -50,6 +53,9 @@ SPECS = {
     "utamp2-noisy": MethodSpec("utamp2-noisy", "utamp2", "noisy"),
     "utamp2-perceived": MethodSpec("utamp2-perceived", "utamp2", "perceived"),
     "utamp1": MethodSpec("utamp1", "utamp1", "gt"),
+    # the extended domain: rim pinches granted (`utamp_gym.affordances.rim`)
+    "utamp2x-gt": MethodSpec("utamp2x-gt", "utamp2x", "gt"),
+    "utamp2x-rules": MethodSpec("utamp2x-rules", "utamp2x", "rules"),
 }
 
 
@@ -74,8 +80,9 @@ def _packaged_ground_truth() -> tuple[frozenset[Fact], frozenset[str]]:
     return truth, frozenset(known)
 
 
-def ground_truth_for(scene: Scene) -> frozenset[Fact]:
-    """Ground truth for the scene's types; types without hand-written truth use the rules."""
+def ground_truth_for(scene: Scene, domain: str = "utamp2") -> frozenset[Fact]:
+    """Ground truth for the scene's types; types without hand-written truth use the rules
+    (with the extended grasps for an extended `domain`, `EXTENDED_DOMAINS`)."""
     types = scene_types(scene)
     names = [t.name for t in types]
     truth, known = _packaged_ground_truth()
@@ -85,7 +92,7 @@ def ground_truth_for(scene: Scene) -> frozenset[Fact]:
         return gt
     from utamp_gym.affordances.rules import derive_affordances
 
-    derived = derive_affordances(types)
+    derived = derive_affordances(types, domain in EXTENDED_DOMAINS)
     extra = {f for f in derived if any(x in unknown for x in f[1:])}
     return gt | frozenset(extra)
 
@@ -104,7 +111,11 @@ def detection_rng(seed: int, scene_name: str) -> np.random.Generator:
 
 
 def affordances_for(
-    scene: Scene, source: str, rng: np.random.Generator | None, noise: float = DEFAULT_NOISE
+    scene: Scene,
+    source: str,
+    rng: np.random.Generator | None,
+    noise: float = DEFAULT_NOISE,
+    domain: str = "utamp2",
 ) -> tuple[frozenset[Fact], Scores]:
     """Affordance facts of `source` for the scene, with their scores against the ground truth.
 
@@ -126,13 +137,13 @@ def affordances_for(
             )
         facts = derive_affordances(scene_types(scene))
         return facts, score(facts, facts)
-    gt = ground_truth_for(scene)
+    gt = ground_truth_for(scene, domain)
     if source == "gt":
         return gt, score(gt, gt)
     if source == "rules":
         from utamp_gym.affordances.rules import derive_affordances
 
-        facts = derive_affordances(scene_types(scene))
+        facts = derive_affordances(scene_types(scene), domain in EXTENDED_DOMAINS)
         return facts, score(facts, gt)
     if rng is None:
         raise ValueError("noisy affordance detection needs a random generator (rng)")
@@ -238,7 +249,7 @@ def plan_scene(
     timed_out, phase = False, None
     late = deadline.expired()  # already out of time when called: the caller's phase
     if affordances is None:
-        facts, scores = affordances_for(scene, spec.affordances, rng, noise)
+        facts, scores = affordances_for(scene, spec.affordances, rng, noise, spec.domain)
     else:
         facts, scores = affordances
     domain = domain_text(spec.domain)

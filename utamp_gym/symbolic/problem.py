@@ -20,8 +20,11 @@ from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, Box, is_adjacent
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
 from utamp_gym.symbolic.slots import Footprint, fits, usable_region
 
-DOMAINS = ("utamp2", "utamp1")
-AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False}
+DOMAINS = ("utamp2", "utamp1", "utamp2x")
+AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False, "utamp2x": True}
+#: domains whose affordances include the extended grasps (`utamp_gym.affordances.rim`): the
+#: rules derive them for these only, so the paper's domains plan as before
+EXTENDED_DOMAINS = frozenset({"utamp2x"})
 SPACE_CONTACT_GAP = 0.01  # m
 
 
