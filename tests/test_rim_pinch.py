@@ -90,6 +90,27 @@ def test_a_heavy_saucepan_is_refused_by_its_mass_a_frying_pan_by_its_moment():
     assert rim_pinch_refusal(light, "body", "on", "left", "right") is None  # upright walls
 
 
+def _torque_refused_board() -> Any:
+    return next(
+        t
+        for s in range(40)
+        if (
+            r := pick_refusal(
+                t := generate("paddle-board", "v1", s), "handle", "on", "left", "right"
+            )
+        )
+        and r.rule == "torque"
+    )
+
+
+def test_a_board_too_heavy_at_its_handle_for_the_paper_rules_is_lifted_in_the_extended():
+    board = _torque_refused_board()
+    assert not _lifts(board, False)
+    assert ("canLift", board.name, "handle") in object_facts(board, True)
+    moment = pick_refusal(board, "handle", "on", "left", "right").values["moment"]
+    assert 1.4 < moment <= 2.5
+
+
 def test_the_extended_domain_is_the_paper_domain_by_another_name():
     assert "utamp2x" in DOMAINS
     paper, extended = domain_text("utamp2"), domain_text("utamp2x")
@@ -216,6 +237,16 @@ def test_a_plate_is_lifted_by_its_rim(sim, mat, high):
     assert (
         _pick_and_place(sim, type_table(f, extremes(f, mat, high)), "rim-back on front back") == ""
     )
+
+
+@physics
+def test_the_board_is_lifted_by_its_handle_in_physics(sim):
+    from utamp_gym.kitchenware.params import draw
+
+    board = _torque_refused_board()
+    seed = int(board.name.rsplit("-", 1)[1])
+    f = family("paddle-board")
+    assert _pick_and_place(sim, type_table(f, draw(f, "v1", seed)), "handle on left right") == ""
 
 
 @physics

@@ -1,7 +1,8 @@
 ; U-TAMP-2x: U-TAMP-2 with the grasps a real Panda makes beyond the paper's (extended domain).
 ; The same types, predicates and actions as utamp2.pddl; its problems carry the affordance
-; facts of the extended rules (utamp_gym.affordances.rim: a bowl's, a pot's, a tumbler's or a
-; plate's wall pinched at the rim from above), which the paper's domain never sees.
+; facts of the extended rules, which the paper's domain never sees: a bowl's, a pot's, a
+; tumbler's or a plate's wall pinched at the rim from above (utamp_gym.affordances.rim), and
+; a handle holding a heavier moment (utamp_gym.affordances.hand.EXTENDED_TORQUE_LIMIT).
 ; U-TAMP-2: Unified TAMP with inter-object affordances (Niaz, Piater, Agostini).
 ; Predicates of Table I; StableGrasp / StablePick / StablePlace / StableSlide of Table II.
 ; Objects are physical objects, their members (body, handle, edges), table slots,

@@ -33,7 +33,8 @@ simulator spreads it, and its centre must lie over the standing surface.
 (the member's middle to the body's centre, horizontally); its moment turns the object between
 the pads unless the pads' friction holds it, up to `TORQUE_LIMIT`, and only `TORQUE_LIMIT_ABOVE`
 when the object's centre lies above the grasp (an upside-down pot held by a lug near its
-rim tips over in the grasp).
+rim tips over in the grasp). The extended domain (``utamp2x``) allows a wrapped member (a
+handle) holding the object hanging up to `EXTENDED_TORQUE_LIMIT`, as measured in physics.
 """
 
 from __future__ import annotations
@@ -74,6 +75,10 @@ CONTACT = 0.002  # m beside the face where the pad ends up touching (a curved wa
 G = 9.81
 TORQUE_LIMIT = 1.4  # N m about the grasp, hanging (the object's centre below or level)
 TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
+#: N m about a wrapped member (a handle) with the object hanging, in the extended domain:
+#: every v1 handle grasp the paper's limit refuses (1.41-2.53 N m: boards, saucepans, frying
+#: pans, stock pots in the payload) was lifted and placed in physics
+EXTENDED_TORQUE_LIMIT = 2.5
 ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
 STAND_MARGIN = 0.01  # m: the centre of mass stays this far inside the standing surface
 
@@ -407,13 +412,17 @@ def grip_limit(member: Member) -> float:
     return GRIPPER_OPENING - (0.0 if member.kind == "edge" else 2 * WRAP_CLEARANCE)
 
 
-def holds(t: ObjectType, member: str, palm: str) -> bool:
+def holds(t: ObjectType, member: str, palm: str, extended: bool = False) -> bool:
     """The pads hold the moment of the object's weight about the grasp (module docstring)."""
-    return hold_refusal(t, member, palm, why=False) is None
+    return hold_refusal(t, member, palm, why=False, extended=extended) is None
 
 
-def hold_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Refusal | None:
-    """Why `holds` refuses (None: the pads hold it; `REFUSED` if not `why`)."""
+def hold_refusal(
+    t: ObjectType, member: str, palm: str, why: bool = True, extended: bool = False
+) -> Refusal | None:
+    """Why `holds` refuses (None: the pads hold it; `REFUSED` if not `why`). `extended`: a
+    wrapped member holding the object hanging is allowed `EXTENDED_TORQUE_LIMIT` (the
+    extended domain's rules)."""
     flipped = palm == "under"
     grip = _member_box(t, member, flipped)
     body = _member_box(t, t.body.name, flipped)
@@ -423,6 +432,8 @@ def hold_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Ref
     grasp_z = grip.max[2] - min(GRASP_DEPTH, (grip.max[2] - grip.min[2]) / 2)
     above = (body.min[2] + body.max[2]) / 2 > grasp_z + ABOVE
     limit = TORQUE_LIMIT_ABOVE if above else TORQUE_LIMIT
+    if extended and not above and t.members[member].kind != "edge":
+        limit = EXTENDED_TORQUE_LIMIT
     moment = t.mass * G * lever
     if moment <= limit:
         return None
