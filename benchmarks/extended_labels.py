@@ -33,16 +33,23 @@ def _lifts(t: Any, extended: bool) -> bool:
 def measure(split: str) -> dict[str, Any]:
     scenes = [g for g in split_scenes(split) if not g.achievable]
     row: dict[str, Any] = {"scenes": len(split_scenes(split)), "unachievable": len(scenes)}
-    now, kept, families = 0, 0, Counter()
+    now, kept, families, all_lift = 0, 0, Counter(), 0
     for g in scenes:
         kept += not plan_scene(g.scene, "utamp2-rules", timeout=60.0).solved
+        movers = [g.scene.type_of(o.name) for o in g.scene.objects if o.name != g.scene.tower_base]
+        all_lift += all(_lifts(t, True) for t in movers)
         if plan_scene(g.scene, "utamp2x-rules", timeout=60.0).solved:
             now += 1
             for o, fam in zip(g.scene.objects, g.families, strict=True):
                 t = g.scene.type_of(o.name)
                 if _lifts(t, True) and not _lifts(t, False):
                     families[fam] += 1
-    row.update(label_holds=kept, achievable_utamp2x=now, newly_liftable=dict(families))
+    row.update(
+        label_holds=kept,
+        achievable_utamp2x=now,
+        newly_liftable=dict(families),
+        every_other_liftable_utamp2x=all_lift,
+    )
     return row
 
 
@@ -60,17 +67,20 @@ def main() -> None:
         "",
         "procedural-v1 scenes labelled unachievable (the rules under the paper's domain), "
         "planned with Fast Downward under `utamp2-rules` (the label must still hold) and "
-        "`utamp2x-rules` (the extended domain's rim pinches). The labels are unchanged.",
+        "`utamp2x-rules` (the extended domain's rim pinches and handle moments). The labels "
+        "are unchanged. A scene stays unachievable when some object cannot be lifted or when "
+        "the objects cannot be stacked in one tower (what carries what).",
         "",
-        "| split | scenes | unachievable | still unsolvable under utamp2 | achievable under "
-        "utamp2x | families newly liftable in them (objects) |",
-        "|---|---|---|---|---|---|",
+        "| split | scenes | unachievable | still unsolvable under utamp2 | every object but the "
+        "base liftable under utamp2x | achievable under utamp2x | families newly liftable in "
+        "them (objects) |",
+        "|---|---|---|---|---|---|---|",
     ]
     for s, r in rows.items():
         fams = ", ".join(f"{k} {v}" for k, v in sorted(r["newly_liftable"].items())) or "–"
         lines.append(
             f"| {s} | {r['scenes']} | {r['unachievable']} | {r['label_holds']} | "
-            f"{r['achievable_utamp2x']} | {fams} |"
+            f"{r['every_other_liftable_utamp2x']} | {r['achievable_utamp2x']} | {fams} |"
         )
     lines.append("")
     out = Path(args.out)
