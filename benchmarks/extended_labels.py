@@ -53,11 +53,15 @@ def measure(split: str) -> dict[str, Any]:
     return row
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--splits", default=",".join(SPLITS))
     ap.add_argument("--out", default="docs/results/extended_labels")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     commit()
     start = time.perf_counter()
     rows = {s: measure(s) for s in args.splits.split(",")}

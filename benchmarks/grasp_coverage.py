@@ -219,13 +219,17 @@ def markdown(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=40)
     ap.add_argument("--physics", type=int, default=0, help="instances per family in physics")
     ap.add_argument("--base", default="", help="an earlier commit for the 'before' column")
     ap.add_argument("--out", default="docs/results/grasp_coverage")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     commit()  # fixed at the start of the run
     start = time.perf_counter()
     data: dict[str, Any] = {
