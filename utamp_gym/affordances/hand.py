@@ -76,9 +76,10 @@ G = 9.81
 TORQUE_LIMIT = 1.4  # N m about the grasp, hanging (the object's centre below or level)
 TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
 #: N m about a wrapped member (a handle) with the object hanging, in the extended domain:
-#: every v1 handle grasp the paper's limit refuses (1.41-2.53 N m: boards, saucepans, frying
-#: pans, stock pots in the payload) was lifted and placed in physics
-EXTENDED_TORQUE_LIMIT = 2.5
+#: the v1 handle grasps the paper's limit refuses (1.41-2.53 N m: boards, saucepans, frying
+#: pans, stock pots in the payload) were lifted and placed in physics, but a 1.1 kg tray
+#: held 23 cm out on a 19 mm handle (2.47 N m) slipped
+EXTENDED_TORQUE_LIMIT = 2.4
 ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
 STAND_MARGIN = 0.01  # m: the centre of mass stays this far inside the standing surface
 
