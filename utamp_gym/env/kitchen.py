@@ -108,7 +108,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       rows of ``object_poses`` and ``present``; every object of every scene needs one);
     * ``grounding``: "physics" (default; the backend simulates every macro action) or
       "symbolic" (effects applied to the symbolic state, >20k steps/s);
-    * ``domain``: "utamp2" | "utamp1"; ``affordances``: "gt" | "rules" | "noisy" (re-detected
+    * ``domain``: "utamp2" | "utamp1" | "utamp2x" (U-TAMP-2 with the extended grasps,
+      `utamp_gym.affordances.rim`); ``affordances``: "gt" | "rules" | "noisy" (re-detected
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5; 2–6 for procedural splits) restricts the scenes, ``scene`` fixes
       one (suite, packaged or file name); ``reset(options={"scene": name})`` picks the scene
