@@ -2,7 +2,7 @@
 
     nice -n 10 python benchmarks/procedural_outcomes.py [--pairs 1200] [--workers 2]
         [--splits train,test-families] [--seed 0] [--max-steps 12]
-        [--out docs/results/procedural_outcomes] [--from-json]
+        [--out docs/results/procedural_outcomes] [--from-json] [--domain utamp2x]
 
 The sibling of `benchmarks/outcome_model.py` on the procedural splits, where the rule parser
 is the only source of affordances (the "ground truth" of a generated type is the rules'):
@@ -75,7 +75,9 @@ def _families(scene_name: str) -> dict[str, str]:
     return {o.name: f for o, f in zip(g.scene.objects, g.families, strict=True)}
 
 
-def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pair]:
+def sample_split(
+    split: str, n_pairs: int, seed: int, max_steps: int, domain: str = "utamp2"
+) -> list[Pair]:
     """`n_pairs` pairs from physics episodes on one split (see the module docstring)."""
     from utamp_gym.env.kitchen import UTampKitchenEnv
     from utamp_gym.env.outcome import OutcomeModel
@@ -86,7 +88,7 @@ def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
         masks="geometric",
         record_timings=False,
     )
-    model = OutcomeModel(env.universe)
+    model = OutcomeModel(env.universe, domain)
     rng = np.random.default_rng(seed)
     pairs: list[Pair] = []
     first = True
@@ -213,7 +215,8 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         "<!-- written by benchmarks/procedural_outcomes.py; do not edit -->",
         "",
         f"`python benchmarks/procedural_outcomes.py --pairs {args.pairs} --splits "
-        f"{args.splits} --seed {args.seed} --max-steps {args.max_steps}`: {s['pairs']} "
+        f"{args.splits} --seed {args.seed} --max-steps {args.max_steps}"
+        f"{'' if args.domain == 'utamp2' else ' --domain ' + args.domain}`: {s['pairs']} "
         f"(state, action) pairs in physics, {wall_s / 60:.1f} min wall with "
         f"{args.workers} workers (shared 2-core machine).",
         "",
@@ -295,6 +298,12 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--max-steps", type=int, default=12)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="docs/results/procedural_outcomes")
+    ap.add_argument(
+        "--domain",
+        default="utamp2",
+        choices=("utamp2", "utamp2x"),
+        help="whose rules judge (utamp2x: with the extended grasps)",
+    )
     ap.add_argument("--from-json", action="store_true", help="re-summarize <out>.json")
     return ap
 
@@ -312,6 +321,7 @@ def main() -> None:
         wall = float(old["wall_time_s"])
         for key in ("pairs", "splits", "seed", "max_steps", "workers"):  # as measured
             setattr(args, key, old["args"][key])
+        args.domain = old["args"].get("domain", "utamp2")
     else:
         # each worker samples its share of one split from its own seed
         jobs = []
@@ -320,7 +330,7 @@ def main() -> None:
             share = args.pairs // len(splits) + (k < args.pairs % len(splits))
             for w in range(per_worker):
                 n = share // per_worker + (w < share % per_worker)
-                jobs.append((split, n, args.seed + 1000 * k + w, args.max_steps))
+                jobs.append((split, n, args.seed + 1000 * k + w, args.max_steps, args.domain))
         with ProcessPoolExecutor(args.workers) as pool:
             parts = list(pool.map(sample_split, *zip(*jobs, strict=True)))
         pairs = [p for part in parts for p in part]

@@ -89,7 +89,9 @@ def _truth_table(key: UniverseKey) -> _TruthTable:
 
 
 @lru_cache(maxsize=4)
-def _shared_scenes(key: UniverseKey) -> SceneCache[tuple[frozenset[str], np.ndarray]]:
+def _shared_scenes(
+    key: UniverseKey, domain: str = GROUND_TRUTH_DOMAIN
+) -> SceneCache[tuple[frozenset[str], np.ndarray]]:
     """Per scene of one universe, its ground truth (`OutcomeModel.reset`), shared by every
     model of a process (a training vector's envs derive each scene once); read-only."""
     return SceneCache()
@@ -98,11 +100,13 @@ def _shared_scenes(key: UniverseKey) -> SceneCache[tuple[frozenset[str], np.ndar
 class OutcomeModel:
     """Decides a symbolic step by the ground-truth U-TAMP-2 precondition (module docstring)."""
 
-    def __init__(self, universe: Universe) -> None:
-        self.universe = universe
+    def __init__(self, universe: Universe, domain: str = GROUND_TRUTH_DOMAIN) -> None:
+        """`domain`: whose ground truth decides (``utamp2x``: with the extended grasps; its
+        actions are U-TAMP-2's)."""
+        self.universe, self.domain = universe, domain
         self._table = _truth_table(universe.key)
         # scene name -> (ground-truth atoms, whether each action's affordances hold)
-        self._scenes = _shared_scenes(universe.key)
+        self._scenes = _shared_scenes(universe.key, domain)
         self._ok = np.ones(universe.n_actions, bool)
         self._truth: frozenset[str] = frozenset()
 
@@ -117,14 +121,14 @@ class OutcomeModel:
         key = state["universe"]
         assert isinstance(key, UniverseKey)
         state["universe"], state["_table"] = ground_universe(key), _truth_table(key)
-        state["_scenes"] = _shared_scenes(key)
+        state["_scenes"] = _shared_scenes(key, state.get("domain", GROUND_TRUTH_DOMAIN))
         self.__dict__.update(state)
 
     def reset(self, scene: Scene) -> None:
         """Start an episode in `scene`: its ground-truth affordances decide from now on."""
 
         def derive() -> tuple[frozenset[str], np.ndarray]:
-            truth, t = truth_atoms(scene), self._table
+            truth, t = truth_atoms(scene, self.domain), self._table
             words = np.zeros(t.pos.shape[1], np.uint64)
             for a in truth:
                 j = t.atoms.get(a)
@@ -158,7 +162,7 @@ class OutcomeModel:
         raise AssertionError(f"no false affordance literal for {self.universe.actions[i]}")
 
 
-def truth_atoms(scene: Scene) -> frozenset[str]:
-    """The scene's ground-truth affordance atoms, lower-case PDDL."""
-    facts = ground_truth_for(scene)
+def truth_atoms(scene: Scene, domain: str = GROUND_TRUTH_DOMAIN) -> frozenset[str]:
+    """The scene's ground-truth affordance atoms (of `domain`), lower-case PDDL."""
+    facts = ground_truth_for(scene, domain)
     return frozenset(str(parse_atom(a)) for a in instantiate_affordances(scene, facts))
