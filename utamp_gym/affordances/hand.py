@@ -75,10 +75,12 @@ CONTACT = 0.002  # m beside the face where the pad ends up touching (a curved wa
 G = 9.81
 TORQUE_LIMIT = 1.4  # N m about the grasp, hanging (the object's centre below or level)
 TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
-#: N m about a wrapped member (a handle) with the object hanging, in the extended domain:
-#: the v1 handle grasps the paper's limit refuses (1.41-2.53 N m: boards, saucepans, frying
-#: pans, stock pots in the payload) were lifted and placed in physics, but a 1.1 kg tray
-#: held 23 cm out on a 19 mm handle (2.47 N m) slipped
+#: N m about a wrapped member (a handle) with the object hanging, in the extended domain,
+#: as long as the part of it about the axis across the closing one stays within
+#: `TORQUE_LIMIT`: the v1 handle grasps the paper's limit refuses whose lever runs across
+#: the fingers' closing axis (1.41-2.53 N m: boards, saucepans, frying pans, stock pots in
+#: the payload) were lifted and placed in physics; trays held at an end handle with the
+#: fingers closing along the lever slipped at 2.36-2.47 N m
 EXTENDED_TORQUE_LIMIT = 2.4
 ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
 STAND_MARGIN = 0.01  # m: the centre of mass stays this far inside the standing surface
@@ -413,17 +415,25 @@ def grip_limit(member: Member) -> float:
     return GRIPPER_OPENING - (0.0 if member.kind == "edge" else 2 * WRAP_CLEARANCE)
 
 
-def holds(t: ObjectType, member: str, palm: str, extended: bool = False) -> bool:
+def holds(
+    t: ObjectType, member: str, palm: str, extended: bool = False, finger: str | None = None
+) -> bool:
     """The pads hold the moment of the object's weight about the grasp (module docstring)."""
-    return hold_refusal(t, member, palm, why=False, extended=extended) is None
+    return hold_refusal(t, member, palm, why=False, extended=extended, finger=finger) is None
 
 
 def hold_refusal(
-    t: ObjectType, member: str, palm: str, why: bool = True, extended: bool = False
+    t: ObjectType,
+    member: str,
+    palm: str,
+    why: bool = True,
+    extended: bool = False,
+    finger: str | None = None,
 ) -> Refusal | None:
-    """Why `holds` refuses (None: the pads hold it; `REFUSED` if not `why`). `extended`: a
-    wrapped member holding the object hanging is allowed `EXTENDED_TORQUE_LIMIT` (the
-    extended domain's rules)."""
+    """Why `holds` refuses (None: the pads hold it; `REFUSED` if not `why`). `extended` (the
+    extended domain's rules) with the fingers closing along `finger`'s axis: a wrapped
+    member holding the object hanging is allowed `EXTENDED_TORQUE_LIMIT`, the part of the
+    moment about the axis across the closing one `TORQUE_LIMIT`."""
     flipped = palm == "under"
     grip = _member_box(t, member, flipped)
     body = _member_box(t, t.body.name, flipped)
@@ -433,8 +443,10 @@ def hold_refusal(
     grasp_z = grip.max[2] - min(GRASP_DEPTH, (grip.max[2] - grip.min[2]) / 2)
     above = (body.min[2] + body.max[2]) / 2 > grasp_z + ABOVE
     limit = TORQUE_LIMIT_ABOVE if above else TORQUE_LIMIT
-    if extended and not above and t.members[member].kind != "edge":
-        limit = EXTENDED_TORQUE_LIMIT
+    if extended and finger is not None and not above and t.members[member].kind != "edge":
+        along = abs((gx - bx, gy - by)[axis_of(finger)])  # the lever along the closing axis
+        if t.mass * G * along <= TORQUE_LIMIT:
+            limit = EXTENDED_TORQUE_LIMIT
     moment = t.mass * G * lever
     if moment <= limit:
         return None

@@ -370,7 +370,7 @@ def object_facts(t: ObjectType, extended: bool = False) -> set[Fact]:
     for member, palm, f1, f2 in grasps:
         if t.members[member].kind == "edge" and not liftable_via(t, member) and any_liftable:
             continue  # an edge grasp that cannot carry the object is never useful
-        if liftable_via(t, member) and not holds(t, member, palm, extended):
+        if liftable_via(t, member) and not holds(t, member, palm, extended, f1):
             continue  # light enough, but it would turn out of the pads when lifted
         facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
         if liftable_via(t, member):
