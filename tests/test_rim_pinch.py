@@ -111,6 +111,20 @@ def test_a_board_too_heavy_at_its_handle_for_the_paper_rules_is_lifted_in_the_ex
     assert 1.4 < moment <= 2.4
 
 
+def test_a_tray_held_at_an_end_handle_along_its_lever_keeps_the_paper_limit():
+    from utamp_gym.affordances.hand import hold_refusal
+
+    tray = next(
+        t
+        for s in range(40)
+        if (r := hold_refusal(t := generate("tray", "v1", s), "handle-front", "on"))
+        and 1.4 < r.values["moment"] <= 2.4
+    )
+    # the fingers close along x, the lever runs along x: the paper's limit
+    assert hold_refusal(tray, "handle-front", "on", extended=True, finger="front").rule == "torque"
+    assert ("canLift", tray.name, "handle-front") not in object_facts(tray, True)
+
+
 def test_the_extended_domain_is_the_paper_domain_by_another_name():
     assert "utamp2x" in DOMAINS
     paper, extended = domain_text("utamp2"), domain_text("utamp2x")
