@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import utamp_gym
+from utamp_gym.contract.views import BACKGROUND, ROBOT, ViewBundle
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.perception.objects import perceive_objects
-from utamp_gym.perception.views import BACKGROUND, ROBOT, ViewBundle
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.catalogue import Catalogue
 from utamp_gym.scene.io import scene_from_dict

@@ -19,8 +19,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from utamp_gym.contract.state import PhysicalState
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.perception.state import PhysicalState
 from utamp_gym.scene.model import Scene
 
 DEFAULT_BACKEND = "utamp_gym.sim.backend:MujocoBackend"

@@ -170,7 +170,7 @@ def crosscheck_tasks() -> int:
 
 #: constants the concept pages quote: name -> (module, attribute, unit scale)
 CONSTANTS = {
-    "tilt_deg": ("utamp_gym.perception.abstraction", "TILT_DEG", 1),
+    "tilt_deg": ("utamp_gym.contract.state", "TILT_DEG", 1),
     "workspace_tol_cm": ("utamp_gym.perception.abstraction", "WORKSPACE_TOL", 100),
     "gripper_opening_cm": ("utamp_gym.affordances.rules", "GRIPPER_OPENING", 100),
     "rules_payload_kg": ("utamp_gym.affordances.rules", "PAYLOAD", 1),

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.material import (
     MaterialEstimate,
@@ -52,7 +53,6 @@ from utamp_gym.perception.material import (
 )
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape
 from utamp_gym.perception.shape import fit_shape
-from utamp_gym.perception.views import ViewBundle
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material

@@ -29,10 +29,10 @@ import mujoco
 import numpy as np
 
 from utamp_gym.backend import DEFAULT_POSE_NOISE, PERCEPTION_MODES, Fault, MacroResult
+from utamp_gym.contract.state import Grasp, PhysicalState
+from utamp_gym.contract.views import RobotState, ViewBundle
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
 from utamp_gym.perception.poses import PoseModel
-from utamp_gym.perception.state import Grasp, PhysicalState
-from utamp_gym.perception.views import RobotState, ViewBundle
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.cameras import (

@@ -27,9 +27,9 @@ from collections.abc import Callable, Mapping
 import mujoco
 import numpy as np
 
+from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.poses import PoseModel, estimate_pose
-from utamp_gym.perception.views import ViewBundle
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.sim.bodies import object_prims
 
