@@ -366,13 +366,13 @@ def test_utamp2_perceived_plans_the_demo_scene() -> None:
 
 
 def test_rgbd_pose_estimates_at_reset() -> None:
+    from utamp_gym.grounding import physics_backend
     from utamp_gym.seeding import run_seed
-    from utamp_gym.sim.backend import MujocoBackend
     from utamp_gym.sim.measure import obj_pose, pose_change
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene("pick-place/072")
-    backend = MujocoBackend(perception="rgbd")
+    backend = physics_backend(perception="rgbd")
     try:
         backend.reset(scene, np.random.default_rng(run_seed(scene.name, 0)))
         st = backend.state

@@ -23,14 +23,15 @@ from utamp_gym.contract.state import PhysicalState
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene.model import Scene
 
-DEFAULT_BACKEND = "utamp_gym.sim.backend:MujocoBackend"
+#: the MuJoCo simulator with the pose tracking the env option ``perception`` names
+DEFAULT_BACKEND = "utamp_gym.grounding:physics_backend"
 #: Standard deviation (m) of the robot's object-position estimates (env option `pose_noise`);
 #: the yaw estimate's standard deviation scales with it (`yaw_noise_deg`).
 DEFAULT_POSE_NOISE = 0.002
 MAX_POSE_NOISE = 0.05
 #: where the robot's object poses come from (env option ``perception``): ``gaussian``, the
-#: true pose plus `pose_noise` (`utamp_gym.sim.estimate`), or ``rgbd``, the rendered cameras
-#: (`utamp_gym.sim.rgbd`)
+#: true pose plus `pose_noise` (`utamp_gym.sim.estimate`), or ``rgbd``, poses fitted to the
+#: rendered cameras (`utamp_gym.perception.tracking`; `utamp_gym.grounding` composes them)
 PERCEPTION_MODES = ("gaussian", "rgbd")
 DEFAULT_PERCEPTION = "gaussian"
 
