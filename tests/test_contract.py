@@ -90,6 +90,7 @@ def test_a_backend_without_a_survey_is_no_physics_backend() -> None:
 @pytest.mark.parametrize(("old", "new", "name"), [
     ("utamp_gym.perception.state", "utamp_gym.contract.state", "PhysicalState"),
     ("utamp_gym.perception.views", "utamp_gym.contract.views", "ViewBundle"),
+    ("utamp_gym.planning.methods", "utamp_gym.affordances.sources", "ground_truth_for"),
 ])  # fmt: skip
 def test_a_moved_name_still_imports_from_its_old_path_with_a_warning(
     old: str, new: str, name: str
@@ -97,7 +98,7 @@ def test_a_moved_name_still_imports_from_its_old_path_with_a_warning(
     import importlib
 
     module = importlib.import_module(old)
-    with pytest.warns(DeprecationWarning, match=f"{old} moved to {new}"):
+    with pytest.warns(DeprecationWarning, match=f"{old}.{name} moved to {new}.{name}"):
         value = getattr(module, name)
     assert value is getattr(sys.modules[new], name)
     with pytest.raises(AttributeError, match="no attribute 'Nope'"):

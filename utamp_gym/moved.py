@@ -28,7 +28,7 @@ def forward(old: str, new: ModuleType) -> tuple[Callable[[str], Any], Callable[[
         except AttributeError:
             raise AttributeError(f"module {old!r} has no attribute {name!r}") from None
         warnings.warn(
-            f"{old} moved to {new.__name__}: import {name} from there "
+            f"{old}.{name} moved to {new.__name__}.{name}: import it from there "
             "(the old path goes in the next release)",
             DeprecationWarning,
             stacklevel=2,

@@ -95,8 +95,9 @@ def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
 
 def add_parser(sub: Any) -> None:
     """``utamp plan SCENE``."""
+    from utamp_gym.affordances.sources import DEFAULT_NOISE
     from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
-    from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
+    from utamp_gym.planning.methods import METHODS
 
     plan = sub.add_parser("plan", help=help_line("plan"))
     plan.add_argument("scene", help=SCENE_HELP)

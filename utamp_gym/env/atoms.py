@@ -13,8 +13,8 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.rules import FINGER_PAIRS, PALM_PARTS
+from utamp_gym.affordances.sources import affordances_for, scene_types
 from utamp_gym.env.scene_cache import SceneCache
-from utamp_gym.planning.methods import affordances_for, scene_types
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES
 from utamp_gym.scene.model import Scene

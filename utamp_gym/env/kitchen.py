@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_PERCEPTION,
@@ -38,7 +39,6 @@ from utamp_gym.env.viewer import FRAME_RATE, Rendering
 from utamp_gym.env.views import KitchenViews
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.perception.abstraction import Perception
-from utamp_gym.planning.methods import DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
 
 #: observation rows of `object_poses` / `present`: the suites' catalogue objects

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.affordances.sources import AFFORDANCE_SOURCES, DEFAULT_NOISE
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_PERCEPTION,
@@ -22,7 +23,6 @@ from utamp_gym.backend import (
 from utamp_gym.env.object_space import INTERFACES
 from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import (
     ALL_SUITES,

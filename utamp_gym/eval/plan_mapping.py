@@ -18,8 +18,8 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.eval.solvability import AFFORDANCE_PREDICATES
-from utamp_gym.planning.methods import ground_truth_for
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import Atom, Domain, Literal, parse_domain, parse_problem
 from utamp_gym.symbolic.problem import build_problem, domain_text

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.backend import (
     DEFAULT_PERCEPTION,
     DEFAULT_POSE_NOISE,
@@ -30,7 +31,6 @@ from utamp_gym.errors import UnknownNameError, UtampError
 from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile, key_shard
 from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EvalTask, check_method, failure_row, run_task
 from utamp_gym.eval.vlm_methods import VLM_METHODS
-from utamp_gym.planning.methods import DEFAULT_NOISE
 from utamp_gym.provenance import commit
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import suite_scenes

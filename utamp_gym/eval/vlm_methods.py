@@ -20,12 +20,12 @@ from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.affordances.rules import derive_affordances
+from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.errors import EndpointError, PlanningTimeout
 from utamp_gym.eval.image import render_scene_png
 from utamp_gym.eval.plan_mapping import map_plan, split_step
 from utamp_gym.eval.vlm_client import Message, VlmClient, extract_json, image_part
 from utamp_gym.planning.fast_downward import solve
-from utamp_gym.planning.methods import ground_truth_for
 from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES, ObjectType
 from utamp_gym.scene.geometry import SIDES
 from utamp_gym.scene.model import Scene
