@@ -78,7 +78,7 @@ def _families(scene_name: str) -> dict[str, str]:
 def sample_split(split: str, n_pairs: int, seed: int, max_steps: int) -> list[Pair]:
     """`n_pairs` pairs from physics episodes on one split (see the module docstring)."""
     from utamp_gym.env.kitchen import UTampKitchenEnv
-    from utamp_gym.env.outcome import OutcomeModel
+    from utamp_gym.symbolic.outcome import OutcomeModel
 
     env = UTampKitchenEnv(
         split=split,

@@ -33,8 +33,8 @@ except ImportError as exc:  # pragma: no cover - depends on the installed extras
 from utamp_gym.dm.physics import KitchenPhysics
 from utamp_gym.dm.replay import JointTrajectory, ReplayPolicy, record_plan
 from utamp_gym.dm.task import CONTROL_TIMESTEP, StackTask
-from utamp_gym.env.universe import UniverseKey, ground_universe
 from utamp_gym.suites import resolve_scene
+from utamp_gym.symbolic.universe import UniverseKey, ground_universe
 
 DEFAULT_TIME_LIMIT = 120.0  # s of simulated time per episode
 

@@ -21,7 +21,6 @@ from utamp_gym.backend import (
     PERCEPTION_MODES,
 )
 from utamp_gym.env.object_space import INTERFACES
-from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import (
@@ -32,6 +31,7 @@ from utamp_gym.suites import (
     suite_scenes,
 )
 from utamp_gym.symbolic.problem import DOMAINS
+from utamp_gym.symbolic.universe import UniverseKey
 
 GROUNDINGS = ("physics", "symbolic")
 #: see `utamp_gym.env.viewer` for what each mode shows

@@ -26,14 +26,14 @@ from functools import lru_cache
 import numpy as np
 
 from utamp_gym.affordances.sources import ground_truth_for
-from utamp_gym.env.atoms import parse_atom
-from utamp_gym.env.geometric import GEOMETRIC_DROPPED
-from utamp_gym.env.scene_cache import SceneCache
-from utamp_gym.env.state import SymbolicState
-from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.atoms import parse_atom
+from utamp_gym.symbolic.geometric import GEOMETRIC_DROPPED
 from utamp_gym.symbolic.pddl import Domain, Literal, parse_domain
 from utamp_gym.symbolic.problem import domain_text, instantiate_affordances
+from utamp_gym.symbolic.scene_cache import SceneCache
+from utamp_gym.symbolic.state import SymbolicState
+from utamp_gym.symbolic.universe import Universe, UniverseKey, ground_universe
 
 GROUND_TRUTH_DOMAIN = "utamp2"
 

@@ -27,7 +27,7 @@ Caching: `ground_universe` is a `functools.lru_cache` (bounded) on a pure functi
 frozen, hashable `UniverseKey`; the result is immutable (read-only arrays, tuples, ints), so
 envs share it safely and pickle it by key. No registry or env holds a mutable cache of it;
 each process (e.g. an async vector env worker) grounds once per key, in 0.2-30 s, unless an
-earlier process stored it on disk (`utamp_gym.env.universe_store`: named by the key and the
+earlier process stored it on disk (`utamp_gym.symbolic.universe_store`: named by the key and the
 package's contents), which a new process reads instead.
 """
 
@@ -42,13 +42,13 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
-from utamp_gym.env import universe_store
-from utamp_gym.env.atoms import parse_atom, scene_atoms, universe_facts
-from utamp_gym.env.geometric import geometric_domain, prune
 from utamp_gym.errors import PddlError, UnknownNameError
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene, universe_scenes
+from utamp_gym.symbolic import universe_store
+from utamp_gym.symbolic.atoms import parse_atom, scene_atoms, universe_facts
+from utamp_gym.symbolic.geometric import geometric_domain, prune
 from utamp_gym.symbolic.pddl import Domain, Literal, Problem, parse_domain
 from utamp_gym.symbolic.problem import domain_text, goal_atoms
 from utamp_gym.symbolic.reach import reachable_ops

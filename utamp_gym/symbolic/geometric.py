@@ -32,7 +32,7 @@ from functools import lru_cache
 from types import MappingProxyType
 
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
-from utamp_gym.env.atoms import parse_atom
+from utamp_gym.symbolic.atoms import parse_atom
 from utamp_gym.symbolic.pddl import Atom, Domain, Literal, parse_domain
 from utamp_gym.symbolic.problem import domain_text
 from utamp_gym.symbolic.reach import GroundOp

@@ -25,9 +25,9 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from utamp_gym.env.atoms import EpisodeAtoms
-from utamp_gym.env.scene_cache import SceneCache
-from utamp_gym.env.universe import Universe, ground_universe
+from utamp_gym.symbolic.atoms import EpisodeAtoms
+from utamp_gym.symbolic.scene_cache import SceneCache
+from utamp_gym.symbolic.universe import Universe, ground_universe
 
 MASK_MODES = ("affordances", "geometric", "none")
 

@@ -14,12 +14,12 @@ import numpy as np
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.rules import FINGER_PAIRS, PALM_PARTS
 from utamp_gym.affordances.sources import affordances_for, scene_types
-from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import Atom, Domain
 from utamp_gym.symbolic.problem import build_problem, goal_atoms, instantiate_affordances
+from utamp_gym.symbolic.scene_cache import SceneCache
 
 
 def parse_atom(text: str) -> Atom:

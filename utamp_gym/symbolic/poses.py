@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.scene_cache import SceneCache
 
 LIFT_HEIGHT = 0.25  # m, how high a held object is reported above where it was picked
 
