@@ -91,6 +91,9 @@ def test_a_backend_without_a_survey_is_no_physics_backend() -> None:
     ("utamp_gym.perception.state", "utamp_gym.contract.state", "PhysicalState"),
     ("utamp_gym.perception.views", "utamp_gym.contract.views", "ViewBundle"),
     ("utamp_gym.planning.methods", "utamp_gym.affordances.sources", "ground_truth_for"),
+    ("utamp_gym.env.scene_cache", "utamp_gym.symbolic.scene_cache", "SceneCache"),
+    ("utamp_gym.env.outcome", "utamp_gym.symbolic.outcome", "OutcomeModel"),
+    ("utamp_gym.env.universe_store", "utamp_gym.symbolic.universe_store", "load"),
 ])  # fmt: skip
 def test_a_moved_name_still_imports_from_its_old_path_with_a_warning(
     old: str, new: str, name: str
