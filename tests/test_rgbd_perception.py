@@ -276,7 +276,7 @@ def test_a_covered_pans_mass_is_its_shell() -> None:
 
 def _perceived_type(scene_name: str, obj: str):
     """The declared and the perceived type of `obj` in a suite scene (seed 0)."""
-    from utamp_gym.eval.perceived import perceive_scene
+    from utamp_gym.methods.perceived import perceive_scene
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(scene_name)
@@ -352,7 +352,7 @@ def test_perception_never_imports_the_simulator() -> None:
 
 
 def test_utamp2_perceived_plans_the_demo_scene() -> None:
-    from utamp_gym.eval.perceived import plan_perceived
+    from utamp_gym.methods.perceived import plan_perceived
     from utamp_gym.planning.crosscheck import check_against_ground_truth
     from utamp_gym.suites import resolve_scene
 

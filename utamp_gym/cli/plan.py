@@ -27,7 +27,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     scene = resolve_scene(args.scene)
     out = None if args.out is None else output_dir(args.out, "--out")
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
-        from utamp_gym.eval.perceived import plan_perceived
+        from utamp_gym.methods.perceived import plan_perceived
 
         outcome = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)[0]
     else:

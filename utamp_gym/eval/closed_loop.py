@@ -120,7 +120,7 @@ def _perceived_facts(env: UTampKitchenEnv, seed: int) -> frozenset:
     """`utamp2-perceived`'s affordances of the env's scene, perceived in its world (physics)
     or in the episode's world built for a look (symbolic), in the env's names."""
     from utamp_gym.affordances.sources import plan_affordances
-    from utamp_gym.eval.perceived import perceive_live, perceive_scene
+    from utamp_gym.methods.perceived import perceive_live, perceive_scene
 
     seen = (
         perceive_scene(env.scene, seed)

@@ -32,7 +32,7 @@ then need and no camera sees is filled in by stated assumptions:
   is wood of 1.7 t/m^3: no camera sees that).
 
 Members are named by kind and side (``handle-back``, ``edge-left``, ``neck``): the
-perceiver does not know the catalogue's names; `utamp_gym.eval.perceived` aligns them to the
+perceiver does not know the catalogue's names; `utamp_gym.methods.perceived` aligns them to the
 declared members by geometry for scoring.
 """
 

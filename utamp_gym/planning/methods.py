@@ -130,7 +130,7 @@ def plan_scene(
     `DEFAULT_SEARCH`. An unsolvable task or a time-out comes back with ``solved=False`` and
     a reason (a time-out also with the phase that ran out of time). `affordances` (facts and
     their scores) replaces the method's own source: ``utamp2-perceived`` plans the declared
-    scene with the facts perceived in it (`utamp_gym.eval.perceived.plan_perceived`).
+    scene with the facts perceived in it (`utamp_gym.methods.perceived.plan_perceived`).
     """
     spec = method_spec(method)
     start = time.perf_counter()

@@ -22,9 +22,9 @@ from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.affordances.rules import derive_affordances
 from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.errors import EndpointError, PlanningTimeout
-from utamp_gym.eval.image import render_scene_png
-from utamp_gym.eval.plan_mapping import map_plan, split_step
-from utamp_gym.eval.vlm_client import Message, VlmClient, extract_json, image_part
+from utamp_gym.methods.image import render_scene_png
+from utamp_gym.methods.plan_mapping import map_plan, split_step
+from utamp_gym.methods.vlm_client import Message, VlmClient, extract_json, image_part
 from utamp_gym.planning.fast_downward import solve
 from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES, ObjectType
 from utamp_gym.scene.geometry import SIDES
@@ -37,8 +37,8 @@ KINDS = tuple(t for _, t in (*MOVABLES, TRAY))
 
 
 def prompt(name: str, **values: str) -> str:
-    """A packaged prompt (``utamp_gym/eval/prompts/<name>.txt``) with ``$values`` filled in."""
-    text = resources.files("utamp_gym.eval").joinpath("prompts", f"{name}.txt").read_text()
+    """A packaged prompt (``utamp_gym/methods/prompts/<name>.txt``) with ``$values`` filled in."""
+    text = resources.files("utamp_gym.methods").joinpath("prompts", f"{name}.txt").read_text()
     return Template(text).substitute(values)
 
 

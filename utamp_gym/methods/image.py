@@ -17,7 +17,7 @@ def render_scene_png(scene: Scene, seed: int = 0, size: tuple[int, int] = IMAGE_
     Needs an offscreen GL context (`utamp_gym.sim.gl` picks one when ``MUJOCO_GL`` is unset);
     anything missing raises `SimulationError` naming what to install or set.
     """
-    try:
+    try:  # MuJoCo and GL load when an image is asked for, not on `utamp eval`'s start-up
         import imageio.v3 as iio
         import mujoco
 

@@ -18,8 +18,8 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from utamp_gym.affordances.facts import PREDICATES
 from utamp_gym.affordances.sources import ground_truth_for
-from utamp_gym.eval.solvability import AFFORDANCE_PREDICATES
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import Atom, Domain, Literal, parse_domain, parse_problem
 from utamp_gym.symbolic.problem import build_problem, domain_text
@@ -28,6 +28,9 @@ from utamp_gym.symbolic.validate import holds
 VERBS = {"pick": "pick-support", "place": "place-support", "slide": "slide-support"}
 TABLE_NAMES = ("table", "kitchen-table", "table-top")
 SPACE_NAMES = ("space", "free-space", "empty-space")
+
+#: the affordance predicates, as the parsed PDDL spells them (lower case)
+AFFORDANCE_PREDICATES = frozenset(p.lower() for p in PREDICATES)
 
 
 @dataclass(frozen=True)

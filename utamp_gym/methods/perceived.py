@@ -29,10 +29,10 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores, score
-from utamp_gym.affordances.sources import SEEN_SUFFIX
+from utamp_gym.affordances.sources import SEEN_SUFFIX, ground_truth_for, plan_affordances
 from utamp_gym.errors import UtampError
-from utamp_gym.eval.stages import ATTRIBUTES
-from utamp_gym.planning.methods import PlanOutcome
+from utamp_gym.methods.attributes import ATTRIBUTES
+from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box
 from utamp_gym.scene.model import Scene
@@ -256,9 +256,6 @@ def plan_perceived(
     scene's ground truth). The planning time includes the perception (render and fit). A
     scene the cameras could not perceive is unsolved, with the reason (and no perceived
     scene)."""
-    from utamp_gym.affordances.sources import ground_truth_for, plan_affordances
-    from utamp_gym.planning.methods import plan_scene
-
     start = time.perf_counter()
     try:
         ps = perceive_scene(scene, seed, backend=backend)
