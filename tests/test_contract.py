@@ -97,6 +97,7 @@ def test_a_backend_without_a_survey_is_no_physics_backend() -> None:
     ("utamp_gym.env.dm_adapter", "utamp_gym.dm.adapter", "DmEnvAdapter"),
     ("utamp_gym.eval.vlm_methods", "utamp_gym.methods.vlm", "run_vlm_planner"),
     ("utamp_gym.eval.vlm_client", "utamp_gym.methods.vlm_client", "VlmClient"),
+    ("utamp_gym.eval.perceived", "utamp_gym.methods.perceived", "attribute_accuracy"),
 ])  # fmt: skip
 def test_a_moved_name_still_imports_from_its_old_path_with_a_warning(
     old: str, new: str, name: str
