@@ -3,10 +3,10 @@
 * measuring this tree against an earlier commit (`physics_speed.py`, `planning_speed.py`,
   `train_speed.py`): `git` in this repository, the earlier commit checked out as a detached
   worktree for one run (`base_worktree`), and a `Worker` process running one tree's code;
-* summaries: `med` (the median, NaN when empty), `cpu_s` (CPU time of this process and its
-  reaped children) and `load` (the load averages: the machine is shared, times are
-  indicative). Intervals are the package's (`utamp_gym.eval.intervals`: Wilson, bootstrap,
-  Student t).
+* summaries: `med` (the median, NaN when empty), `rounded` (4 significant digits),
+  `cpu_s` (CPU time of this process and its reaped children) and `load` (the load
+  averages: the machine is shared, times are indicative). Intervals are the package's
+  (`utamp_gym.eval.intervals`: Wilson, bootstrap, Student t).
 """
 
 from __future__ import annotations
@@ -112,3 +112,14 @@ def cpu_s() -> float:
 def load() -> list[float]:
     """The 1, 5 and 15 minute load averages, rounded to 0.01."""
     return [round(x, 2) for x in os.getloadavg()]
+
+
+def rounded(x: Any) -> Any:
+    """`x` with every float to 4 significant digits (a smaller JSON file)."""
+    if isinstance(x, float):
+        return float(f"{x:.4g}")
+    if isinstance(x, dict):
+        return {k: rounded(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [rounded(v) for v in x]
+    return x

@@ -35,7 +35,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from compare import Worker, base_worktree, cpu_s, git, med  # benchmarks/ is on sys.path
+from compare import Worker, base_worktree, cpu_s, git, med, rounded  # benchmarks/ is on sys.path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -200,17 +200,6 @@ def episodes(suites: Sequence[str], objects: set[int], stride: int, seeds: int) 
     return out
 
 
-def _rounded(x: Any) -> Any:
-    """`x` with every float to 4 significant digits (a smaller JSON file)."""
-    if isinstance(x, float):
-        return float(f"{x:.4g}")
-    if isinstance(x, dict):
-        return {k: _rounded(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_rounded(v) for v in x]
-    return x
-
-
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -331,7 +320,7 @@ def main() -> None:
         "episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in rows],
         "phase_episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in phase_rows],
     }
-    write_json(out.with_suffix(".json"), _rounded(report), indent=None)
+    write_json(out.with_suffix(".json"), rounded(report), indent=None)
     written = [out.with_suffix(".md"), out.with_suffix(".json")]
     if phase_rows:
         phases_md = out.parent / "physics_phases.md"

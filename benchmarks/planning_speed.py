@@ -42,7 +42,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from compare import Worker, base_worktree, git, med  # benchmarks/ is on sys.path when run
+from compare import Worker, base_worktree, git, med, rounded  # benchmarks/ is on sys.path when run
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -387,16 +387,6 @@ def table(s: dict[str, Any], base: str, this: str, n_plans: int, n_procs: int, a
     return "\n".join(lines) + "\n"
 
 
-def _rounded(x: Any) -> Any:
-    if isinstance(x, float):
-        return float(f"{x:.4g}")
-    if isinstance(x, dict):
-        return {k: _rounded(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_rounded(v) for v in x]
-    return x
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", choices=("plan", "env"), help=argparse.SUPPRESS)
@@ -477,7 +467,7 @@ def main() -> None:
         "process": process,
         "env": env,
     }
-    out.with_suffix(".json").write_text(json.dumps(_rounded(report), indent=1) + "\n")
+    out.with_suffix(".json").write_text(json.dumps(rounded(report), indent=1) + "\n")
     print(f"wrote {out.with_suffix('.md')}, {out.with_suffix('.json')}")
 
 
