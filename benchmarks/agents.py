@@ -32,16 +32,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import os
 import statistics
 import time
 from pathlib import Path
 from typing import Any
 
+from compare import load  # benchmarks/ is on sys.path when run
+
+from utamp_gym.eval.intervals import t_interval
 from utamp_gym.provenance import commit, write_json, write_markdown
 
-T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571}  # Student t, 97.5 %, by dof
 PLANNERS = ("utamp2-rules", "utamp2-gt")
 
 
@@ -62,19 +62,6 @@ def achievable(split_suites: dict[str, str]) -> dict[str, list[int]]:
         scenes = split_scenes(suite.rsplit("/", 1)[1])
         out[name] = [sum(g.achievable for g in scenes), len(scenes)]
     return out
-
-
-def load() -> list[float]:
-    """The 1, 5 and 15 minute load averages (the machine is shared: times are indicative)."""
-    return [round(x, 2) for x in os.getloadavg()]
-
-
-def t_interval(values: list[float]) -> tuple[float, float]:
-    """(mean, 95 % half-width over seeds)."""
-    mean = statistics.fmean(values)
-    if len(values) < 2:
-        return mean, float("nan")
-    return mean, T95[len(values) - 1] * statistics.stdev(values) / math.sqrt(len(values))
 
 
 def evaluate(

@@ -14,10 +14,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import tempfile
 import time
 from pathlib import Path
+
+from compare import cpu_s  # benchmarks/ is on sys.path when run
 
 from utamp_gym.eval.sweep import DEFAULT_METHODS, SweepConfig, run_sweep, write_outputs
 
@@ -25,15 +26,9 @@ TARGETS_S = {"symbolic": 120.0, "physics": 600.0}
 SUITES = ("pick-place", "sliding")
 
 
-def _cpu_s() -> float:
-    """CPU seconds of this process and its reaped children (workers, planner processes)."""
-    me, kids = (resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
-
-
 def _sweep(grounding: str, args: argparse.Namespace, root: Path) -> dict[str, object]:
     out: dict[str, object] = {"grounding": grounding, "workers": args.workers, "suites": {}}
-    start, cpu0 = time.perf_counter(), _cpu_s()
+    start, cpu0 = time.perf_counter(), cpu_s()
     for suite in SUITES:
         cfg = SweepConfig(
             suite, DEFAULT_METHODS, seeds=args.seeds, grounding=grounding, limit=args.limit
@@ -57,7 +52,7 @@ def _sweep(grounding: str, args: argparse.Namespace, root: Path) -> dict[str, ob
             },
         }
     out["total_wall_time_s"] = round(time.perf_counter() - start, 2)
-    out["cpu_time_s"] = round(_cpu_s() - cpu0, 2)
+    out["cpu_time_s"] = round(cpu_s() - cpu0, 2)
     out["load_average"] = os.getloadavg()
     return out
 

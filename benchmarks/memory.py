@@ -9,7 +9,7 @@ Four measurements, each in a fresh Python process so none inherits another's hea
   (`utamp_gym.env.planner_policy.PlannerPolicy`, one episode per seed): RSS after each, and the
   growth over the last half (target <= 10 MB over the last 100 of 200), and how many scenes
   they met: the env keeps what a reset derives from each scene it meets (up to
-  `utamp_gym.env.scene_cache.SCENES_KEPT`), so its memory grows with the scenes it has met;
+  `utamp_gym.symbolic.scene_cache.SCENES_KEPT`), so its memory grows with the scenes it has met;
 * ``repeat``: the same, ``--episodes`` episodes cycling over ``--repeat-scenes`` scenes, so
   every scene is met within the first few: what an episode itself leaves behind. Its growth
   compares two episodes of the same scene (target <= 10 MB over the last 100 of 200);

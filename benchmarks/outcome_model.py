@@ -32,9 +32,9 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.env.outcome import OutcomeModel, truth_atoms
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.suites import resolve_scene
+from utamp_gym.symbolic.outcome import OutcomeModel, truth_atoms
 
 SUITES = ("pick-place", "sliding")
 _NUMBER = re.compile(r"-?\d+(\.\d+)?")

@@ -3,7 +3,7 @@
 Three measurements, written to ``docs/results/perception_cost.{md,json}``:
 
 * **per macro step, perception="rgbd"** — UTAMP-2-GT plans executed with the robot's poses
-  from the cameras (`utamp_gym.sim.rgbd`): the wall time spent rendering the looks and
+  from the cameras (`utamp_gym.perception.tracking`): the wall time spent rendering the looks and
   fitting the poses (``perception_s`` of every step's timings), median and p95, next to the
   step's physics (``sim_s``: stepping MuJoCo) and its whole wall time; target median 50 ms;
 * **pose accuracy** — the camera estimate of every object against the simulator's pose
@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from utamp_gym.grounding import physics_backend
 from utamp_gym.perception.objects import perceive_objects
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.provenance import commit, write_json, write_markdown
@@ -73,7 +74,7 @@ def main() -> None:
     load = os.getloadavg()
     step_perc, step_cpu, step_sim, step_wall, errors, survey, fit = [], [], [], [], [], [], []
     outcomes = []
-    backend = MujocoBackend(perception="rgbd")
+    backend = physics_backend(perception="rgbd")
     start = time.perf_counter()
     try:
         for scene in scenes:

@@ -45,15 +45,15 @@ def _median_ms(f, repeats: int = REPEATS) -> tuple[float, object]:
 
 def dump(path: Path) -> None:
     """Render the survey of pick-place/072 and the acting look; keep what both sides need."""
+    from utamp_gym.grounding import physics_backend
     from utamp_gym.perception.cloud import fuse
     from utamp_gym.perception.poses import icp_pose
     from utamp_gym.seeding import run_seed
-    from utamp_gym.sim.backend import MujocoBackend
     from utamp_gym.sim.measure import obj_pose, pose_change
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene("pick-place/072")
-    backend = MujocoBackend(perception="rgbd")
+    backend = physics_backend(perception="rgbd")
     try:
         backend.reset(scene, np.random.default_rng(run_seed(scene.name, 0)))
         bundle = backend.survey()

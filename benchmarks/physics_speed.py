@@ -29,16 +29,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import statistics
-import subprocess
 import sys
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
-from compare import base_worktree, git  # benchmarks/ is on sys.path when run
+from compare import Worker, base_worktree, cpu_s, git, med, rounded  # benchmarks/ is on sys.path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -49,12 +46,6 @@ DT = 0.002  # s, both versions' physics step
 
 
 # --------------------------------------------------------------------------- worker
-def _cpu() -> float:
-    own = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
 def _episode(scene: str, seed: int, phases: bool) -> dict[str, Any]:
     """Run one episode in this process (the tree on `PYTHONPATH`) and measure it."""
     sys.path.insert(0, str(HERE))
@@ -63,9 +54,9 @@ def _episode(scene: str, seed: int, phases: bool) -> dict[str, Any]:
     from utamp_gym.sim.execute import run_episode
 
     with Meter(phases=phases) as meter:
-        cpu, t0 = _cpu(), time.perf_counter()
+        cpu, t0 = cpu_s(), time.perf_counter()
         r = run_episode(scene, seed=seed)
-        wall, cpu = time.perf_counter() - t0, _cpu() - cpu
+        wall, cpu = time.perf_counter() - t0, cpu_s() - cpu
     failure = None if r.failure is None else str(r.failure.get("reason"))
     return {
         "scene": scene,
@@ -98,49 +89,6 @@ def worker() -> None:
 
 
 # --------------------------------------------------------------------------- driver
-class Worker:
-    """A worker process running the code of one tree."""
-
-    def __init__(self, label: str, tree: Path):
-        self.label, self.tree = label, tree
-        env = dict(os.environ, PYTHONPATH=str(tree))
-        self.proc = subprocess.Popen(
-            [sys.executable, str(Path(__file__).resolve()), "--worker"],
-            cwd=tree,
-            env=env,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        ready = json.loads(self._read())
-        if not Path(ready["ready"]).resolve().is_relative_to(tree.resolve()):
-            raise RuntimeError(f"{label}: imported {ready['ready']}, not from {tree}")
-
-    def _read(self) -> str:
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        if not line:
-            raise RuntimeError(f"worker '{self.label}' ({self.tree}) exited")
-        return line
-
-    def run(self, scene: str, seed: int, phases: bool) -> dict[str, Any]:
-        stdin: IO[str] | None = self.proc.stdin
-        assert stdin is not None
-        stdin.write(json.dumps({"scene": scene, "seed": seed, "phases": phases}) + "\n")
-        stdin.flush()
-        return json.loads(self._read())
-
-    def close(self) -> None:
-        if self.proc.stdin is not None:
-            self.proc.stdin.close()
-        self.proc.wait(timeout=60)
-
-
-def med(xs: Iterable[float]) -> float:
-    xs = list(xs)
-    return statistics.median(xs) if xs else float("nan")
-
-
 def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (suite, object count): medians and ratios of the timed pass."""
     out = []
@@ -252,17 +200,6 @@ def episodes(suites: Sequence[str], objects: set[int], stride: int, seeds: int) 
     return out
 
 
-def _rounded(x: Any) -> Any:
-    """`x` with every float to 4 significant digits (a smaller JSON file)."""
-    if isinstance(x, float):
-        return float(f"{x:.4g}")
-    if isinstance(x, dict):
-        return {k: _rounded(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_rounded(v) for v in x]
-    return x
-
-
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -299,11 +236,14 @@ def main() -> None:
     with base_worktree(base, "physics_speed_") as tree:
         workers: dict[str, Worker] = {}
         try:
-            workers = {"this": Worker("this", ROOT), "base": Worker("base", tree)}
+            workers = {
+                v: Worker(v, t, Path(__file__), "--worker")
+                for v, t in (("this", ROOT), ("base", tree))
+            }
             for i, job in enumerate(jobs):
                 order = ("this", "base") if i % 2 == 0 else ("base", "this")
                 for v in order:
-                    r = workers[v].run(job["scene"], job["seed"], False)
+                    r = workers[v].ask(scene=job["scene"], seed=job["seed"], phases=False)
                     rows.append({**job, **r, "version": v})
                 a, b = rows[-2:] if rows[-1]["version"] == "base" else rows[-1:-3:-1]
                 print(
@@ -316,7 +256,7 @@ def main() -> None:
             if not args.no_phases:
                 for job in jobs:
                     for v in ("this", "base"):
-                        r = workers[v].run(job["scene"], job["seed"], True)
+                        r = workers[v].ask(scene=job["scene"], seed=job["seed"], phases=True)
                         phase_rows.append({**job, **r, "version": v})
                         timed = next(
                             x
@@ -380,7 +320,7 @@ def main() -> None:
         "episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in rows],
         "phase_episodes": [{k: v for k, v in r.items() if k != "outcome"} for r in phase_rows],
     }
-    write_json(out.with_suffix(".json"), _rounded(report), indent=None)
+    write_json(out.with_suffix(".json"), rounded(report), indent=None)
     written = [out.with_suffix(".md"), out.with_suffix(".json")]
     if phase_rows:
         phases_md = out.parent / "physics_phases.md"

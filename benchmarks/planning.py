@@ -29,35 +29,25 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from compare import cpu_s, med  # benchmarks/ is on sys.path when run
 
 SECTIONS = ("suite", "process", "search", "crosscheck", "policy")
 
 
-def cpu_now() -> float:
-    """CPU seconds of this process and its reaped children."""
-    own = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
 def timed(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, float, float]:
     """(result, wall s, CPU s) of one call ``fn(*args, **kwargs)``."""
-    c, t = cpu_now(), time.perf_counter()
+    c, t = cpu_s(), time.perf_counter()
     out = fn(*args, **kwargs)
-    return out, time.perf_counter() - t, cpu_now() - c
-
-
-def med(xs: Sequence[float]) -> float:
-    return statistics.median(xs) if xs else float("nan")
+    return out, time.perf_counter() - t, cpu_s() - c
 
 
 def ms(x: float) -> str:

@@ -39,15 +39,15 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Iterable
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
-from compare import base_worktree, git  # benchmarks/ is on sys.path when run
+from compare import Worker, base_worktree, git, med, rounded  # benchmarks/ is on sys.path when run
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 VERSIONS = ("this", "base")
+ONE_THREAD = {"OMP_NUM_THREADS": "1"}  # the workers' environment
 TARGETS = {"cold_vs_base": 1.0, "cold_vs_driver": 0.15, "process_vs_driver": 0.5, "env": 1.0}
 
 
@@ -167,49 +167,6 @@ def worker(kind: str) -> None:
 
 
 # --------------------------------------------------------------------------- driver side
-class Worker:
-    """A worker process of one kind running the code of one tree."""
-
-    def __init__(self, label: str, tree: Path, kind: str):
-        self.label, self.tree = label, tree
-        env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1")
-        self.proc = subprocess.Popen(
-            [sys.executable, str(Path(__file__).resolve()), "--worker", kind],
-            cwd=tree,
-            env=env,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        ready = json.loads(self._read())
-        if not Path(ready["ready"]).resolve().is_relative_to(tree.resolve()):
-            raise RuntimeError(f"{label}: imported {ready['ready']}, not from {tree}")
-
-    def _read(self) -> str:
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        if not line:
-            raise RuntimeError(f"worker '{self.label}' ({self.tree}) exited")
-        return line
-
-    def ask(self, **req: Any) -> dict[str, Any]:
-        stdin: IO[str] | None = self.proc.stdin
-        assert stdin is not None
-        stdin.write(json.dumps(req) + "\n")
-        stdin.flush()
-        return json.loads(self._read())
-
-    def close(self) -> None:
-        if self.proc.stdin is not None:
-            self.proc.stdin.close()
-        self.proc.wait(timeout=60)
-
-
-def med(xs: Iterable[float]) -> float:
-    xs = list(xs)
-    return statistics.median(xs) if xs else float("nan")
-
-
 def wall_cpu(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
     """(wall s, CPU s of the child) of one whole command."""
     c, t = _cpu(resource.RUSAGE_CHILDREN), time.perf_counter()
@@ -430,16 +387,6 @@ def table(s: dict[str, Any], base: str, this: str, n_plans: int, n_procs: int, a
     return "\n".join(lines) + "\n"
 
 
-def _rounded(x: Any) -> Any:
-    if isinstance(x, float):
-        return float(f"{x:.4g}")
-    if isinstance(x, dict):
-        return {k: _rounded(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_rounded(v) for v in x]
-    return x
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", choices=("plan", "env"), help=argparse.SUPPRESS)
@@ -479,12 +426,18 @@ def main() -> None:
         trees = {"this": ROOT, "base": tree}
         workers: dict[str, Worker] = {}
         try:
-            workers = {v: Worker(v, trees[v], "plan") for v in VERSIONS}
+            workers = {
+                v: Worker(v, trees[v], Path(__file__), "--worker", "plan", env=ONE_THREAD)
+                for v in VERSIONS
+            }
             plans = bench_plans(workers, names, args.repeats, Path(tmp))
             for w in workers.values():
                 w.close()
             process = bench_process(trees, procs, args.process_runs, Path(tmp))
-            workers = {v: Worker(v, trees[v], "env") for v in VERSIONS}
+            workers = {
+                v: Worker(v, trees[v], Path(__file__), "--worker", "env", env=ONE_THREAD)
+                for v in VERSIONS
+            }
             env = bench_env(workers, args.suite, args.env_rounds, args.env_steps)
         finally:
             for w in workers.values():
@@ -514,7 +467,7 @@ def main() -> None:
         "process": process,
         "env": env,
     }
-    out.with_suffix(".json").write_text(json.dumps(_rounded(report), indent=1) + "\n")
+    out.with_suffix(".json").write_text(json.dumps(rounded(report), indent=1) + "\n")
     print(f"wrote {out.with_suffix('.md')}, {out.with_suffix('.json')}")
 
 

@@ -80,7 +80,7 @@ def sample_split(
 ) -> list[Pair]:
     """`n_pairs` pairs from physics episodes on one split (see the module docstring)."""
     from utamp_gym.env.kitchen import UTampKitchenEnv
-    from utamp_gym.env.outcome import OutcomeModel
+    from utamp_gym.symbolic.outcome import OutcomeModel
 
     env = UTampKitchenEnv(
         split=split,

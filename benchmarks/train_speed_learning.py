@@ -29,8 +29,9 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-from agents import evaluate, t_interval  # noqa: E402
+from agents import evaluate  # noqa: E402
 
+from utamp_gym.eval.intervals import t_interval  # noqa: E402
 from utamp_gym.provenance import provenance, write_json, write_markdown  # noqa: E402
 
 ROW = "MaskablePPO, slot transformer"

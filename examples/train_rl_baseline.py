@@ -11,7 +11,7 @@ The agents (all on UTampKitchen-v0, 2-5 objects mixed, symbolic grounding, rewar
 * ``affordances``: MaskablePPO with the U-TAMP-2 masks under ground-truth affordances (the
   planner's knowledge handed to the agent);
 * ``geometric``: MaskablePPO with geometric masks; what the ground truth forbids fails
-  through the symbolic outcome model (`utamp_gym.env.outcome`), so affordances are learned;
+  through the symbolic outcome model (`utamp_gym.symbolic.outcome`), so affordances are learned;
 * ``none``: PPO without masks (masks "none": every action of the scene is shown and allowed;
   the outcome model rejects the impossible ones).
 

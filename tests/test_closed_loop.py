@@ -12,12 +12,12 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from utamp_gym.contract.state import PhysicalState
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.errors import PlanningError
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.perception.abstraction import perceive
-from utamp_gym.perception.state import PhysicalState
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.backend import MujocoBackend

@@ -15,8 +15,8 @@ from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.options import MASKS
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import register_envs
-from utamp_gym.env.universe import UniverseKey, ground_universe
 from utamp_gym.errors import UnknownNameError
+from utamp_gym.symbolic.universe import UniverseKey, ground_universe
 
 SIDE_GRASP = "(pick-support salt salt-body left back front"  # palm on the side, not the top
 

@@ -14,7 +14,7 @@ import pytest
 
 import utamp_gym  # noqa: F401  (registers the env ids)
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.env.state import SymbolicState
+from utamp_gym.symbolic.state import SymbolicState
 
 
 def test_dead_end_is_no_applicable_action_along_random_walks() -> None:

@@ -8,13 +8,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from utamp_gym.env.atoms import parse_atom, possible_affordances, scene_atoms
+from utamp_gym.affordances.sources import affordances_for, ground_truth_for, scene_types
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.env.universe import UniverseKey, ground_universe
-from utamp_gym.planning.methods import affordances_for, ground_truth_for, scene_types
 from utamp_gym.suites import suite_scenes
+from utamp_gym.symbolic.atoms import parse_atom, possible_affordances, scene_atoms
 from utamp_gym.symbolic.pddl import Problem
 from utamp_gym.symbolic.reach import GroundOp, reachable_ops
+from utamp_gym.symbolic.universe import UniverseKey, ground_universe
 
 
 def direct_ops(env: UTampKitchenEnv) -> list[GroundOp]:

@@ -9,11 +9,12 @@ from typing import Any
 
 import tomli_w
 
+from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.cli import main
 from utamp_gym.eval.explain import NO_CORRECTION, explain_unsolvable, format_fact
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.eval.solvability import SolvabilityOracle
-from utamp_gym.planning.methods import ground_truth_for, plan_scene
+from utamp_gym.planning.methods import plan_scene
 from utamp_gym.suites import get_scene, resolve_scene, suite_scenes
 
 PAN_SUPPORTS_BOARD = ("isP2PSupportive", "on", "frying-pan", "under", "cutting-board")

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from utamp_gym.eval.intervals import bootstrap_mean_interval, wilson_interval
+from utamp_gym.eval.intervals import bootstrap_mean_interval, t_interval, wilson_interval
 from utamp_gym.eval.plots import write_plots
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.summary import summarize, to_markdown, write_summary
@@ -121,3 +121,13 @@ def test_summary_and_plots_carry_n_and_intervals(tmp_path: Path) -> None:
         "success_vs_f1.png",
     ]
     assert all(p.stat().st_size > 0 for p in paths)
+
+
+def test_t_interval_of_a_few_seeds() -> None:
+    """Student t with n - 1 degrees of freedom: (mean, half-width); one value has none."""
+    mean, half = t_interval([0.5, 0.7, 0.6])
+    assert mean == pytest.approx(0.6) and half == pytest.approx(4.303 * 0.1 / 3**0.5)
+    assert math.isnan(t_interval([0.4])[1]) and t_interval([0.4])[0] == 0.4
+    assert t_interval([0.3] * 6)[1] == 0.0
+    with pytest.raises(ValueError, match="1 to 6 values"):
+        t_interval([0.1] * 7)

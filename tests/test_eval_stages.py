@@ -6,15 +6,15 @@ import dataclasses
 
 import pytest
 
-from utamp_gym.eval.perceived import (
+from utamp_gym.eval.records import ResultRow, key_shard, read_rows, row_key, write_rows
+from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
+from utamp_gym.eval.summary import summarize, to_markdown
+from utamp_gym.methods.perceived import (
     align_members,
     attribute_accuracy,
     build_perceived_scene,
     rename_fact,
 )
-from utamp_gym.eval.records import ResultRow, key_shard, read_rows, row_key, write_rows
-from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
-from utamp_gym.eval.summary import summarize, to_markdown
 from utamp_gym.scene.catalogue import Member
 from utamp_gym.scene.geometry import Box
 from utamp_gym.suites import resolve_scene

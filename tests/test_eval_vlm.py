@@ -22,8 +22,8 @@ from utamp_gym.cli import main
 from utamp_gym.errors import EndpointError
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
-from utamp_gym.eval.vlm_client import VlmConfig
-from utamp_gym.eval.vlm_methods import prompt
+from utamp_gym.methods.vlm import prompt
+from utamp_gym.methods.vlm_client import VlmConfig
 from utamp_gym.scene.geometry import SIDES
 from utamp_gym.suites import get_scene
 

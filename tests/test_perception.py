@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 
 from utamp_gym.backend import MacroResult, PhysicsBackend
+from utamp_gym.contract.state import FLOOR, TABLE, Grasp, PhysicalState
+from utamp_gym.contract.views import ViewBundle
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.physics import perceived_static, unexpected_atoms
 from utamp_gym.perception.abstraction import declared_state, perceive
-from utamp_gym.perception.state import FLOOR, TABLE, Grasp, PhysicalState
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene, suite_scenes
 from utamp_gym.symbolic.problem import scene_facts
@@ -164,6 +165,17 @@ class ScriptedBackend:
 
     def render(self, width: int, height: int) -> np.ndarray:
         return np.zeros((height, width, 3), np.uint8)
+
+    def survey(self) -> ViewBundle:
+        return ViewBundle(())  # no cameras: nothing seen
+
+    @property
+    def cameras(self) -> ScriptedBackend:
+        return self
+
+    @property
+    def instances(self) -> dict[int, str]:
+        return {}
 
     def close(self) -> None:
         pass

@@ -12,9 +12,10 @@ import sys
 
 import pytest
 
+from utamp_gym.affordances.sources import affordances_for
 from utamp_gym.cli import main
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.planning.methods import affordances_for, plan_scene
+from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.io import load_scene, scene_to_toml
 from utamp_gym.suites import ALL_SUITES, PROCEDURAL_SUITES, all_scene_names, resolve_scene

@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import utamp_gym
+from utamp_gym.contract.views import BACKGROUND, ROBOT, ViewBundle
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.perception.objects import perceive_objects
-from utamp_gym.perception.views import BACKGROUND, ROBOT, ViewBundle
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.scene.catalogue import Catalogue
 from utamp_gym.scene.io import scene_from_dict
@@ -276,7 +276,7 @@ def test_a_covered_pans_mass_is_its_shell() -> None:
 
 def _perceived_type(scene_name: str, obj: str):
     """The declared and the perceived type of `obj` in a suite scene (seed 0)."""
-    from utamp_gym.eval.perceived import perceive_scene
+    from utamp_gym.methods.perceived import perceive_scene
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(scene_name)
@@ -352,7 +352,7 @@ def test_perception_never_imports_the_simulator() -> None:
 
 
 def test_utamp2_perceived_plans_the_demo_scene() -> None:
-    from utamp_gym.eval.perceived import plan_perceived
+    from utamp_gym.methods.perceived import plan_perceived
     from utamp_gym.planning.crosscheck import check_against_ground_truth
     from utamp_gym.suites import resolve_scene
 
@@ -366,13 +366,13 @@ def test_utamp2_perceived_plans_the_demo_scene() -> None:
 
 
 def test_rgbd_pose_estimates_at_reset() -> None:
+    from utamp_gym.grounding import physics_backend
     from utamp_gym.seeding import run_seed
-    from utamp_gym.sim.backend import MujocoBackend
     from utamp_gym.sim.measure import obj_pose, pose_change
     from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene("pick-place/072")
-    backend = MujocoBackend(perception="rgbd")
+    backend = physics_backend(perception="rgbd")
     try:
         backend.reset(scene, np.random.default_rng(run_seed(scene.name, 0)))
         st = backend.state

@@ -175,9 +175,9 @@ def test_a_grounded_procedural_model_runs_on_another_split(tmp_path: Path) -> No
 def test_a_stored_universe_is_the_grounded_one(tmp_path: Path, monkeypatch) -> None:
     """`universe_store`: the universe read back from disk equals the one grounded; an
     unreadable file is ignored; keys naming scene files outside the package are not stored."""
-    from utamp_gym.env import universe as universe_mod
-    from utamp_gym.env import universe_store
-    from utamp_gym.env.universe import UniverseKey
+    from utamp_gym.symbolic import universe as universe_mod
+    from utamp_gym.symbolic import universe_store
+    from utamp_gym.symbolic.universe import UniverseKey
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     key = UniverseKey("utamp2", "gt", "pick-place")

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from utamp_gym.env import objects as env_objects
-from utamp_gym.env import scene_cache
 from utamp_gym.env.registry import register_envs
-from utamp_gym.env.scene_cache import SCENES_KEPT, SceneCache
 from utamp_gym.suites import ALL_SUITES, all_scene_names
+from utamp_gym.symbolic import scene_cache
+from utamp_gym.symbolic.scene_cache import SCENES_KEPT, SceneCache
 
 register_envs()
 

@@ -181,10 +181,11 @@ def _on(sim, name: str):
 def test_backend_protocol_and_initial_state(backend, demo):
     from utamp_gym.backend import PhysicsBackend
 
-    assert isinstance(backend, PhysicsBackend)
     with pytest.raises(SimulationError, match="reset"):
         backend.object_poses()
     backend.reset(demo, np.random.default_rng(0))
+    assert isinstance(backend, PhysicsBackend)  # `cameras` exists from the first reset on
+    assert set(backend.cameras.instances.values()) == set(demo.object_names)
     poses = backend.object_poses()
     assert set(poses) == set(demo.object_names) and all(p.shape == (7,) for p in poses.values())
     assert backend.joint_positions().shape == (9,)

@@ -1,8 +1,10 @@
 """utamp_gym: a Gymnasium suite for U-TAMP-2 kitchen-table organisation on a MuJoCo Panda.
 
 Layers, each in its own sub-package:
-scene -> affordances -> perception -> symbolic -> planning -> robot/sim -> env -> eval / rl
-(`utamp_gym.backend` is the contract between sim and env).
+scene -> contract -> affordances -> perception -> symbolic -> planning -> robot/sim -> env ->
+methods -> eval / rl. `contract` holds the types the simulator and perception exchange, and
+`utamp_gym.backend` the protocol between a backend and the env; `sim` never imports
+`perception` (the env's backend composes them: `utamp_gym.grounding`).
 """
 
 import itertools

@@ -7,7 +7,10 @@ option without the env importing MuJoCo, and the simulator never imports the env
 The env constructs the backend once, as ``factory(pose_noise=..., **backend_kwargs)``, and
 calls `reset` with the sampled scene and a generator derived from the env's RNG at every
 episode start. After `reset` and after every `execute` it reads `physical_state()` and
-perceives the symbolic state from it (`utamp_gym.perception`).
+perceives the symbolic state from it (`utamp_gym.perception`); ``utamp2-perceived`` surveys
+the table (`survey`) and scores what it perceived by the cameras' instance ids (`cameras`).
+The data types exchanged live in `utamp_gym.contract` (below both the simulator and
+perception); `MacroResult` and `Fault` here.
 """
 
 from __future__ import annotations
@@ -19,18 +22,20 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from utamp_gym.contract.state import PhysicalState
+from utamp_gym.contract.views import ViewBundle
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.perception.state import PhysicalState
 from utamp_gym.scene.model import Scene
 
-DEFAULT_BACKEND = "utamp_gym.sim.backend:MujocoBackend"
+#: the MuJoCo simulator with the pose tracking the env option ``perception`` names
+DEFAULT_BACKEND = "utamp_gym.grounding:physics_backend"
 #: Standard deviation (m) of the robot's object-position estimates (env option `pose_noise`);
 #: the yaw estimate's standard deviation scales with it (`yaw_noise_deg`).
 DEFAULT_POSE_NOISE = 0.002
 MAX_POSE_NOISE = 0.05
 #: where the robot's object poses come from (env option ``perception``): ``gaussian``, the
-#: true pose plus `pose_noise` (`utamp_gym.sim.estimate`), or ``rgbd``, the rendered cameras
-#: (`utamp_gym.sim.rgbd`)
+#: true pose plus `pose_noise` (`utamp_gym.sim.estimate`), or ``rgbd``, poses fitted to the
+#: rendered cameras (`utamp_gym.perception.tracking`; `utamp_gym.grounding` composes them)
 PERCEPTION_MODES = ("gaussian", "rgbd")
 DEFAULT_PERCEPTION = "gaussian"
 
@@ -72,9 +77,22 @@ class Fault:
         return f"{self.kind} {self.obj}: {self.detail}"
 
 
+class Cameras(Protocol):
+    """A backend's RGB-D cameras, as the evaluation reads them."""
+
+    @property
+    def instances(self) -> Mapping[int, str]:
+        """Instance id in the views' masks -> object name: the scorer's ground truth for
+        what was perceived (never the perceiver's input)."""
+        ...
+
+
 @runtime_checkable
 class PhysicsBackend(Protocol):
-    """What the env needs from a simulator (see the module docstring)."""
+    """What the env and the evaluation need from a simulator (see the module docstring).
+
+    On Python 3.11 ``isinstance(backend, PhysicsBackend)`` reads every member, `cameras`
+    included: check it after `reset`."""
 
     def reset(self, scene: Scene, rng: np.random.Generator) -> None: ...
 
@@ -97,6 +115,17 @@ class PhysicsBackend(Protocol):
         ...
 
     def render(self, width: int, height: int) -> np.ndarray: ...
+
+    def survey(self) -> ViewBundle:
+        """The first, careful look at the table: every scene camera's colour, depth and
+        object-level instance masks, and the robot's state (what ``utamp2-perceived``
+        perceives)."""
+        ...
+
+    @property
+    def cameras(self) -> Cameras:
+        """The cameras of the current episode (after `reset`)."""
+        ...
 
     def close(self) -> None: ...
 

@@ -170,7 +170,7 @@ def crosscheck_tasks() -> int:
 
 #: constants the concept pages quote: name -> (module, attribute, unit scale)
 CONSTANTS = {
-    "tilt_deg": ("utamp_gym.perception.abstraction", "TILT_DEG", 1),
+    "tilt_deg": ("utamp_gym.contract.state", "TILT_DEG", 1),
     "workspace_tol_cm": ("utamp_gym.perception.abstraction", "WORKSPACE_TOL", 100),
     "gripper_opening_cm": ("utamp_gym.affordances.rules", "GRIPPER_OPENING", 100),
     "rules_payload_kg": ("utamp_gym.affordances.rules", "PAYLOAD", 1),
@@ -250,12 +250,13 @@ def constants() -> dict[str, Any]:
 
 def facts(envs: Iterable[EnvFacts]) -> dict[str, Any]:
     """The substitutions of every page (see the module docstring)."""
+    from utamp_gym.affordances.sources import DEFAULT_NOISE
     from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
     from utamp_gym.dm import CONTROL_TIMESTEP
     from utamp_gym.env.planner_policy import MAX_BANS
     from utamp_gym.eval.closed_loop import MAX_STEPS
     from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
-    from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
+    from utamp_gym.planning.methods import METHODS
 
     envs = list(envs)
     counts = suite_counts()

@@ -119,8 +119,8 @@ def add_parser(sub: Any) -> None:
     argparse has no optional sub-command next to required options, so ``merge`` is an
     optional sub-command and the sweep's required options are checked in `_cmd_eval`.
     """
+    from utamp_gym.affordances.sources import DEFAULT_NOISE
     from utamp_gym.distributed import EXECUTORS
-    from utamp_gym.planning.methods import DEFAULT_NOISE
     from utamp_gym.suites import ALL_SUITES as SUITES
 
     ev = sub.add_parser(

@@ -27,7 +27,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     scene = resolve_scene(args.scene)
     out = None if args.out is None else output_dir(args.out, "--out")
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
-        from utamp_gym.eval.perceived import plan_perceived
+        from utamp_gym.methods.perceived import plan_perceived
 
         outcome = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)[0]
     else:
@@ -95,8 +95,9 @@ def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
 
 def add_parser(sub: Any) -> None:
     """``utamp plan SCENE``."""
+    from utamp_gym.affordances.sources import DEFAULT_NOISE
     from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
-    from utamp_gym.planning.methods import DEFAULT_NOISE, METHODS
+    from utamp_gym.planning.methods import METHODS
 
     plan = sub.add_parser("plan", help=help_line("plan"))
     plan.add_argument("scene", help=SCENE_HELP)

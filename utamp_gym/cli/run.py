@@ -29,7 +29,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     }
     scene = resolve_scene(args.scene)
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
-        from utamp_gym.eval.perceived import run_perceived_episode
+        from utamp_gym.methods.perceived import run_perceived_episode
 
         result = run_perceived_episode(scene, **physics)
     else:

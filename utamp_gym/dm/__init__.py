@@ -13,7 +13,8 @@ targets and the gripper command at 50 Hz and whose reward follows tower progress
     viewer.launch(env)                        # needs a display
 
 `record_plan` records the servo commands the physics executor sends for a macro plan and
-`ReplayPolicy` replays them through this interface. Needs the ``dm`` extra
+`ReplayPolicy` replays them through this interface. `DmEnvAdapter` (`adapter`) is the other
+way round: a macro-action Gymnasium env as a `dm_env.Environment`. Needs the ``dm`` extra
 (``pip install 'utamp-gym[dm]'``); ``import utamp_gym`` never imports dm_control.
 """
 
@@ -30,11 +31,12 @@ try:
 except ImportError as exc:  # pragma: no cover - depends on the installed extras
     raise MissingExtraError("utamp_gym.dm", "dm", "dm_control", str(exc)) from exc
 
+from utamp_gym.dm.adapter import DmEnvAdapter
 from utamp_gym.dm.physics import KitchenPhysics
 from utamp_gym.dm.replay import JointTrajectory, ReplayPolicy, record_plan
 from utamp_gym.dm.task import CONTROL_TIMESTEP, StackTask
-from utamp_gym.env.universe import UniverseKey, ground_universe
 from utamp_gym.suites import resolve_scene
+from utamp_gym.symbolic.universe import UniverseKey, ground_universe
 
 DEFAULT_TIME_LIMIT = 120.0  # s of simulated time per episode
 
@@ -76,6 +78,7 @@ def load(
 
 __all__ = [
     "CONTROL_TIMESTEP",
+    "DmEnvAdapter",
     "JointTrajectory",
     "KitchenPhysics",
     "ReplayPolicy",

@@ -15,8 +15,8 @@ import numpy as np
 from dm_control import mujoco as dm_mujoco
 from dm_control.mujoco import wrapper
 
+from utamp_gym.contract.state import PhysicalState
 from utamp_gym.perception.abstraction import Perception, perceive
-from utamp_gym.perception.state import PhysicalState
 from utamp_gym.robot.panda_mjcf import PandaIds, add_panda
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.gl import ensure_dm_control_gl

@@ -5,9 +5,9 @@ Import the modules directly; this package imports nothing and registers nothing
 
 * `registry` – env ids from the definition files in ``envs/`` and `register_envs()`;
 * `kitchen` – `UTampKitchenEnv` (its docstring documents spaces, reward and options);
-* `universe` / `atoms` – the grounded action universe and the scenes' initial atoms;
-* `state`, `poses`, `task`, `render` – symbolic state and mask, symbolic poses, reward and
-  spaces, the schematic renderer (the physics backend protocol is `utamp_gym.backend`);
-* `wrappers` (`SymbolicActionWrapper`), `planner_policy` (`PlannerPolicy`),
-  `dm_adapter` (`DmEnvAdapter`).
+* `task`, `render` – reward and spaces, the schematic renderer (the physics backend
+  protocol is `utamp_gym.backend`; the symbolic world model the env steps in, universe,
+  atoms, state, poses and outcome model, is `utamp_gym.symbolic`: ``env.universe``,
+  ``env.state`` ... are deprecated aliases);
+* `wrappers` (`SymbolicActionWrapper`), `planner_policy` (`PlannerPolicy`).
 """

@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_PERCEPTION,
@@ -23,23 +24,22 @@ from utamp_gym.backend import (
     PhysicsBackend,
     backend_factory,
 )
-from utamp_gym.env.atoms import InitialAtoms
 from utamp_gym.env.info import step_info
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.options import EnvOptions, action_id
-from utamp_gym.env.outcome import OutcomeModel
 from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
-from utamp_gym.env.poses import SymbolicPoses
 from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
-from utamp_gym.env.state import SymbolicState
 from utamp_gym.env.task import KitchenTask, home_joints, observation_space
-from utamp_gym.env.universe import Universe, ground_universe
 from utamp_gym.env.viewer import FRAME_RATE, Rendering
 from utamp_gym.env.views import KitchenViews
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.perception.abstraction import Perception
-from utamp_gym.planning.methods import DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.atoms import InitialAtoms
+from utamp_gym.symbolic.outcome import OutcomeModel
+from utamp_gym.symbolic.poses import SymbolicPoses
+from utamp_gym.symbolic.state import SymbolicState
+from utamp_gym.symbolic.universe import Universe, ground_universe
 
 #: observation rows of `object_poses` / `present`: the suites' catalogue objects
 DEFAULT_OBJECTS = ("tray", "salt", "mug", "board", "pan")

@@ -86,11 +86,11 @@ from utamp_gym.env.object_space import (
     member_order,
     observation_space,
 )
-from utamp_gym.env.scene_cache import SceneCache
-from utamp_gym.env.universe import Universe, UniverseKey, ground_universe
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import PARTS, SIDES
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.scene_cache import SceneCache
+from utamp_gym.symbolic.universe import Universe, UniverseKey, ground_universe
 
 __all__ = [
     "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SPACES",

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.affordances.sources import AFFORDANCE_SOURCES, DEFAULT_NOISE
 from utamp_gym.backend import (
     DEFAULT_BACKEND,
     DEFAULT_PERCEPTION,
@@ -20,9 +21,7 @@ from utamp_gym.backend import (
     PERCEPTION_MODES,
 )
 from utamp_gym.env.object_space import INTERFACES
-from utamp_gym.env.universe import UniverseKey
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.planning.methods import AFFORDANCE_SOURCES, DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import (
     ALL_SUITES,
@@ -32,6 +31,7 @@ from utamp_gym.suites import (
     suite_scenes,
 )
 from utamp_gym.symbolic.problem import DOMAINS
+from utamp_gym.symbolic.universe import UniverseKey
 
 GROUNDINGS = ("physics", "symbolic")
 #: see `utamp_gym.env.viewer` for what each mode shows

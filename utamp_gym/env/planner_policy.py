@@ -26,17 +26,18 @@ import gymnasium as gym
 import numpy as np
 
 from utamp_gym.affordances.facts import Fact
-from utamp_gym.env.atoms import scene_atoms
+from utamp_gym.affordances.sources import DEFAULT_NOISE, affordances_for
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.physics import perceived_static
-from utamp_gym.env.scene_cache import SceneCache
 from utamp_gym.errors import PlanningError, UnknownNameError
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
-from utamp_gym.planning.methods import DEFAULT_NOISE, affordances_for, method_spec
+from utamp_gym.planning.methods import method_spec
 from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.atoms import scene_atoms
 from utamp_gym.symbolic.pddl import parse_domain
 from utamp_gym.symbolic.problem import domain_text, goal_atoms
+from utamp_gym.symbolic.scene_cache import SceneCache
 
 
 def state_problem(

@@ -1,47 +1,7 @@
-"""What a reset derives from its scene, kept per scene name for the scenes met most recently.
+"""Deprecated: moved to `utamp_gym.symbolic.scene_cache` (the symbolic world model's room); this
+path forwards its names with a `DeprecationWarning` for one release."""
 
-Resets are frequent and a scene's derived data (initial atoms, the static-literal table, the
-object-centric map, initial poses) is a pure function of the scene, so each env part keeps it
-per scene name. The caches are bounded: an env that meets ever new scenes (a scene file per
-episode, say) keeps the `SCENES_KEPT` it used last instead of growing for as long as it runs.
-The bound holds every packaged suite and procedural split whole (a test checks it), so an env on
-one of them derives each scene once. A miss only recomputes: deriving draws no random numbers.
-"""
+import utamp_gym.symbolic.scene_cache as _new
+from utamp_gym.moved import forward
 
-from __future__ import annotations
-
-from collections import OrderedDict
-from collections.abc import Callable
-from typing import Generic, TypeVar
-
-V = TypeVar("V")
-
-SCENES_KEPT = 1024
-
-
-class SceneCache(Generic[V]):
-    """Values by scene name for the `size` scenes used most recently (least recently used out)."""
-
-    def __init__(self, size: int | None = None) -> None:
-        size = SCENES_KEPT if size is None else size  # read when made: a test can lower it
-        if size < 1:
-            raise ValueError(f"a scene cache keeps at least one scene, got size={size!r}")
-        self.size = size
-        self._items: OrderedDict[str, V] = OrderedDict()
-
-    def get(self, name: str, make: Callable[[], V]) -> V:
-        """The value for scene `name`; on a miss, ``make()`` computes it and it is kept."""
-        value = self._items.get(name)
-        if value is None:
-            value = self._items[name] = make()
-            if len(self._items) > self.size:
-                self._items.popitem(last=False)
-        else:
-            self._items.move_to_end(name)
-        return value
-
-    def __len__(self) -> int:
-        return len(self._items)
-
-    def __contains__(self, name: object) -> bool:
-        return name in self._items
+__getattr__, __dir__ = forward(__name__, _new)

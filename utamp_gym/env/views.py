@@ -9,18 +9,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from utamp_gym.env.atoms import parse_atom
 from utamp_gym.env.object_space import N_ACTIONS, action_texts
 from utamp_gym.env.options import action_id
+from utamp_gym.symbolic.atoms import parse_atom
 
 if TYPE_CHECKING:
     from utamp_gym.backend import MacroResult, PhysicsBackend
     from utamp_gym.env.objects import ObjectInterface
     from utamp_gym.env.physics import PhysicalGrounding
-    from utamp_gym.env.state import SymbolicState
-    from utamp_gym.env.universe import Universe
     from utamp_gym.perception.abstraction import Perception
     from utamp_gym.scene.model import Scene
+    from utamp_gym.symbolic.state import SymbolicState
+    from utamp_gym.symbolic.universe import Universe
 
 
 class KitchenViews:

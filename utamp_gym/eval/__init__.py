@@ -1,6 +1,6 @@
-"""Evaluation harness (`utamp eval`): sweeps, result rows, summaries, figures, VLM methods
-and why-not explanations.
+"""Evaluation harness (`utamp eval`): sweeps, result rows, summaries, figures and why-not
+explanations (the perceived and VLM methods it runs are `utamp_gym.methods`).
 
 Entry points: `sweep.run_sweep` / `sweep.write_outputs`, `runner.run_task`,
-`explain.explain_unsolvable`, `vlm_methods.run_utamp2_vlm` / `run_vlm_planner`.
+`explain.explain_unsolvable`.
 """

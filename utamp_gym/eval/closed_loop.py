@@ -15,11 +15,12 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.backend import DEFAULT_PERCEPTION
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
 from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.errors import PlanningError
-from utamp_gym.planning.methods import DEFAULT_NOISE, method_spec
+from utamp_gym.planning.methods import method_spec
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, resolve_scene
 
@@ -118,8 +119,8 @@ def run_closed_loop(
 def _perceived_facts(env: UTampKitchenEnv, seed: int) -> frozenset:
     """`utamp2-perceived`'s affordances of the env's scene, perceived in its world (physics)
     or in the episode's world built for a look (symbolic), in the env's names."""
-    from utamp_gym.eval.perceived import perceive_live, perceive_scene
-    from utamp_gym.planning.methods import plan_affordances
+    from utamp_gym.affordances.sources import plan_affordances
+    from utamp_gym.methods.perceived import perceive_live, perceive_scene
 
     seen = (
         perceive_scene(env.scene, seed)

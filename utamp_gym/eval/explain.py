@@ -26,15 +26,15 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from utamp_gym.affordances.facts import Fact
-from utamp_gym.eval.blocking import Block, blocking_goals, format_fact
-from utamp_gym.eval.solvability import SolvabilityOracle
-from utamp_gym.planning.methods import (
+from utamp_gym.affordances.sources import (
     DEFAULT_NOISE,
     affordances_for,
     detection_rng,
     ground_truth_for,
-    method_spec,
 )
+from utamp_gym.eval.blocking import Block, blocking_goals, format_fact
+from utamp_gym.eval.solvability import SolvabilityOracle
+from utamp_gym.planning.methods import method_spec
 from utamp_gym.scene.model import Scene
 
 NEGATIVELY_USED = ("canLift",)  # affordance predicates under `not` in utamp2.pddl

@@ -1,4 +1,5 @@
-"""95 % confidence intervals for the summaries: Wilson for rates, bootstrap for means.
+"""95 % confidence intervals for the summaries: Wilson for rates, bootstrap for means, and
+Student's t for a mean over a few seeds (`t_interval`, the benchmarks').
 
 The Wilson score interval stays inside [0, 1] and is sensible at 0 % and 100 % with few
 runs, where the normal approximation collapses to a point. Mean times are skewed (a few
@@ -9,6 +10,7 @@ the same rows always give the same interval.
 from __future__ import annotations
 
 import math
+import statistics
 from collections.abc import Sequence
 
 import numpy as np
@@ -16,6 +18,8 @@ import numpy as np
 Z95 = 1.959963984540054  # the standard normal's 97.5 % quantile
 BOOTSTRAP_RESAMPLES = 2000
 BOOTSTRAP_SEED = 0
+#: Student t's 97.5 % quantile by degrees of freedom (`t_interval`)
+T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571}
 _CHUNK = 4_000_000  # resampled values per numpy batch (bounds memory for large sweeps)
 
 
@@ -58,3 +62,14 @@ def bootstrap_mean_interval(
     tail = (1.0 - level) / 2 * 100
     low, high = np.percentile(means, [tail, 100 - tail])
     return float(low), float(high)
+
+
+def t_interval(values: Sequence[float]) -> tuple[float, float]:
+    """(mean, 95 % half-width) of a few values, e.g. one rate per seed (at most six: `T95`;
+    the half-width is NaN for one value)."""
+    mean = statistics.fmean(values)
+    if len(values) < 2:
+        return mean, float("nan")
+    if len(values) - 1 not in T95:
+        raise ValueError(f"t_interval takes 1 to {max(T95) + 1} values, got {len(values)}")
+    return mean, T95[len(values) - 1] * statistics.stdev(values) / math.sqrt(len(values))

@@ -20,18 +20,14 @@ from dataclasses import dataclass
 from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.errors import EndpointError, UnknownNameError
 from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
-from utamp_gym.eval.vlm_methods import RUNNERS, VLM_METHODS
+from utamp_gym.methods.vlm import RUNNERS, VLM_METHODS
 from utamp_gym.planning.crosscheck import check_against_ground_truth
-from utamp_gym.planning.methods import (
-    DEFAULT_NOISE,
-    METHODS,
-    method_spec,
-    plan_scene,
-)
+from utamp_gym.planning.methods import METHODS, method_spec, plan_scene
 from utamp_gym.scene.model import Scene
 
 EVAL_METHODS = (*METHODS, *VLM_METHODS)
@@ -97,7 +93,7 @@ def _suite_of(name: str) -> str:
 
 def _plan(scene: Scene, task: EvalTask) -> _Planned:
     if task.method in VLM_METHODS:
-        from utamp_gym.eval.vlm_client import VlmClient
+        from utamp_gym.methods.vlm_client import VlmClient
 
         start = time.perf_counter()
         try:
@@ -110,7 +106,7 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
             out.solved, out.plan, out.planning_time_s, out.reason, out.scores, out.facts
         )
     if task.method == "utamp2-perceived":
-        from utamp_gym.eval.perceived import plan_perceived
+        from utamp_gym.methods.perceived import plan_perceived
 
         o, seen = plan_perceived(scene, task.seed, timeout=task.timeout)
         accuracy = None if seen is None else seen.accuracy
@@ -129,8 +125,8 @@ def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
     """Per-attribute accuracy of the noisy detector's attributes (the same draws as the
     detection: `detection_rng`, types in `scene_types` order)."""
     from utamp_gym.affordances.noisy import corrupt_type
-    from utamp_gym.eval.perceived import attribute_accuracy, mean_accuracy
-    from utamp_gym.planning.methods import detection_rng, scene_types
+    from utamp_gym.affordances.sources import detection_rng, scene_types
+    from utamp_gym.methods.perceived import attribute_accuracy, mean_accuracy
 
     rng = detection_rng(seed, scene.name)
     noisy = {t.name: corrupt_type(t, noise, rng) for t in scene_types(scene)}

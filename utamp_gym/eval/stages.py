@@ -16,20 +16,8 @@ A failed run is charged to the first stage that went wrong (`failure_stage`):
 
 from __future__ import annotations
 
-#: per-attribute accuracy (fractions of objects, parts or members right; see
-#: `utamp_gym.eval.perceived.attribute_accuracy`), stored as ``acc_<attribute>``
-ATTRIBUTES = (
-    "body",
-    "members",
-    "member_size",
-    "shape",
-    "surface",
-    "height",
-    "food",
-    "material",
-    "mass",
-    "robustness",
-)
+from utamp_gym.methods.attributes import ATTRIBUTES
+
 ATTRIBUTE_COLUMNS = tuple(f"acc_{a}" for a in ATTRIBUTES)
 STAGES = ("perception", "affordances", "plan", "physics", "crash")
 DETECTED = ("utamp2-noisy", "utamp2-perceived", "utamp2-vlm", "vlm-planner")

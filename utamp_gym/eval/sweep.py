@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.backend import (
     DEFAULT_PERCEPTION,
     DEFAULT_POSE_NOISE,
@@ -29,8 +30,9 @@ from utamp_gym.distributed import Executor, LocalExecutor
 from utamp_gym.errors import UnknownNameError, UtampError
 from utamp_gym.eval.records import GROUNDINGS, ResultRow, ResultsFile, key_shard
 from utamp_gym.eval.runner import DEFAULT_TIMEOUT, EvalTask, check_method, failure_row, run_task
-from utamp_gym.eval.vlm_methods import VLM_METHODS
-from utamp_gym.planning.methods import DEFAULT_NOISE
+from utamp_gym.eval.summary import summarize, write_summary
+from utamp_gym.methods.vlm import VLM_METHODS
+from utamp_gym.methods.vlm_client import VlmConfig
 from utamp_gym.provenance import commit
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import suite_scenes
@@ -197,8 +199,6 @@ def run_sweep(
     the CPU count, 0 to run in this process); `runner` must be picklable for both.
     """
     if any(m in VLM_METHODS for m in cfg.methods):
-        from utamp_gym.eval.vlm_client import VlmConfig
-
         VlmConfig.from_env()  # fail fast without an endpoint
     start = time.perf_counter()
     commit()  # the provenance of this run's results: the code as it is now
@@ -243,8 +243,7 @@ def run_sweep(
 
 def write_outputs(report: SweepReport) -> dict[str, Any]:
     """Write summary.md, summary.json and the figures of a sweep; returns the summary."""
-    from utamp_gym.eval.plots import write_plots
-    from utamp_gym.eval.summary import summarize, write_summary
+    from utamp_gym.eval.plots import write_plots  # matplotlib: only when figures are written
 
     cfg = report.config
     context = {

@@ -34,11 +34,10 @@ from functools import cached_property
 
 import numpy as np
 
-from utamp_gym.perception.state import FLOOR, TABLE, Grasp, PhysicalState
+from utamp_gym.contract.state import FLOOR, TABLE, TILT_DEG, Grasp, PhysicalState
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, Box
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
 
-TILT_DEG = 20.0  # an object tilted more than this from upright/inverted has toppled
 WORKSPACE_TOL = 0.01  # m, a box this far outside the workspace still lies in it
 SPACE_GAP = 0.01  # m, largest gap between a footprint and a space it touches
 SPACE_OVERLAP = 0.015  # m, footprints overlapping less than this only touch

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from utamp_gym.perception.views import BACKGROUND, ViewBundle
+from utamp_gym.contract.views import BACKGROUND, ViewBundle
 
 MAX_RANGE = 4.0  # m: depth beyond this is no return (the renderer's far plane)
 NEAR_PIXELS = 24  # background pixels this close to an object's image box are kept

@@ -32,7 +32,7 @@ then need and no camera sees is filled in by stated assumptions:
   is wood of 1.7 t/m^3: no camera sees that).
 
 Members are named by kind and side (``handle-back``, ``edge-left``, ``neck``): the
-perceiver does not know the catalogue's names; `utamp_gym.eval.perceived` aligns them to the
+perceiver does not know the catalogue's names; `utamp_gym.methods.perceived` aligns them to the
 declared members by geometry for scoring.
 """
 
@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.material import (
     MaterialEstimate,
@@ -52,7 +53,6 @@ from utamp_gym.perception.material import (
 )
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape
 from utamp_gym.perception.shape import fit_shape
-from utamp_gym.perception.views import ViewBundle
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material

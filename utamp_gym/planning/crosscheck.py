@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from utamp_gym.planning.methods import ground_truth_for
+from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import Domain, Problem, parse_domain, parse_plan, parse_problem
 from utamp_gym.symbolic.problem import build_problem, domain_text

@@ -5,7 +5,7 @@
 * ``utamp2-noisy`` – U-TAMP-2 with affordances parsed from noisily detected attributes
                      (the offline stand-in for the paper's VLM detector)
 * ``utamp2-perceived`` – U-TAMP-2 with affordances parsed from attributes perceived in
-                     rendered RGB-D views (`utamp_gym.eval.perceived` looks at the scene
+                     rendered RGB-D views (`utamp_gym.methods.perceived` looks at the scene
                      and plans its *planning scene*, whose types are the perceived ones)
 * ``utamp1``       – the original U-TAMP domain, no affordances
 """
@@ -13,17 +13,18 @@
 from __future__ import annotations
 
 import time
-from functools import lru_cache
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from utamp_gym.affordances.facts import Fact, Scores, packaged_ground_truth, restrict, score
+import utamp_gym.affordances.sources as _sources
+from utamp_gym.affordances.facts import Fact, Scores
+from utamp_gym.affordances.sources import DEFAULT_NOISE, affordances_for, detection_rng
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
+from utamp_gym.moved import forward
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
 from utamp_gym.planning.state_planner import StatePlanner
-from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import Scene
-from utamp_gym.symbolic.problem import EXTENDED_DOMAINS, build_problem, domain_text
+from utamp_gym.symbolic.problem import build_problem, domain_text
 
 if TYPE_CHECKING:  # numpy, the rule parser and the noisy detector load only when used
     import numpy as np
@@ -32,13 +33,6 @@ METHODS = (
     "utamp2-gt", "utamp2-rules", "utamp2-noisy", "utamp2-perceived", "utamp1",
     "utamp2x-gt", "utamp2x-rules",
 )  # fmt: skip
-#: where an env's affordances come from (env option ``affordances``)
-AFFORDANCE_SOURCES = ("gt", "rules", "noisy")
-#: ... and a method's: ``perceived`` are the rules on a planning scene's perceived types
-METHOD_SOURCES = (*AFFORDANCE_SOURCES, "perceived")
-#: suffix of the perceived types of a planning scene (``mug-seen``)
-SEEN_SUFFIX = "-seen"
-DEFAULT_NOISE = 0.01
 
 
 class MethodSpec(NamedTuple):
@@ -46,6 +40,10 @@ class MethodSpec(NamedTuple):
     domain: str
     affordances: str  # gt | rules | noisy | perceived
 
+
+#: the affordance sourcing moved to `utamp_gym.affordances.sources`: its other names
+#: (`ground_truth_for`, `scene_types`, ...) still import from here, with a warning
+__getattr__, _ = forward(__name__, _sources)
 
 SPECS = {
     "utamp2-gt": MethodSpec("utamp2-gt", "utamp2", "gt"),
@@ -63,99 +61,6 @@ def method_spec(method: str) -> MethodSpec:
     if method not in SPECS:
         raise UnknownNameError("method", method, METHODS)
     return SPECS[method]
-
-
-def scene_types(scene: Scene) -> list[ObjectType]:
-    """The object types in a scene, the table's included."""
-    names = dict.fromkeys([scene.table_type, *(o.type for o in scene.objects)])
-    return [scene.catalogue[n] for n in names]
-
-
-@lru_cache(maxsize=1)
-def _packaged_ground_truth() -> tuple[frozenset[Fact], frozenset[str]]:
-    """The packaged ground truth and the types it covers (computed once: a planner needs
-    them on every call)."""
-    truth = packaged_ground_truth()
-    known = {n for f in truth for n in (f[1:2] if f[0] != "isP2PSupportive" else (f[2], f[4]))}
-    return truth, frozenset(known)
-
-
-def ground_truth_for(scene: Scene, domain: str = "utamp2") -> frozenset[Fact]:
-    """Ground truth for the scene's types; types without hand-written truth use the rules
-    (with the extended grasps for an extended `domain`, `EXTENDED_DOMAINS`)."""
-    types = scene_types(scene)
-    names = [t.name for t in types]
-    truth, known = _packaged_ground_truth()
-    gt = restrict(truth, names)
-    unknown = {t.name for t in types} - known
-    if not unknown:
-        return gt
-    from utamp_gym.affordances.rules import derive_affordances
-
-    derived = derive_affordances(types, domain in EXTENDED_DOMAINS)
-    extra = {f for f in derived if any(x in unknown for x in f[1:])}
-    return gt | frozenset(extra)
-
-
-def detection_rng(seed: int, scene_name: str) -> np.random.Generator:
-    """The generator of a scene's noisy detection: independent per (seed, scene).
-
-    Keyed on the scene name as well as the seed, so one seed of a sweep corrupts each
-    scene differently (a per-seed stream would repeat one corruption in every scene).
-    """
-    import numpy as np
-
-    from utamp_gym.seeding import scene_seed_sequence  # numpy: not on `utamp plan`'s path
-
-    return np.random.default_rng(scene_seed_sequence(scene_name, seed))
-
-
-def affordances_for(
-    scene: Scene,
-    source: str,
-    rng: np.random.Generator | None,
-    noise: float = DEFAULT_NOISE,
-    domain: str = "utamp2",
-) -> tuple[frozenset[Fact], Scores]:
-    """Affordance facts of `source` for the scene, with their scores against the ground truth.
-
-    `rng` drives the noisy detection (required for ``noisy``, unused otherwise). Source
-    ``perceived`` needs a planning scene of perceived types (`utamp_gym.eval.perceived`);
-    its scores here are against the rules on those types (1.0): the declared scene's
-    ground truth is scored by `PerceivedScene.scores`."""
-    if source not in METHOD_SOURCES:
-        raise UnknownNameError("affordance source", source, METHOD_SOURCES)
-    if source == "perceived":
-        from utamp_gym.affordances.rules import derive_affordances
-
-        unseen = [o.name for o in scene.objects if not o.type.endswith(SEEN_SUFFIX)]
-        if unseen:
-            raise ValueError(
-                f"utamp2-perceived plans a perceived scene, but the types of {', '.join(unseen)} "
-                f"in '{scene.name}' are declared ones: perceive it first "
-                "(utamp_gym.eval.perceived.perceive_scene or plan_perceived)"
-            )
-        facts = derive_affordances(scene_types(scene))
-        return facts, score(facts, facts)
-    gt = ground_truth_for(scene, domain)
-    if source == "gt":
-        return gt, score(gt, gt)
-    if source == "rules":
-        from utamp_gym.affordances.rules import derive_affordances
-
-        facts = derive_affordances(scene_types(scene), domain in EXTENDED_DOMAINS)
-        return facts, score(facts, gt)
-    if rng is None:
-        raise ValueError("noisy affordance detection needs a random generator (rng)")
-    from utamp_gym.affordances.noisy import detect_affordances
-
-    det = detect_affordances(scene_types(scene), noise, rng, gt)
-    return det.facts, det.scores
-
-
-def plan_affordances(planning: Scene) -> frozenset[Fact]:
-    """The ``perceived`` source's facts of a planning scene (the rules on its types)."""
-    return affordances_for(planning, "perceived", None)[0]
 
 
 class PlanOutcome(NamedTuple):
@@ -231,7 +136,7 @@ def plan_scene(
     `DEFAULT_SEARCH`. An unsolvable task or a time-out comes back with ``solved=False`` and
     a reason (a time-out also with the phase that ran out of time). `affordances` (facts and
     their scores) replaces the method's own source: ``utamp2-perceived`` plans the declared
-    scene with the facts perceived in it (`utamp_gym.eval.perceived.plan_perceived`).
+    scene with the facts perceived in it (`utamp_gym.methods.perceived.plan_perceived`).
     """
     spec = method_spec(method)
     start = time.perf_counter()

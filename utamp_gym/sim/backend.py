@@ -28,11 +28,11 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from utamp_gym.backend import DEFAULT_POSE_NOISE, PERCEPTION_MODES, Fault, MacroResult
+from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE, Fault, MacroResult
+from utamp_gym.contract.state import Grasp, PhysicalState
+from utamp_gym.contract.tracking import PoseTracker, PoseTracking
+from utamp_gym.contract.views import RobotState, ViewBundle
 from utamp_gym.errors import GroundingError, SimulationError, UnknownNameError
-from utamp_gym.perception.poses import PoseModel
-from utamp_gym.perception.state import Grasp, PhysicalState
-from utamp_gym.perception.views import RobotState, ViewBundle
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.scene.model import Scene
 from utamp_gym.sim.cameras import (
@@ -52,9 +52,9 @@ from utamp_gym.sim.gl import new_renderer
 from utamp_gym.sim.heap import release_free_memory
 from utamp_gym.sim.measure import SimState, settle_objects
 from utamp_gym.sim.physical import FLOOR_BELOW, measure_state, object_poses
-from utamp_gym.sim.rgbd import RgbdPoseEstimator, surface_points
 from utamp_gym.sim.skills import run_skill
 from utamp_gym.sim.snapshot import build_state, freeze, thaw
+from utamp_gym.sim.surfaces import surface_points
 from utamp_gym.sim.world import build_world_spec, rests_on_top
 
 CAMERA = "overview"
@@ -70,11 +70,14 @@ class MujocoBackend:
     `pos_noise` (m) and `yaw_noise_deg` randomise where the scene's objects start (uniform,
     per episode). `pose_noise` (m) is the robot's pose-estimation error: grasp, place and
     slide targets are decoded from estimates (`utamp_gym.sim.estimate`), never from the
-    simulator's truth. With ``perception="rgbd"`` the estimates come from the rendered
-    cameras instead (`utamp_gym.sim.rgbd`; `pose_noise` is then unused), and so do the
-    poses of `physical_state`. `frame_sink` (settable at any time; None: off) receives an RGB frame
-    (`frame_size` = width, height) every `frame_period` s of simulated time while actions
-    run (for videos); `watch` registers any per-period callback (module docstring).
+    simulator's truth. `perception` is ``"gaussian"`` (that model: the true pose plus
+    `pose_noise`) or a `PoseTracking` built above the simulator (`utamp_gym.contract.tracking`),
+    e.g. ``perception.tracking.rgbd_tracking``, which fits poses to the rendered cameras
+    (`pose_noise` is then unused, and the poses of `physical_state` are its estimates too;
+    ``utamp_gym.grounding.physics_backend(perception="rgbd")`` builds that). `frame_sink`
+    (settable at any time; None: off) receives an RGB frame (`frame_size` = width, height)
+    every `frame_period` s of simulated time while actions run (for videos); `watch`
+    registers any per-period callback (module docstring).
     """
 
     def __init__(
@@ -83,7 +86,7 @@ class MujocoBackend:
         pos_noise: float = 0.003,
         yaw_noise_deg: float = 2.0,
         pose_noise: float = DEFAULT_POSE_NOISE,
-        perception: str = "gaussian",
+        perception: str | PoseTracking = DEFAULT_PERCEPTION,
         settle_s: float = 0.5,
         frame_sink: FrameSink | None = None,
         frame_period: float = 0.1,
@@ -91,9 +94,14 @@ class MujocoBackend:
     ):
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
         self.pose_noise = pose_noise
-        if perception not in PERCEPTION_MODES:
-            raise UnknownNameError("perception", str(perception), PERCEPTION_MODES)
-        self.perception = perception
+        if isinstance(perception, str) and perception != DEFAULT_PERCEPTION:
+            raise ValueError(
+                f"MujocoBackend(perception={perception!r}): the simulator fits no poses; pass a "
+                "PoseTracking (e.g. utamp_gym.perception.tracking.rgbd_tracking) or build it "
+                f"with utamp_gym.grounding.physics_backend(perception={perception!r})"
+            )
+        #: the pose tracking handed in (None: the Gaussian model of `utamp_gym.sim.estimate`)
+        self.tracking: PoseTracking | None = None if isinstance(perception, str) else perception
         if frame_period <= 0:
             raise ValueError(f"frame_period must be > 0 s, got {frame_period!r}")
         self.frame_period, self.frame_size = frame_period, frame_size
@@ -123,8 +131,8 @@ class MujocoBackend:
         )
         estimator = PoseEstimator(self.pose_noise, rng)
         self._state = build_state(spec, info, self._kin, rng, estimator)
-        if self.perception == "rgbd":
-            self._state.estimator = self._rgbd_estimator(scene)
+        if self.tracking is not None:
+            self._state.estimator = self._tracker(scene, self.tracking)
         self._steps = 0
         self._hook()
         settle_objects(self._state, min_s=self.settle_s, max_s=self.settle_s + 1.0)
@@ -133,20 +141,20 @@ class MujocoBackend:
         release_free_memory()  # keeps a long run's resident size flat (`utamp_gym.sim.heap`)
 
     def execute(self, action: str) -> MacroResult:
-        """Run one grounded PDDL macro action; a failure comes back with a reason. With
-        ``perception="rgbd"`` its timings include ``perception_s`` (wall) and
+        """Run one grounded PDDL macro action; a failure comes back with a reason. With a
+        pose tracking its timings include ``perception_s`` (wall) and
         ``perception_cpu_s`` (this process's CPU time): rendering and fitting."""
         st = self._require()
         try:
             act = parse_action(action, st.world.scene)
         except (GroundingError, UnknownNameError) as exc:
             return MacroResult(False, f"invalid action {action}: {exc}", Timings().as_dict(0.0))
-        est = st.estimator
+        est = self._tracked()
         before = self._perception_seconds()
-        cpu = est.cpu_seconds if isinstance(est, RgbdPoseEstimator) else 0.0
+        cpu = est.cpu_seconds if est is not None else 0.0
         result = run_skill(st, act)
         self._rest()
-        if isinstance(est, RgbdPoseEstimator):
+        if est is not None:
             timings = {
                 **result.timings,
                 "perception_s": self._perception_seconds() - before,
@@ -155,17 +163,20 @@ class MujocoBackend:
             result = replace(result, timings=timings)
         return result
 
-    # ------------------------------------------------------------ perception="rgbd"
-    def _rgbd_estimator(self, scene: Scene) -> RgbdPoseEstimator:
+    # ------------------------------------------------------------ pose tracking
+    def _tracker(self, scene: Scene, tracking: PoseTracking) -> PoseTracker:
+        """This episode's tracker: handed the cameras' look, their instance ids, the
+        robot's model of each object (`surfaces.surface_points`) and the declared poses."""
         st = self._require()
         ids = {name: i for i, name in self.cameras.instances.items()}
-        models = {
-            n: PoseModel.of(t).with_surface(*surface_points(t))
-            for n, t in ((n, scene.type_of(n)) for n in st.world.body_ids)
-        }
+        surfaces = {n: surface_points(scene.type_of(n)) for n in st.world.body_ids}
         declared = {n: pose_of(p.position, p.quat) for n, p in scene.poses.items()}
         self._pose_look(False)  # the cameras' renderers, made before the first action
-        return RgbdPoseEstimator(self._pose_look, ids, models, declared)
+        return tracking(scene, self._pose_look, ids, surfaces, declared)
+
+    def _tracked(self) -> PoseTracker | None:
+        """The episode's pose tracker, or None with the Gaussian model."""
+        return None if self.tracking is None else self._require().estimator
 
     def _pose_look(self, wrist_only: bool) -> ViewBundle:
         """The views of one look while acting: the wrist camera, and unless `wrist_only`
@@ -178,8 +189,8 @@ class MujocoBackend:
         return ViewBundle(scene + wrist, self.robot_state())
 
     def _perception_seconds(self) -> float:
-        est = self._require().estimator
-        return float(sum(est.seconds)) if isinstance(est, RgbdPoseEstimator) else 0.0
+        est = self._tracked()
+        return float(sum(est.seconds)) if est is not None else 0.0
 
     def physical_state(self) -> PhysicalState:
         """Poses, what carries each object (contact forces), containment and the grasp
@@ -193,7 +204,7 @@ class MujocoBackend:
         state = measure_state(
             st.world, st.data, held=held, gripper_gap=st.arm.gap(), scratch=st.scratch
         )
-        if isinstance(st.estimator, RgbdPoseEstimator):
+        if self.tracking is not None:
             state = replace(state, poses=self._camera_poses())
         return state
 
@@ -202,8 +213,8 @@ class MujocoBackend:
         estimated bottom lies more than `TIPPED_BELOW` under the table has tipped over (a
         level pose cannot explain it): it is reported turned on its side."""
         st = self._require()
-        est = st.estimator
-        assert isinstance(est, RgbdPoseEstimator)
+        est = self._tracked()
+        assert est is not None
         est.new_look()
         quat = np.zeros(4)
         out = {}
@@ -313,8 +324,9 @@ class MujocoBackend:
             self._kin = PandaKinematics()
         self._state = None if snapshot is None else thaw(snapshot, self._kin)
         self._rig = None
-        if self._state is not None and isinstance(self._state.estimator, RgbdPoseEstimator):
-            self._state.estimator.attach(self._pose_look)  # its cameras are this backend's
+        est = None if self._state is None else self._tracked()
+        if est is not None:
+            est.attach(self._pose_look)  # its cameras are this backend's
         self._hook()
 
     # ------------------------------------------------------------ frames

@@ -1,7 +1,7 @@
 """RGB-D cameras of the kitchen world: fixed scene cameras and a wrist camera on the Panda.
 
 Why in `sim`: rendering needs the MuJoCo world. What leaves this module is plain data
-(`utamp_gym.perception.views`): images, intrinsics and camera poses, with **object-level**
+(`utamp_gym.contract.views`): images, intrinsics and camera poses, with **object-level**
 instance masks — one id per object (1..N in the scene's object order), never per member or
 geom, -1 for the robot's own body, 0 for everything else (table, floor). Handles, rims and
 edges have to be found from geometry by the perceiver.
@@ -19,7 +19,7 @@ world's z axis up in the image; docs/perception.md lists them):
   towards the grasp axis, with about a RealSense D405's field of view (`WRIST_SIZE`).
 
 Intrinsics follow from the image size and the field of view (pinhole, square pixels,
-principal point at the image centre; `utamp_gym.perception.views.Intrinsics`). Rendering is
+principal point at the image centre; `utamp_gym.contract.views.Intrinsics`). Rendering is
 headless (EGL or OSMesa through ``MUJOCO_GL``) with shadows, reflections and skybox off:
 320 x 240 costs a few milliseconds per image on these CPUs (`benchmarks/perception_cost.py`).
 """
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from utamp_gym.perception.views import (
+from utamp_gym.contract.views import (
     BACKGROUND,
     ROBOT,
     Intrinsics,

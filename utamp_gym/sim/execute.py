@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE
+from utamp_gym.grounding import physics_backend
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.model import Scene
 from utamp_gym.seeding import run_seed
@@ -114,7 +115,7 @@ def execute_plan(
     faults = np.random.default_rng([base, FAULT_STREAM]) if disturbance > 0 else None
     with _video(video) as sink:
         own = backend is None
-        sim = backend or MujocoBackend(pose_noise=pose_noise, perception=perception)
+        sim = backend or physics_backend(pose_noise=pose_noise, perception=perception)
         sim.frame_sink = sink
         try:
             start = time.perf_counter()

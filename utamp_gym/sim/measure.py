@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from utamp_gym.contract.tracking import PoseTracker
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim.control import ArmDriver
 from utamp_gym.sim.decode import GraspSymbols, pose_of, support_point, world_aabb
@@ -60,7 +61,7 @@ class SimState:
     arm: ArmDriver
     held: Held | None = None
     scratch: mujoco.MjData | None = None  # for forwarded copies (`world.forwarded_copy`)
-    estimator: PoseEstimator | None = None  # None: the robot knows the true poses
+    estimator: PoseEstimator | PoseTracker | None = None  # None: the robot knows the true poses
     #: why attempts within the current macro action were undone and retried (`MacroResult`)
     retries: list[str] = field(default_factory=list)
 

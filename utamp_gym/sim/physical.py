@@ -12,7 +12,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from utamp_gym.perception.state import FLOOR, Grasp, PhysicalState
+from utamp_gym.contract.state import FLOOR, Grasp, PhysicalState
 from utamp_gym.robot.panda_mjcf import PandaIds
 from utamp_gym.scene.geometry import FINGER_PAIRS, NORMALS, SIDES, axis_of
 from utamp_gym.sim.bodies import object_prims

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from utamp_gym.contract.tracking import PoseTracker
 from utamp_gym.robot.kinematics import PandaKinematics
 from utamp_gym.robot.panda_mjcf import add_panda, set_home
 from utamp_gym.sim.cameras import add_wrist_camera
@@ -48,7 +49,7 @@ class SimSnapshot:
     timestep: float
     physics: np.ndarray
     rng: np.random.Generator
-    estimator: PoseEstimator | None
+    estimator: PoseEstimator | PoseTracker | None
     held: Held | None = None
     retries: list[str] = field(default_factory=list)
     timings: Timings = field(default_factory=Timings)
@@ -63,7 +64,7 @@ def build_state(
     info: WorldInfo,
     kin: PandaKinematics,
     rng: np.random.Generator,
-    estimator: PoseEstimator | None,
+    estimator: PoseEstimator | PoseTracker | None,
 ) -> SimState:
     """The world of `spec` (from `build_world_spec`) with the Panda at its ready pose."""
     handles = add_panda(spec)

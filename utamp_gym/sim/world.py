@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from utamp_gym.contract.state import TILT_DEG
 from utamp_gym.errors import SimulationError, UnknownNameError
-from utamp_gym.perception.abstraction import TILT_DEG
 from utamp_gym.scene.model import Pose, Scene
 from utamp_gym.sim.appearance import (
     ACCENT_MATERIAL,

@@ -22,9 +22,6 @@ from utamp_gym.symbolic.slots import Footprint, fits, usable_region
 
 DOMAINS = ("utamp2", "utamp1", "utamp2x")
 AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False, "utamp2x": True}
-#: domains whose affordances include the extended grasps (`utamp_gym.affordances.rim`): the
-#: rules derive them for these only, so the paper's domains plan as before
-EXTENDED_DOMAINS = frozenset({"utamp2x"})
 SPACE_CONTACT_GAP = 0.01  # m
 
 

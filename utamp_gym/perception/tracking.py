@@ -1,17 +1,19 @@
-"""`RgbdPoseEstimator`: the robot's object poses from rendered RGB-D views.
+"""`RgbdPoseEstimator`: the robot's object poses fitted to a backend's RGB-D views.
 
-The drop-in alternative to the Gaussian stand-in (`utamp_gym.sim.estimate.PoseEstimator`),
-chosen with ``perception="rgbd"``. A *look* renders the acting cameras
-(`cameras.ACTING_VIEWS`, depth and object-level instance masks at `cameras.ACTING_SIZE`)
-and the wrist camera, fuses them (`perception.cloud.fuse`) and fits each object's pose when
-it is first asked for (`perception.poses.estimate_pose`: iterative closest points against
-the robot's model of the object, points on the surfaces of the catalogue type it decodes
-with, `surface_points`). Within a look an object's estimate stays the
-same; `forget` makes the next estimate of an object come from a new rendering (the wrist
-camera's alone if it sees the object well: the object in the hand), `new_look` does so for
-all. `close_look` renders the wrist camera alone. An object the cameras cannot
-see (fewer than `poses.MIN_POINTS` points) keeps its last estimate. Injected wrong beliefs
-(`offset`) are added to the camera estimate until forgotten, as in the Gaussian model.
+The drop-in alternative to the simulator's Gaussian stand-in
+(`utamp_gym.sim.estimate.PoseEstimator`), chosen with ``perception="rgbd"``: the backend is
+handed `rgbd_tracking` (a `utamp_gym.contract.tracking.PoseTracking`) and calls it at every
+reset with its `Look`, its cameras' instance ids, the points on each object's surfaces and
+the declared poses. A *look* renders the acting cameras (depth and object-level instance
+masks) and the wrist camera, fuses them (`perception.cloud.fuse`) and fits each object's
+pose when it is first asked for (`perception.poses.estimate_pose`: iterative closest points
+against the robot's model of the object, `PoseModel` with the surface points the backend
+gave). Within a look an object's estimate stays the same; `forget` makes the next estimate
+of an object come from a new rendering (the wrist camera's alone if it sees the object
+well: the object in the hand), `new_look` does so for all. `close_look` renders the wrist
+camera alone. An object the cameras cannot see (fewer than `poses.MIN_POINTS` points) keeps
+its last estimate. Injected wrong beliefs (`offset`) are added to the camera estimate until
+forgotten, as in the Gaussian model.
 
 It never reads the simulator's poses: `estimate` takes the true pose for the interface's
 sake and ignores it. The first belief is the scene's declared pose (orientation and
@@ -22,16 +24,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
-import mujoco
 import numpy as np
 
+from utamp_gym.contract.tracking import Look, Surface
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.poses import PoseModel, estimate_pose
-from utamp_gym.perception.views import ViewBundle
-from utamp_gym.scene.catalogue import ObjectType
-from utamp_gym.sim.bodies import object_prims
+from utamp_gym.scene.model import Scene
 
 #: the standard deviation (m) the grasps' finger openings allow for, as the Gaussian
 #: model's `noise` does (the measured error: benchmarks/perception_cost.py)
@@ -39,76 +39,6 @@ RGBD_NOISE = 0.002
 WRIST_POINTS = 150  # an object this well seen by the wrist camera needs no scene look ...
 WHOLE_SPAN = 0.8  # ... if its points span this much of its longest extent
 STILL = 0.0005  # m: an object whose points' centre moved less than this was not refitted
-
-Look = Callable[[bool], ViewBundle]  # (wrist only?) -> the rendered views
-
-
-def surface_points(t: ObjectType, spacing: float = 0.005) -> tuple[np.ndarray, np.ndarray]:
-    """Points (N, 3) about `spacing` apart on the surfaces of the type's collision
-    primitives (`bodies.object_prims`) and their outward normals, in the object frame: the
-    robot's model of it."""
-    pts, nrm = [], []
-    for p in object_prims(t):
-        rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, np.asarray(p.quat, dtype=float))
-        r = rot.reshape(3, 3)
-        local, normal = _primitive_surface(p.shape, np.asarray(p.size, dtype=float), spacing)
-        pts.append(local @ r.T + np.asarray(p.pos))
-        nrm.append(normal @ r.T)
-    return np.concatenate(pts), np.concatenate(nrm)
-
-
-def _grid(a: float, b: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    u = np.linspace(-a, a, max(2, round(2 * a / spacing) + 1))
-    v = np.linspace(-b, b, max(2, round(2 * b / spacing) + 1))
-    uu, vv = np.meshgrid(u, v, indexing="ij")
-    return uu.ravel(), vv.ravel()
-
-
-def _primitive_surface(
-    shape: str, size: np.ndarray, spacing: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Surface points of a primitive centred at the origin, and their unit normals."""
-    if shape == "box":
-        faces, normals = [], []
-        for ax, (a, b) in enumerate(((size[1], size[2]), (size[0], size[2]), (size[0], size[1]))):
-            u, v = _grid(a, b, spacing)
-            for sign in (-1.0, 1.0):
-                f = np.zeros((len(u), 3))
-                f[:, ax] = sign * size[ax]
-                others = [i for i in range(3) if i != ax]
-                f[:, others[0]], f[:, others[1]] = u, v
-                n = np.zeros_like(f)
-                n[:, ax] = sign
-                faces.append(f)
-                normals.append(n)
-        return np.concatenate(faces), np.concatenate(normals)
-    if shape == "cylinder":
-        r, h = float(size[0]), float(size[1])
-        n = max(8, round(2 * math.pi * r / spacing))
-        ang = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
-        zs = np.linspace(-h, h, max(2, round(2 * h / spacing) + 1))
-        aa, zz = np.meshgrid(ang, zs, indexing="ij")
-        radial = np.column_stack([np.cos(aa.ravel()), np.sin(aa.ravel()), np.zeros(aa.size)])
-        side = radial * r
-        side[:, 2] = zz.ravel()
-        u, v = _grid(r, r, spacing)
-        disc = (u**2 + v**2) <= r * r
-        caps, cap_n = [], []
-        for z in (-h, h):
-            caps.append(np.column_stack([u[disc], v[disc], np.full(disc.sum(), z)]))
-            cap_n.append(np.tile([0.0, 0.0, math.copysign(1.0, z)], (int(disc.sum()), 1)))
-        return np.concatenate([side, *caps]), np.concatenate([radial, *cap_n])
-    a, b, c = size  # ellipsoid
-    n = max(8, round(2 * math.pi * max(a, b) / spacing))
-    th = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
-    ph = np.linspace(-math.pi / 2, math.pi / 2, max(4, n // 2))
-    tt, pp = np.meshgrid(th, ph, indexing="ij")
-    cp, sp, ct, st = np.cos(pp.ravel()), np.sin(pp.ravel()), np.cos(tt.ravel()), np.sin(tt.ravel())
-    pts = np.column_stack([a * cp * ct, b * cp * st, c * sp])
-    grad = np.column_stack([pts[:, 0] / a**2, pts[:, 1] / b**2, pts[:, 2] / c**2])
-    grad /= np.maximum(np.linalg.norm(grad, axis=1, keepdims=True), 1e-12)
-    return pts, grad
 
 
 def _rot_z(yaw: float) -> np.ndarray:
@@ -265,4 +195,17 @@ class RgbdPoseEstimator:
         return out
 
 
-__all__ = ["RGBD_NOISE", "RgbdPoseEstimator", "surface_points"]
+def rgbd_tracking(
+    scene: Scene,
+    look: Look,
+    instances: Mapping[str, int],
+    surfaces: Mapping[str, Surface],
+    initial: Mapping[str, np.ndarray],
+) -> RgbdPoseEstimator:
+    """The `PoseTracking` of ``perception="rgbd"``: an `RgbdPoseEstimator` whose model of
+    each object is its catalogue type's `PoseModel` with the backend's surface points."""
+    models = {n: PoseModel.of(scene.type_of(n)).with_surface(*surfaces[n]) for n in surfaces}
+    return RgbdPoseEstimator(look, instances, models, initial)
+
+
+__all__ = ["RGBD_NOISE", "RgbdPoseEstimator", "rgbd_tracking"]
