@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.backend import MacroResult
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.options import MASKS
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import register_envs
 from utamp_gym.env.universe import UniverseKey, ground_universe
 from utamp_gym.errors import UnknownNameError

@@ -19,8 +19,8 @@ import pytest
 from xvfb import Display, virtual_display, wait_until
 
 import utamp_gym  # noqa: F401  (registers the envs)
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.cli import main
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.video import RecordVideo
 from utamp_gym.env.viewer import FRAME_RATE, NoDisplayError
 
@@ -131,7 +131,7 @@ HUMAN = textwrap.dedent(
     import sys
     import gymnasium as gym
     import utamp_gym
-    from utamp_gym.env.planner_policy import PlannerPolicy
+    from utamp_gym.agents import PlannerPolicy
 
     env = gym.make("UTampKitchen-v0", scene="{scene}", grounding=sys.argv[1], render_mode="human")
     policy = PlannerPolicy(env.unwrapped)

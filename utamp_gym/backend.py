@@ -15,7 +15,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -107,6 +107,17 @@ class Disturbable(Protocol):
 
     def disturb(self, rng: np.random.Generator) -> Fault | None:
         """Inject one fault of `FAULT_KINDS` chosen with `rng` (None if none applies)."""
+        ...
+
+
+@runtime_checkable
+class Surveying(Protocol):
+    """A backend with cameras (the MuJoCo backend): what `utamp2-perceived` looks through."""
+
+    cameras: Any  # the camera rig; ``cameras.instances`` names each segmented instance
+
+    def survey(self) -> Any:
+        """The survey look: every camera's images, intrinsics and poses (a view bundle)."""
         ...
 
 

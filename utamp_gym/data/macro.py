@@ -1,7 +1,7 @@
 """The macro track: planner-policy episodes of a kitchen env, step by step.
 
 An episode is ``env.reset(seed=s)`` (the env's RNG picks the scene) followed by the planner
-policy's actions (`utamp_gym.env.planner_policy.PlannerPolicy`: Fast Downward, replanning from
+policy's actions (`utamp_gym.agents.PlannerPolicy`: Fast Downward, replanning from
 the observed state) until the goal, a dead end, the time limit or a planner error. Each step
 keeps the observation, the action id, the reward, termination and truncation, and the env's
 info (its fixed structure: the macro action's PDDL string, the action mask, the failure reason,
@@ -47,7 +47,7 @@ def make_env(env_id: str, env_options: Mapping[str, Any]) -> Any:
 
 def record_episode(task: MacroTask) -> Episode:
     """Run the planner policy for one episode of `task` and keep every step."""
-    from utamp_gym.env.planner_policy import PlannerPolicy
+    from utamp_gym.agents import PlannerPolicy
     from utamp_gym.errors import PlanningError
     from utamp_gym.scene.io import scene_to_toml
 

@@ -8,6 +8,8 @@ Import the modules directly; this package imports nothing and registers nothing
 * `universe` / `atoms` – the grounded action universe and the scenes' initial atoms;
 * `state`, `poses`, `task`, `render` – symbolic state and mask, symbolic poses, reward and
   spaces, the schematic renderer (the physics backend protocol is `utamp_gym.backend`);
-* `wrappers` (`SymbolicActionWrapper`), `planner_policy` (`PlannerPolicy`),
-  `dm_adapter` (`DmEnvAdapter`).
+* `grounding`, `physics`, `symbolic_backend` – what the env asks of its grounding, the
+  physics grounding (perception, faults) and symbolic grounding as a backend;
+* `wrappers` (`SymbolicActionWrapper`), `dm_adapter` (`DmEnvAdapter`); `planner_policy` is
+  a deprecated alias (the policies live in `utamp_gym.agents`).
 """

@@ -29,12 +29,14 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores, score
+from utamp_gym.backend import DEFAULT_BACKEND, backend_factory
 from utamp_gym.errors import UtampError
 from utamp_gym.eval.stages import ATTRIBUTES
 from utamp_gym.planning.methods import SEEN_SUFFIX, PlanOutcome
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box
 from utamp_gym.scene.model import Scene
+from utamp_gym.seeding import run_seed
 
 #: what each ``acc_<attribute>`` column measures (`attribute_accuracy`):
 #: body (box or cylinder), members (Dice of the matched members), member_size (matched boxes
@@ -199,16 +201,19 @@ def build_perceived_scene(
 def perceive_scene(scene: Scene, seed: int = 0, *, backend: Any = None) -> PerceivedScene:
     """Look at the episode's world of (`scene`, `seed`) with the survey cameras and perceive
     every object (module docstring). `backend`: a `MujocoBackend` to reuse (it is reset)."""
-    import numpy as np
+    return perceive_world(scene, run_seed(scene.name, seed), backend=backend)
 
-    from utamp_gym.seeding import run_seed
-    from utamp_gym.sim.backend import MujocoBackend
 
+def perceive_world(scene: Scene, world_seed: int, *, backend: Any = None) -> PerceivedScene:
+    """`perceive_scene` of the world whose generator is seeded with `world_seed` (already
+    derived from the scene and the run's seed: `utamp_gym.seeding.run_seed`). Without a
+    `backend`, one of the default physics backend (`utamp_gym.backend.DEFAULT_BACKEND`) is
+    built for the look."""
     own = backend is None
-    sim = MujocoBackend() if own else backend
+    sim = backend_factory(DEFAULT_BACKEND)() if own else backend
     start = time.perf_counter()
     try:
-        sim.reset(scene, np.random.default_rng(run_seed(scene.name, seed)))
+        sim.reset(scene, np.random.default_rng(world_seed))
         return perceive_live(scene, sim, start)
     finally:
         if own:
@@ -315,6 +320,7 @@ __all__ = [
     "build_perceived_scene",
     "perceive_live",
     "perceive_scene",
+    "perceive_world",
     "plan_perceived",
     "rename_fact",
     "run_perceived_episode",
