@@ -43,6 +43,8 @@ class Episode:
     decision_s: float  # inside the policy
     step_s: float  # inside env.step
     info: Mapping[str, Any]  # the last info (of the reset if no step was taken)
+    #: per step: info["action"], the info and the env's `macro_result` (None: not executed)
+    records: tuple[tuple[str, Mapping[str, Any], Any], ...] = ()
 
 
 def run_policy(
@@ -52,12 +54,17 @@ def run_policy(
     max_steps: int,
     seed: int | None = None,
     options: Mapping[str, Any] | None = None,
+    through_termination: bool = False,
 ) -> Episode:
-    """Reset `env` (`seed`, `options`) and let `policy` act until the episode ends."""
+    """Reset `env` (`seed`, `options`) and let `policy` act until the episode ends
+    (`through_termination`: only when the policy stops or the budget runs out, e.g. an
+    open-loop plan, played to its end whatever the env perceives)."""
     start = time.perf_counter()
     obs, info = env.reset(seed=seed, options=dict(options) if options else None)
     reset_s = time.perf_counter() - start
     actions: list[str] = []
+    records: list[tuple[str, Mapping[str, Any], Any]] = []
+    kitchen = env.unwrapped
     n_failed = n_faults = 0
     last_failure, stopped, ended = "", "", "budget"
     decision = stepping = 0.0
@@ -73,10 +80,11 @@ def run_policy(
         obs, _, terminated, truncated, info = env.step(action)
         decision, stepping = decision + t1 - t0, stepping + time.perf_counter() - t1
         actions.append(str(info["action"]))
+        records.append((actions[-1], info, getattr(kitchen, "macro_result", None)))
         n_faults += bool(info.get("fault"))
         if info["failure_reason"]:
             n_failed, last_failure = n_failed + 1, str(info["failure_reason"])
-        if terminated or truncated:
+        if (terminated or truncated) and not through_termination:
             ended = "terminated" if terminated else "truncated"
             break
     return Episode(
@@ -91,4 +99,5 @@ def run_policy(
         decision_s=decision,
         step_s=stepping,
         info=info,
+        records=tuple(records),
     )

@@ -44,10 +44,11 @@ class ScenePresence:
         self._cache: SceneCache[np.ndarray] = SceneCache()  # resets are frequent
 
     def reset(self, scene: Scene) -> None:
+        self._rows = self._cache.get(scene.name, lambda: self._of(scene))
+
+    def _of(self, scene: Scene) -> np.ndarray:
         names = set(scene.object_names)
-        self._rows = self._cache.get(
-            scene.name, lambda: np.array([n in names for n in self._objects], np.int8)
-        )
+        return np.array([n in names for n in self._objects], np.int8)
 
     def rows(self) -> np.ndarray:
         return self._rows.copy()  # the cached array itself is never handed out
@@ -64,7 +65,11 @@ class Grounding(Protocol):
     def perception(self) -> Perception | None: ...
 
     def reset(
-        self, scene: Scene, declared: frozenset[str], np_random: np.random.Generator
+        self,
+        scene: Scene,
+        declared: frozenset[str],
+        np_random: np.random.Generator,
+        world_seed: int | None = None,
     ) -> None: ...
 
     def step(self, a: int, np_random: np.random.Generator) -> Stepped: ...
@@ -97,8 +102,14 @@ class SymbolicGrounding:
         self.state = state
         self.backend = SymbolicBackend(universe, state, objects, masks)
 
-    def reset(self, scene: Scene, declared: frozenset[str], np_random: np.random.Generator) -> None:
-        """Start an episode (the env's generator is not drawn from)."""
+    def reset(
+        self,
+        scene: Scene,
+        declared: frozenset[str],
+        np_random: np.random.Generator,
+        world_seed: int | None = None,
+    ) -> None:
+        """Start an episode (nothing is random: no generator is drawn from)."""
         self.backend.reset(scene)
 
     def step(self, a: int, np_random: np.random.Generator) -> Stepped:

@@ -35,6 +35,10 @@ from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import DEFAULT_NOISE
 from utamp_gym.scene.model import Scene
 
+#: what ``reset(options=...)`` accepts: the episode's scene, and the seed of its simulated
+#: world (physics: the simulator's generator, and a second stream of it for injected
+#: faults; default: drawn from the env's RNG, which then also draws the faults)
+RESET_OPTIONS = ("scene", "world_seed")
 #: observation rows of `object_poses` / `present`: the suites' catalogue objects
 DEFAULT_OBJECTS = ("tray", "salt", "mug", "board", "pan")
 Obs = dict[str, np.ndarray]
@@ -249,8 +253,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         super().reset(seed=seed)
         options = dict(options or {})
         name = options.pop("scene", None)
+        world_seed = options.pop("world_seed", None)
         if options:
-            raise UnknownNameError("reset option", next(iter(options)), ["scene"])
+            raise UnknownNameError("reset option", next(iter(options)), RESET_OPTIONS)
         if name is None:
             scene = self.scenes[int(self.np_random.integers(len(self.scenes)))]
         else:
@@ -262,7 +267,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         atoms = self._initial_atoms(scene, self.np_random)
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
         self._present.reset(scene)
-        self._grounding.reset(scene, atoms.static, self.np_random)
+        self._grounding.reset(scene, atoms.static, self.np_random, world_seed)
         goal, height = self._progress(self.options.reward_shaping)
         self._task.initialize_episode(height)
         self._rendering.reset()

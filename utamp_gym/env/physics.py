@@ -23,6 +23,8 @@ from utamp_gym.env.universe import Universe, ground_universe
 from utamp_gym.perception.abstraction import Perception, perceive
 from utamp_gym.scene.model import Scene
 
+#: the second stream of an episode's world seed: its injected faults
+FAULT_STREAM = 0xFA17
 #: static predicates whose atoms perception re-derives (they follow the object's orientation)
 ORIENTATION_PREFIXES = ("(force ", "(base ")
 
@@ -92,6 +94,7 @@ class PhysicalGrounding:
         self._rows = {n: i for i, n in enumerate(objects)}
         self._scene: Scene | None = None
         self._declared: frozenset[str] = frozenset()
+        self._faults = None
         self.perception: Perception | None = None
 
     def __getstate__(self) -> dict[str, object]:
@@ -104,10 +107,23 @@ class PhysicalGrounding:
         state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
         self.__dict__.update(state)
 
-    def reset(self, scene: Scene, declared: frozenset[str], np_random: np.random.Generator) -> None:
-        """Reset the simulator to `scene` (noise from a generator drawn from the env's) and
-        perceive its state; `declared`: the episode's static atoms."""
-        rng = np.random.default_rng(np_random.integers(2**63))
+    def reset(
+        self,
+        scene: Scene,
+        declared: frozenset[str],
+        np_random: np.random.Generator,
+        world_seed: int | None = None,
+    ) -> None:
+        """Reset the simulator to `scene` and perceive its state; `declared`: the episode's
+        static atoms. The simulator's generator is seeded with `world_seed`, and faults are
+        drawn from its second stream (`FAULT_STREAM`); without it, the generator's seed and
+        the faults are drawn from the env's `np_random`."""
+        if world_seed is None:
+            rng = np.random.default_rng(np_random.integers(2**63))
+            self._faults: np.random.Generator | None = None
+        else:
+            rng = np.random.default_rng(world_seed)
+            self._faults = np.random.default_rng([world_seed, FAULT_STREAM])
         self.backend.reset(scene, rng)
         self._scene, self._declared = scene, declared
         self._observe(self._perceive()[0])
@@ -117,7 +133,7 @@ class PhysicalGrounding:
         start = time.perf_counter()
         action = self.universe.actions[a]
         predicted = self._predicted(a)
-        executed = self.execute(action, np_random)
+        executed = self.execute(action, np_random if self._faults is None else self._faults)
         self._observe(executed.perception)
         unexpected = unexpected_atoms(predicted, executed.perception.atoms)
         macro = executed.macro

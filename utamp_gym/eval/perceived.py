@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores, score
-from utamp_gym.backend import DEFAULT_BACKEND, backend_factory
+from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, backend_factory
 from utamp_gym.errors import UtampError
+from utamp_gym.eval.episode import episode_result
 from utamp_gym.eval.stages import ATTRIBUTES
 from utamp_gym.planning.methods import SEEN_SUFFIX, PlanOutcome
 from utamp_gym.scene.catalogue import ObjectType
@@ -298,16 +299,13 @@ def run_perceived_episode(
     perception: str = "gaussian",
 ) -> Any:
     """`utamp run --method utamp2-perceived`: perceive, plan, execute in the declared world
-    (an `utamp_gym.sim.execute.EpisodeResult`)."""
-    from utamp_gym.backend import DEFAULT_POSE_NOISE
-    from utamp_gym.sim.execute import episode_result
-
+    (an `utamp_gym.eval.episode.EpisodeResult`)."""
     t0 = time.perf_counter()
     outcome, _ = plan_perceived(scene, seed)
     plan = outcome.plan
     noise = DEFAULT_POSE_NOISE if pose_noise is None else pose_noise
     return episode_result(
-        scene, outcome, plan, seed, video, t0, None, noise, disturbance, perception
+        scene.name, outcome, plan, seed, video, t0, None, noise, disturbance, perception
     )
 
 

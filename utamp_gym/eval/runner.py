@@ -3,8 +3,8 @@
 Grounding ``symbolic``: success = a plan was found and it is valid under the
 ground-truth U-TAMP-2 model (`check_against_ground_truth`); the failure reason is the
 first violated precondition or the planner's reason. Grounding ``physics``: the plan is
-executed in MuJoCo by `execute_plan`, the executor behind `run_episode` (same seed, same
-rollout), and physics decides. An unsolved U-TAMP-2 run is explained
+played open loop in the physics env by `execute_plan` (`utamp_gym.eval.episode`, behind
+`run_episode`: same seed, same rollout), and the env decides. An unsolved U-TAMP-2 run is explained
 (`explain`). `run_task` never raises: a crash becomes a failure row.
 
 A method ``rl:PATH`` is a saved RL agent acting in the env of either grounding
@@ -21,6 +21,7 @@ from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError, UnknownNameError
+from utamp_gym.eval.episode import execute_plan
 from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
@@ -222,12 +223,10 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         if task.grounding == "symbolic":
             success = check.valid
             failure = "" if check.valid else f"invalid under ground truth: {check.message}"
-        else:
-            from utamp_gym.sim.execute import execute_plan
-
+        else:  # the plan played open loop in the physics env (`OpenLoopPolicy`)
             assert task.pose_noise is not None
             ex = execute_plan(
-                scene,
+                task.scene,
                 plan,
                 task.seed,
                 pose_noise=task.pose_noise,
