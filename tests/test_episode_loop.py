@@ -1,8 +1,9 @@
 """The one episode loop (`utamp_gym.agents.run_policy`): policies acting through ``env.step``.
 
-Every `utamp eval` run that acts in the env (closed loop with each planning method, a saved
-``rl:PATH`` agent) must call ``env.step`` once per macro action in its row, and its row's
-success must be the env's last ``info["is_success"]``.
+Every `utamp eval` run in physics (each planning method and VLM method open loop, each
+planning method closed loop, a saved ``rl:PATH`` agent) must call ``env.step`` once per macro
+action in its row, and its row's success must be the env's last ``info["is_success"]``.
+(Symbolic open-loop rows are still decided by validating the plan: not an env episode.)
 """
 
 from __future__ import annotations
@@ -12,11 +13,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from test_eval_vlm import Server, attributes, completion, fenced, vlm  # noqa: F401 (fixture)
 
 from utamp_gym.agents import OpenLoopPolicy, PlannerPolicy, PlanStopped, run_policy
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.eval.records import PLAN_SEPARATOR
-from utamp_gym.eval.runner import EvalTask, run_task
+from utamp_gym.eval.runner import EVAL_METHODS, EvalTask, run_task
 from utamp_gym.planning.methods import METHODS, plan_scene
 from utamp_gym.suites import resolve_scene
 
@@ -78,6 +80,28 @@ def test_every_closed_loop_method_steps_the_env_once_per_action(
     assert spy.calls == row.plan_length > 0
     assert spy.last_info is not None and row.success == spy.last_info["is_success"]
     assert len(row.plan.split(PLAN_SEPARATOR)) == row.plan_length
+
+
+VLM_SCENE = "pick-place/013"  # tray/pan | board (the VLM tests' scene)
+
+
+@pytest.mark.parametrize("method", EVAL_METHODS)
+def test_every_open_loop_method_steps_the_physics_env_once_per_action(
+    method: str, monkeypatch: pytest.MonkeyPatch, vlm: Server  # noqa: F811
+) -> None:
+    vlm.reply(completion(fenced(attributes(VLM_SCENE))))
+    plan = ["pick cutting-board table", "place cutting-board frying-pan"]
+    vlm.reply(completion(fenced({"plan": plan})))
+    spy = StepSpy(monkeypatch)
+    task = EvalTask(VLM_SCENE, method, seed=0, grounding="physics", pose_noise=0.0)
+    row = run_task(task)
+    assert not row.crashed and row.solved, row.failure_reason
+    assert spy.last_info is not None and row.success == spy.last_info["is_success"]
+    if spy.calls < row.plan_length:  # open loop: the plan stopped at its first failed step
+        assert not row.success and spy.calls > 0
+        assert row.failure_reason.endswith(spy.last_info["failure_reason"])
+    else:
+        assert spy.calls == row.plan_length > 0
 
 
 def test_planner_policy_old_path_warns() -> None:
