@@ -26,6 +26,8 @@ from utamp_gym.errors import PlanningError
 ENDINGS = ("terminated", "truncated", "policy", "budget")
 
 Policy = Callable[[Any, Mapping[str, Any]], Any]
+#: called after every step with (action, obs, reward, terminated, truncated, info)
+StepHook = Callable[[Any, Any, float, bool, bool, Mapping[str, Any]], None]
 
 
 @dataclass(frozen=True)
@@ -45,6 +47,7 @@ class Episode:
     info: Mapping[str, Any]  # the last info (of the reset if no step was taken)
     #: per step: info["action"], the info and the env's `macro_result` (None: not executed)
     records: tuple[tuple[str, Mapping[str, Any], Any], ...] = ()
+    first: tuple[Any, Mapping[str, Any]] | None = None  # the reset's observation and info
 
 
 def run_policy(
@@ -55,12 +58,16 @@ def run_policy(
     seed: int | None = None,
     options: Mapping[str, Any] | None = None,
     through_termination: bool = False,
+    on_step: StepHook | None = None,
 ) -> Episode:
     """Reset `env` (`seed`, `options`) and let `policy` act until the episode ends
     (`through_termination`: only when the policy stops or the budget runs out, e.g. an
-    open-loop plan, played to its end whatever the env perceives)."""
+    open-loop plan, played to its end whatever the env perceives); `on_step` sees every
+    step (e.g. a dataset recorder); the reset's observation and info are the returned
+    episode's `first`."""
     start = time.perf_counter()
     obs, info = env.reset(seed=seed, options=dict(options) if options else None)
+    first = (obs, info)
     reset_s = time.perf_counter() - start
     actions: list[str] = []
     records: list[tuple[str, Mapping[str, Any], Any]] = []
@@ -77,8 +84,10 @@ def run_policy(
             ended, stopped = "policy", str(exc)
             break
         t1 = time.perf_counter()
-        obs, _, terminated, truncated, info = env.step(action)
+        obs, reward, terminated, truncated, info = env.step(action)
         decision, stepping = decision + t1 - t0, stepping + time.perf_counter() - t1
+        if on_step is not None:
+            on_step(action, obs, float(reward), bool(terminated), bool(truncated), info)
         actions.append(str(info["action"]))
         records.append((actions[-1], info, getattr(kitchen, "macro_result", None)))
         n_faults += bool(info.get("fault"))
@@ -100,4 +109,5 @@ def run_policy(
         step_s=stepping,
         info=info,
         records=tuple(records),
+        first=first,
     )
