@@ -163,12 +163,12 @@ def compare(args: argparse.Namespace) -> int:
     _diff(a, b, "", found)
     for line in found[:100]:
         print(line)
-    n_eps = sum(len(v) for v in a.values())
-    n_steps = sum(len(e["steps"]) for v in a.values() for e in v)
     if found:
         print(f"{len(found)} difference(s)")
         return 1
-    print(f"identical: {len(a)} groups, {n_eps} episodes, {n_steps} steps")
+    episodes = [e for v in a.values() if isinstance(v, list) for e in v if isinstance(e, dict)]
+    n_steps = sum(len(e.get("steps", ())) for e in episodes)
+    print(f"identical: {len(a)} groups, {len(episodes)} episodes, {n_steps} steps")
     return 0
 
 

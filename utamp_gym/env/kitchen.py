@@ -72,7 +72,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     * ``image`` (only with ``camera=True``): ``Box((h, w, 3), uint8)``.
 
     Symbolic grounding moves poses by the rules of `utamp_gym.env.poses` and keeps the robot
-    at home; physics grounding reads both from the simulator.
+    at home; physics grounding reads both from the simulator. Both are backends behind one
+    interface (`utamp_gym.env.grounding`): `backend` is the simulator or the
+    `SymbolicBackend`.
 
     **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per object newly
     on the tower (over the episode's best) and −0.01 per failed action (`utamp_gym.env.task`).
@@ -110,7 +112,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5; 2–6 for procedural splits) restricts the scenes, ``scene`` fixes
       one (suite, packaged or file name); ``reset(options={"scene": name})`` picks the scene
-      of one episode;
+      of one episode, ``reset(options={"world_seed": s})`` seeds its simulated world (the
+      simulator's generator, and a second stream of it for injected faults; default: both
+      from the env's RNG; the open-loop runner, `utamp_gym.eval.episode`, uses it);
     * ``split``: a procedural split ("train", "test-instances", "test-families", "test-count";
       `utamp_gym.suites.procedural`): its scenes instead of a suite's. All splits share one
       action universe and the observation rows ``base, obj1 .. obj5``

@@ -19,7 +19,7 @@ import numpy as np
 
 from utamp_gym.backend import Disturbable, Fault, MacroResult, PhysicsBackend
 from utamp_gym.env.state import SymbolicState
-from utamp_gym.env.universe import Universe, ground_universe
+from utamp_gym.env.universe import Universe, UniverseByKey
 from utamp_gym.perception.abstraction import Perception, perceive
 from utamp_gym.scene.model import Scene
 
@@ -69,7 +69,7 @@ def unexpected_atoms(predicted: Iterable[str], perceived: Iterable[str]) -> list
     )
 
 
-class PhysicalGrounding:
+class PhysicalGrounding(UniverseByKey):
     """A physics backend plus perception and fault injection (see the module docstring): the
     env's grounding in physics (`utamp_gym.env.grounding.Grounding`); `state` is the env's
     symbolic state, which becomes the perceived one after every reset and executed step."""
@@ -96,16 +96,6 @@ class PhysicalGrounding:
         self._declared: frozenset[str] = frozenset()
         self._faults = None
         self.perception: Perception | None = None
-
-    def __getstate__(self) -> dict[str, object]:
-        """Pickle the universe by its key (re-grounded, or taken from the cache, on load)."""
-        state = self.__dict__.copy()
-        state["universe"] = self.universe.key
-        return state
-
-    def __setstate__(self, state: dict[str, object]) -> None:
-        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
-        self.__dict__.update(state)
 
     def reset(
         self,

@@ -25,11 +25,11 @@ from utamp_gym.env.poses import SymbolicPoses
 from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
 from utamp_gym.env.state import SymbolicState
 from utamp_gym.env.task import home_joints
-from utamp_gym.env.universe import Universe, ground_universe
+from utamp_gym.env.universe import Universe, UniverseByKey
 from utamp_gym.scene.model import Scene
 
 
-class SymbolicBackend:
+class SymbolicBackend(UniverseByKey):
     """The outcome model, the rule-moved poses and the schematic of one env's episodes.
 
     `state` is the env's symbolic state, advanced here by every successful action.
@@ -47,16 +47,6 @@ class SymbolicBackend:
         self.held: str | None = None
         self._home = home_joints()
         self._scene: Scene | None = None
-
-    def __getstate__(self) -> dict[str, object]:
-        """Pickle the universe by its key (re-grounded, or taken from the cache, on load)."""
-        state = self.__dict__.copy()
-        state["universe"] = self.universe.key
-        return state
-
-    def __setstate__(self, state: dict[str, object]) -> None:
-        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
-        self.__dict__.update(state)
 
     # ------------------------------------------------------------------ PhysicsBackend
     def reset(self, scene: Scene, rng: np.random.Generator | None = None) -> None:

@@ -113,6 +113,23 @@ def scene_env(
     )
 
 
+def open_loop_env(
+    scene: str,
+    *,
+    backend: PhysicsBackend | None = None,
+    pose_noise: float = DEFAULT_POSE_NOISE,
+    disturbance: float = 0.0,
+    perception: str = DEFAULT_PERCEPTION,
+) -> UTampKitchenEnv:
+    """The physics env an open-loop plan of `scene` is played in (module docstring); with
+    `backend`, acting in that simulator (`pose_noise` and `perception` are then its own)."""
+    physics = {"pose_noise": pose_noise, "perception": perception} if backend is None else {}
+    return scene_env(
+        scene, backend=backend, masks="none", disturbance=disturbance, record_timings=True,
+        **physics,
+    )  # fmt: skip
+
+
 def execute_plan(
     scene: Scene | str,
     plan: Sequence[str],
@@ -123,6 +140,7 @@ def execute_plan(
     pose_noise: float = DEFAULT_POSE_NOISE,
     disturbance: float = 0.0,
     perception: str = DEFAULT_PERCEPTION,
+    env: UTampKitchenEnv | None = None,
 ) -> Execution:
     """Play `plan` on `scene` in the physics env, stopping at the first failed step (open loop;
     module docstring). `scene`: a name or file path (a `Scene` is referred to by its name).
@@ -132,14 +150,17 @@ def execute_plan(
     injected faults; `pose_noise` is the robot's pose-estimation noise (m; ignored when
     `backend` is given: its own applies), `perception` where its pose estimates come from
     (``gaussian`` or ``rgbd``). With `disturbance` p, each executed step is followed with
-    probability p by an injected fault.
+    probability p by an injected fault. `env`: an `open_loop_env` of the scene to play in
+    (e.g. one whose simulator was looked at first), left open; the other physics arguments
+    are then its own.
     """
     ref = scene if isinstance(scene, str) else scene.name
-    physics = {"pose_noise": pose_noise, "perception": perception} if backend is None else {}
-    env = scene_env(
-        ref, backend=backend, masks="none", disturbance=disturbance, record_timings=True,
-        **physics,
-    )  # fmt: skip
+    own = env is None and backend is None
+    if env is None:
+        env = open_loop_env(
+            ref, backend=backend, pose_noise=pose_noise, disturbance=disturbance,
+            perception=perception,
+        )  # fmt: skip
     sim: Any = env.backend
     try:
         world = run_seed(env.scenes[0].name, seed)  # independent per (scene, seed)
@@ -161,7 +182,7 @@ def execute_plan(
             poses = {n: [float(v) for v in p] for n, p in sim.object_poses().items()}
     finally:
         sim.frame_sink = None
-        if backend is None:
+        if own:
             env.close()
     failed = next((s for s in steps if not s.success), None)
     failure = None
@@ -216,8 +237,10 @@ def episode_result(
     pose_noise: float,
     disturbance: float,
     perception: str,
+    env: UTampKitchenEnv | None = None,
 ) -> EpisodeResult:
-    """Execute `plan` (the world's names of `outcome`'s plan) and report the episode."""
+    """Execute `plan` (the world's names of `outcome`'s plan; in `env`, if given) and report
+    the episode."""
     ex = execute_plan(
         scene,
         plan if outcome.solved else (),
@@ -227,6 +250,7 @@ def episode_result(
         pose_noise=pose_noise,
         disturbance=disturbance,
         perception=perception,
+        env=env,
     )
     failure = ex.failure
     if not outcome.solved:

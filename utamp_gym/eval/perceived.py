@@ -31,7 +31,7 @@ import numpy as np
 from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, backend_factory
 from utamp_gym.errors import UtampError
-from utamp_gym.eval.episode import episode_result
+from utamp_gym.eval.episode import episode_result, open_loop_env
 from utamp_gym.eval.stages import ATTRIBUTES
 from utamp_gym.planning.methods import SEEN_SUFFIX, PlanOutcome
 from utamp_gym.scene.catalogue import ObjectType
@@ -298,15 +298,22 @@ def run_perceived_episode(
     disturbance: float = 0.0,
     perception: str = "gaussian",
 ) -> Any:
-    """`utamp run --method utamp2-perceived`: perceive, plan, execute in the declared world
-    (an `utamp_gym.eval.episode.EpisodeResult`)."""
-    t0 = time.perf_counter()
-    outcome, _ = plan_perceived(scene, seed)
-    plan = outcome.plan
+    """`utamp run --method utamp2-perceived`: perceive (through the simulator of the env the
+    plan is then played in), plan, execute in the declared world (an
+    `utamp_gym.eval.episode.EpisodeResult`)."""
     noise = DEFAULT_POSE_NOISE if pose_noise is None else pose_noise
-    return episode_result(
-        scene.name, outcome, plan, seed, video, t0, None, noise, disturbance, perception
+    env = open_loop_env(
+        scene.name, pose_noise=noise, disturbance=disturbance, perception=perception
     )
+    try:
+        t0 = time.perf_counter()
+        outcome, _ = plan_perceived(scene, seed, backend=env.backend)
+        return episode_result(
+            scene.name, outcome, outcome.plan, seed, video, t0, None, noise, disturbance,
+            perception, env=env,
+        )  # fmt: skip
+    finally:
+        env.close()
 
 
 __all__ = [

@@ -21,7 +21,7 @@ from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.errors import EndpointError, UnknownNameError
-from utamp_gym.eval.episode import execute_plan
+from utamp_gym.eval.episode import execute_plan, open_loop_env
 from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
@@ -96,7 +96,9 @@ def _suite_of(name: str) -> str:
     return suite_of(name) or "custom"
 
 
-def _plan(scene: Scene, task: EvalTask) -> _Planned:
+def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
+    """Plan `scene` with the task's method (`look`: the simulator `utamp2-perceived` looks
+    through, the one its plan is then played in; None: a world built for the look)."""
     if task.method in VLM_METHODS:
         from utamp_gym.eval.vlm_client import VlmClient
 
@@ -113,7 +115,7 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
     if task.method == "utamp2-perceived":
         from utamp_gym.eval.perceived import plan_perceived
 
-        o, seen = plan_perceived(scene, task.seed, timeout=task.timeout)
+        o, seen = plan_perceived(scene, task.seed, timeout=task.timeout, backend=look)
         accuracy = None if seen is None else seen.accuracy
         return _Planned(
             o.solved, o.plan, o.planning_time_s, o.reason, o.affordance_scores, o.facts, accuracy
@@ -212,8 +214,28 @@ def _run(task: EvalTask, start: float) -> ResultRow:
     if task.closed_loop:
         return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)
+    env = None  # physics: the env the plan is played in, made before planning to look through
+    if task.grounding == "physics" and task.method == "utamp2-perceived":
+        env = _open_loop_env(task)
+    try:
+        return _run_open_loop(task, scene, start, env)
+    finally:
+        if env is not None:
+            env.close()
+
+
+def _open_loop_env(task: EvalTask) -> Any:
+    assert task.pose_noise is not None
+    return open_loop_env(
+        task.scene, pose_noise=task.pose_noise, disturbance=task.disturbance,
+        perception=task.perception,
+    )  # fmt: skip
+
+
+def _run_open_loop(task: EvalTask, scene: Scene, start: float, env: Any) -> ResultRow:
+    """The open-loop protocol: plan once, then validate (symbolic) or play (physics)."""
     exec_time, n_faults = 0.0, 0
-    planned = _plan(scene, task)
+    planned = _plan(scene, task, None if env is None else env.backend)
     success, failure = False, ""
     valid_gt = None
     plan = planned.plan
@@ -232,6 +254,7 @@ def _run(task: EvalTask, start: float) -> ResultRow:
                 pose_noise=task.pose_noise,
                 disturbance=task.disturbance,
                 perception=task.perception,
+                env=env,
             )
             success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
             n_faults = ex.n_faults
