@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -46,6 +47,13 @@ TOLERANCE = 0.05
 
 
 # --------------------------------------------------------------------------- worker
+def _cpu() -> float:
+    """CPU seconds of this process and its finished children (the planner's subprocesses)."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 def _steps_per_s(env_id: str, steps: int, seed: int = 0) -> float:
     import gymnasium as gym
     import numpy as np
@@ -79,18 +87,20 @@ def worker(steps: int, scenes: list[str]) -> None:
         from utamp_gym.sim.execute import run_episode
 
     register_envs()
-    out: dict[str, Any] = {"steps_per_s": {}, "episode_s": {}, "success": {}}
+    out: dict[str, Any] = {"steps_per_s": {}, "episode_s": {}, "episode_cpu_s": {}, "success": {}}
     for env_id in env_ids():
         out["steps_per_s"][env_id] = _steps_per_s(env_id, steps)
     run_episode(scenes[0], seed=1)  # warm-up: the first episode of a process loads caches
     for scene in scenes:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), _cpu()
         ep = run_episode(scene, seed=0)
         out["episode_s"][f"open loop {scene}"] = time.perf_counter() - start
+        out["episode_cpu_s"][f"open loop {scene}"] = _cpu() - cpu
         out["success"][f"open loop {scene}"] = [ep.success, ep.final_stack, ep.object_poses]
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), _cpu()
         result = run_closed_loop(scene, "utamp2-gt", seed=0, grounding="physics")
         out["episode_s"][f"closed loop {scene}"] = time.perf_counter() - start
+        out["episode_cpu_s"][f"closed loop {scene}"] = _cpu() - cpu
         out["success"][f"closed loop {scene}"] = [result.success, list(result.actions)]
     print(json.dumps(out))
 
@@ -110,13 +120,16 @@ def table(summary: dict[str, Any], base: str, this: str) -> str:
         "",
         f"Medians over {summary['rounds']} interleaved rounds. Target: symbolic steps/s at "
         f"least {1 - TOLERANCE:.2f}x the base's, physics episode wall time at most "
-        f"{1 + TOLERANCE:.2f}x.",
+        f"{1 + TOLERANCE:.2f}x. CPU time (this process and the planner's) beside wall time: "
+        f"on a shared machine (load {summary['load'][0]:.1f} at the end) it is the steadier "
+        "measure.",
         "",
         "| measure | case | base | this | this / base |",
         "|---|---|---:|---:|---:|",
     ]
     for key, unit, fmt in (("steps_per_s", "symbolic steps/s", ",.0f"),
-                           ("episode_s", "physics episode s", ".2f")):  # fmt: skip
+                           ("episode_s", "physics episode wall s", ".2f"),
+                           ("episode_cpu_s", "physics episode CPU s", ".2f")):  # fmt: skip
         for case, (b, t) in summary[key].items():
             lines.append(f"| {unit} | {case} | {b:{fmt}} | {t:{fmt}} | {t / b:.3f} |")
     same = "same" if summary["same_outcomes"] else "DIFFERENT"
@@ -154,8 +167,11 @@ def main() -> None:
             for v in ("this", "base") if r % 2 == 0 else ("base", "this"):
                 runs[v].append(_run(trees[v], args.steps, scenes))
                 print(f"round {r} {v}: {json.dumps(runs[v][-1]['episode_s'])}", flush=True)
-    summary: dict[str, Any] = {"rounds": args.rounds, "steps_per_s": {}, "episode_s": {}}
-    for key in ("steps_per_s", "episode_s"):
+    summary: dict[str, Any] = {
+        "rounds": args.rounds, "load": os.getloadavg(), "steps_per_s": {}, "episode_s": {},
+        "episode_cpu_s": {},
+    }  # fmt: skip
+    for key in ("steps_per_s", "episode_s", "episode_cpu_s"):
         for case in runs["this"][0][key]:
             b = statistics.median(x[key][case] for x in runs["base"])
             t = statistics.median(x[key][case] for x in runs["this"])
