@@ -8,7 +8,8 @@ measures, in one process:
 
 * symbolic env steps/s: `--steps` masked random steps (an applicable action drawn from a
   pre-drawn stream, resets at episode ends) in a raw `UTampKitchenEnv` of every registered
-  id, counting only the time inside ``env.step``;
+  id, counting only the CPU time of this process inside ``env.step`` (steadier than wall
+  time on a shared machine);
 * physics episode wall time, on `--scenes`, seed 0, at the default pose noise: open loop
   (`run_episode`, ``utamp run SCENE``: UTAMP-2-GT planned, then played; on this tree
   through the env, on the base by `sim/execute.py`'s own loop) and closed loop
@@ -68,10 +69,10 @@ def _steps_per_s(env_id: str, steps: int, seed: int = 0) -> float:
     for k in range(steps + 2_000):  # the first 2000: warm-up (caches), not timed
         valid = np.flatnonzero(info["action_mask"])
         action = valid[int(draws[k] * len(valid))] if len(valid) else np.int64(0)
-        t = time.perf_counter()
+        t = time.process_time()
         _, _, terminated, truncated, info = env.step(action)
         if k >= 2_000:
-            inside += time.perf_counter() - t
+            inside += time.process_time() - t
         if terminated or truncated:
             _, info = env.reset()
     return steps / inside
