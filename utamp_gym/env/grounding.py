@@ -100,7 +100,11 @@ class SymbolicGrounding:
         self, universe: Universe, state: SymbolicState, objects: Sequence[str], masks: str
     ) -> None:
         self.state = state
-        self.backend = SymbolicBackend(universe, state, objects, masks)
+        self.backend = backend = SymbolicBackend(universe, state, objects, masks)
+        # the backend's own calls, bound once (a symbolic step is a few microseconds)
+        self.pose_rows = backend.poses.observation
+        self.robot = backend.joint_positions
+        self._execute = backend.execute_id
 
     def reset(
         self,
@@ -113,18 +117,12 @@ class SymbolicGrounding:
         self.backend.reset(scene)
 
     def step(self, a: int, np_random: np.random.Generator) -> Stepped:
-        failure = self.backend.execute_id(a)
+        failure = self._execute(a)
         return NOT_RUN if failure is None else Stepped(failure)
 
     def progress(self, base: str, need_height: bool) -> tuple[bool, int]:
         height = len(self.backend.poses.tower(base)) if need_height else 0
         return self.state.goal_reached(), height
-
-    def pose_rows(self) -> np.ndarray:
-        return self.backend.poses.observation()
-
-    def robot(self) -> np.ndarray:
-        return self.backend.joint_positions()
 
     def image(self, size: tuple[int, int]) -> np.ndarray:
         return self.backend.render(size[1], size[0])

@@ -367,7 +367,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         executed = stepped.executed
         fault = None if executed is None or executed.fault is None else str(executed.fault)
         macro = None if executed is None else executed.macro
-        self._last = (macro, tuple(stepped.unexpected))
+        self._last = (macro, stepped.unexpected)
         return step_info(
             action=None if a is None else self.universe.actions[a],
             mask=self.action_masks(),

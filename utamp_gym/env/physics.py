@@ -46,7 +46,7 @@ class Stepped:
 
     failure: str | None
     executed: Executed | None = None
-    unexpected: list[str] = field(default_factory=list)
+    unexpected: tuple[str, ...] = ()
     timings: dict[str, float] = field(default_factory=dict)
 
 
@@ -137,7 +137,7 @@ class PhysicalGrounding(UniverseByKey):
         else:  # wall-clock times would make info trajectories differ between runs
             executed = replace(executed, macro=replace(macro, timings={}))
         failure = None if macro.success else (macro.reason or f"{action} failed in simulation")
-        return Stepped(failure, executed, unexpected, timings)
+        return Stepped(failure, executed, tuple(unexpected), timings)
 
     def execute(self, action: str, rng: np.random.Generator) -> Executed:
         """Run `action`, maybe inject a fault (drawn from `rng`), then perceive."""
