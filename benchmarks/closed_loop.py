@@ -40,8 +40,8 @@ RGBD_TARGETS = {0.0: 0.98, 0.1: 0.97}
 
 def perception_cost(scenes: list[str], seed: int = 0) -> list[float]:
     """Seconds per step spent perceiving, over closed-loop episodes of `scenes` at p = 0."""
+    from utamp_gym.agents import PlannerPolicy
     from utamp_gym.env.kitchen import UTampKitchenEnv
-    from utamp_gym.env.planner_policy import PlannerPolicy
 
     out: list[float] = []
     for name in scenes:

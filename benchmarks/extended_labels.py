@@ -21,9 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from utamp_gym.affordances.rules import object_facts
+from utamp_gym.agents.runs import execute_plan
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.provenance import commit, write_json, write_markdown
-from utamp_gym.sim.execute import execute_plan
 from utamp_gym.suites.procedural import split_scenes
 from utamp_gym.suites.procedural.spec import SPLITS
 

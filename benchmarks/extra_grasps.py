@@ -15,9 +15,9 @@ import argparse
 
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.sources import ground_truth_for
+from utamp_gym.agents.runs import execute_plan
 from utamp_gym.planning.fast_downward import solve
 from utamp_gym.scene.model import UP_PART, Scene
-from utamp_gym.sim.execute import execute_plan
 from utamp_gym.suites import suite_scenes
 from utamp_gym.symbolic.problem import build_problem, domain_text
 

@@ -6,7 +6,7 @@ Four measurements, each in a fresh Python process so none inherits another's hea
   0, 1, ...): RSS every 100, and the growth per 1,000 resets after the first 500 (least-squares
   slope; target <= 10 MB);
 * ``episodes``: the same env, ``--episodes`` full episodes of the planner policy
-  (`utamp_gym.env.planner_policy.PlannerPolicy`, one episode per seed): RSS after each, and the
+  (`utamp_gym.agents.PlannerPolicy`, one episode per seed): RSS after each, and the
   growth over the last half (target <= 10 MB over the last 100 of 200), and how many scenes
   they met: the env keeps what a reset derives from each scene it meets (up to
   `utamp_gym.symbolic.scene_cache.SCENES_KEPT`), so its memory grows with the scenes it has met;
@@ -72,7 +72,7 @@ def measure_episodes(n: int, cycle: int = 0) -> tuple[list[tuple[int, float]], d
     import gymnasium as gym
 
     import utamp_gym  # noqa: F401
-    from utamp_gym.env.planner_policy import PlannerPolicy
+    from utamp_gym.agents import PlannerPolicy
 
     env = gym.make(ENV_ID)
     names: list[str] = []

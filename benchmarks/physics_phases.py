@@ -137,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main() -> None:
     args = build_parser().parse_args()
-    from utamp_gym.sim.execute import run_episode
+    from utamp_gym.agents.runs import run_episode
 
     with Meter(phases=True) as meter:
         r = run_episode(args.scene, seed=args.seed)

@@ -51,7 +51,10 @@ def _episode(scene: str, seed: int, phases: bool) -> dict[str, Any]:
     sys.path.insert(0, str(HERE))
     from physics_phases import Meter
 
-    from utamp_gym.sim.execute import run_episode
+    try:  # this tree; the earlier commit's runner was `sim/execute.py`
+        from utamp_gym.agents.runs import run_episode
+    except ImportError:
+        from utamp_gym.sim.execute import run_episode
 
     with Meter(phases=phases) as meter:
         cpu, t0 = cpu_s(), time.perf_counter()

@@ -38,8 +38,8 @@ SLEEP = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
 
 def record(scene: str, seed: int, every_s: float) -> tuple[mujoco.MjModel, list[np.ndarray], set]:
     """(model, states every `every_s` simulated s, arm link geom ids) of one episode."""
+    from utamp_gym.agents.runs import run_episode
     from utamp_gym.sim.backend import MujocoBackend
-    from utamp_gym.sim.execute import run_episode
 
     states: list[np.ndarray] = []
     orig = mujoco.mj_step

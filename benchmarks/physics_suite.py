@@ -24,11 +24,11 @@ import os
 import statistics
 from pathlib import Path
 
+from utamp_gym.agents.runs import EpisodeResult, run_episode
 from utamp_gym.backend import DEFAULT_POSE_NOISE
 from utamp_gym.planning.crosscheck import affordance_violations
 from utamp_gym.provenance import commit, png_metadata, write_markdown
 from utamp_gym.scene.model import Scene
-from utamp_gym.sim.execute import EpisodeResult, run_episode
 from utamp_gym.suites import suite_scenes
 
 

@@ -311,8 +311,8 @@ def bench_crosscheck(args: argparse.Namespace) -> list[dict[str, Any]]:
 
 # --------------------------------------------------------------------------- policy
 def bench_policy(args: argparse.Namespace) -> list[dict[str, Any]]:
+    from utamp_gym.agents import PlannerPolicy
     from utamp_gym.env.kitchen import UTampKitchenEnv
-    from utamp_gym.env.planner_policy import PlannerPolicy
 
     env = UTampKitchenEnv(grounding="symbolic", suite=args.suite, num_objects=5)
     policy = PlannerPolicy(env)

@@ -19,7 +19,7 @@ import gymnasium as gym
 import imageio
 
 import utamp_gym  # noqa: F401  (registers the envs)
-from utamp_gym.env.planner_policy import PlannerPolicy
+from utamp_gym.agents import PlannerPolicy
 
 
 def main() -> None:

@@ -29,7 +29,7 @@ def test_run_names_the_tower_base_and_its_type(capsys) -> None:
 
 
 def test_an_unreached_goal_names_the_base() -> None:
-    from utamp_gym.sim.execute import execute_plan
+    from utamp_gym.agents.runs import execute_plan
 
     ex = execute_plan(resolve_scene(BOARD_SCENE), [])  # nothing moves: obj5 starts on the base
     assert ex.failure_reason == f"goal not reached: base holds {ex.final_stack}"

@@ -12,9 +12,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.contract.state import PhysicalState
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.errors import PlanningError
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.perception.abstraction import perceive

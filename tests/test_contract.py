@@ -1,6 +1,6 @@
 """The contract between the simulator and perception (issue "One episode engine", item 3):
 the types both use live below both, the simulator fits no poses, and everything the env and
-the evaluation ask of a backend is in `PhysicsBackend`."""
+the evaluation ask of a backend is in `PhysicsBackend` and, for the cameras, `Surveying`."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import utamp_gym
-from utamp_gym.backend import PERCEPTION_MODES, PhysicsBackend
+from utamp_gym.backend import PERCEPTION_MODES, PhysicsBackend, Surveying
 from utamp_gym.contract.views import ViewBundle
 from utamp_gym.errors import UnknownNameError
 
@@ -58,7 +58,7 @@ def test_the_simulator_takes_a_pose_tracking_not_a_name() -> None:
         physics_backend(perception="rgb")
 
 
-def test_a_backend_without_a_survey_is_no_physics_backend() -> None:
+def test_a_backend_without_cameras_is_a_backend_that_cannot_survey() -> None:
     class Blind:
         def reset(self, scene, rng) -> None: ...
         def execute(self, action): ...
@@ -83,8 +83,8 @@ def test_a_backend_without_a_survey_is_no_physics_backend() -> None:
         def survey(self) -> ViewBundle:
             return ViewBundle(())
 
-    assert not isinstance(Blind(), PhysicsBackend)
-    assert isinstance(Seeing(), PhysicsBackend)
+    assert isinstance(Blind(), PhysicsBackend) and not isinstance(Blind(), Surveying)
+    assert isinstance(Seeing(), PhysicsBackend) and isinstance(Seeing(), Surveying)
 
 
 @pytest.mark.parametrize(("old", "new", "name"), [

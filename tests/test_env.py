@@ -13,8 +13,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env, data_equivalence
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import env_definitions, env_ids, load_definition, register_envs
 from utamp_gym.errors import UnknownNameError
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.backend import MacroResult
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.options import MASKS
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.symbolic.universe import UniverseKey, ground_universe
@@ -106,7 +106,7 @@ def test_outcome_model_agrees_with_the_affordance_env(suite: str) -> None:
         _, info = geo.reset(seed=seed)
         _, ref_info = ref.reset(options={"scene": geo.scene.name})
         for _ in range(40):
-            hold = geo._outcome.affordances_hold()  # type: ignore[union-attr]
+            hold = geo.backend.outcome.affordances_hold()  # type: ignore[attr-defined]
             predicted = {geo.action_strings[i] for i in np.flatnonzero(info["action_mask"] & hold)}
             truth = {ref.action_strings[i] for i in np.flatnonzero(ref_info["action_mask"])}
             assert predicted == truth, geo.scene.name

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.objects import (
     GRASPS,
@@ -23,7 +24,6 @@ from utamp_gym.env.objects import (
     encode_type,
     member_order,
 )
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.suites.generate import EXTRA_MOVABLES, MOVABLES, TRAY

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from utamp_gym.env.planner_policy import PlannerPolicy
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.registry import env_ids, register_envs
 
 pytestmark = [pytest.mark.physics, pytest.mark.slow]

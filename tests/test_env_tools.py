@@ -16,8 +16,8 @@ from dm_env import StepType, test_utils
 from procs import user_env
 from solvable import solvable_resets
 
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.dm.adapter import DmEnvAdapter
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.registry import env_ids, register_envs
 from utamp_gym.env.wrappers import SymbolicActionWrapper
 from utamp_gym.errors import PlanningError, UnknownNameError

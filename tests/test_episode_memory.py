@@ -13,7 +13,7 @@ import weakref
 
 import gymnasium as gym
 
-from utamp_gym.env.planner_policy import PlannerPolicy
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.registry import register_envs
 
 register_envs()

@@ -136,7 +136,7 @@ def test_the_rules_plan_every_extra_scene() -> None:
     ],
 )
 def test_new_objects_stack_in_physics(name: str) -> None:
-    from utamp_gym.sim.execute import run_episode
+    from utamp_gym.agents.runs import run_episode
 
     scene = resolve_scene(name)
     result = run_episode(scene, "utamp2-rules", seed=0)

@@ -26,7 +26,7 @@ from gymnasium.utils.env_checker import check_env, data_equivalence
 from gymnasium.vector import AsyncVectorEnv, SyncVectorEnv
 from solvable import solvable_resets
 
-from utamp_gym.env.planner_policy import PlannerPolicy
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.registry import env_ids, register_envs
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.rl.envs import make_env

@@ -19,8 +19,8 @@ import pytest
 from xvfb import Display, virtual_display, wait_until
 
 import utamp_gym  # noqa: F401  (registers the envs)
+from utamp_gym.agents import PlannerPolicy
 from utamp_gym.cli import main
-from utamp_gym.env.planner_policy import PlannerPolicy
 from utamp_gym.env.video import RecordVideo
 from utamp_gym.env.viewer import FRAME_RATE, NoDisplayError
 
@@ -69,7 +69,7 @@ def test_symbolic_render_is_labelled_and_marks_the_held_object() -> None:
     fig = matplotlib.figure.Figure()
     ax = fig.add_axes((0, 0, 1, 1))
     u = env.unwrapped
-    u._draw_schematic(ax)
+    u.backend.draw(ax)  # the symbolic backend draws the labelled schematic
     texts = {t.get_text().strip() for t in ax.texts}
     assert {"tray", "board (held)", "slot1", "slot2", "workspace", "robot"} <= texts
     assert fig._suptitle.get_text() == f"{SCENE}: hand holds board"
@@ -131,7 +131,7 @@ HUMAN = textwrap.dedent(
     import sys
     import gymnasium as gym
     import utamp_gym
-    from utamp_gym.env.planner_policy import PlannerPolicy
+    from utamp_gym.agents import PlannerPolicy
 
     env = gym.make("UTampKitchen-v0", scene="{scene}", grounding=sys.argv[1], render_mode="human")
     policy = PlannerPolicy(env.unwrapped)

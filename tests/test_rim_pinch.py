@@ -164,7 +164,7 @@ def test_a_bowl_on_a_tray_is_planned_in_the_extended_domain_only() -> tuple[Any,
 
 @physics
 def test_the_extended_plan_puts_the_bowl_on_the_tray_in_physics():
-    from utamp_gym.sim.execute import execute_plan
+    from utamp_gym.agents.runs import execute_plan
 
     scene, plan = test_a_bowl_on_a_tray_is_planned_in_the_extended_domain_only()
     run = execute_plan(scene, plan, seed=0, pose_noise=0.0)

@@ -12,7 +12,7 @@ import statistics
 import numpy as np
 import pytest
 
-from utamp_gym.sim.execute import run_episode
+from utamp_gym.agents.runs import run_episode
 from utamp_gym.suites import all_scene_names
 
 pytestmark = pytest.mark.physics

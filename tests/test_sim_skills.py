@@ -459,7 +459,7 @@ def test_plates_pinched_by_the_rim_in_a_larger_plates_well(name):
     """The lower plate's rim rises where the outer finger goes: the pinch is made higher up
     on the rim, the plate let go higher above the well (IK found no grasp or placement at
     the usual heights before); physics then carries the whole plan out."""
-    from utamp_gym.sim.execute import run_episode
+    from utamp_gym.agents.runs import run_episode
 
     res = run_episode(name, "utamp2-rules", seed=0, pose_noise=0.0)
     assert any("rim-back" in a and "place-support" in a for a in res.plan)

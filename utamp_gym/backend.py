@@ -8,7 +8,8 @@ The env constructs the backend once, as ``factory(pose_noise=..., **backend_kwar
 calls `reset` with the sampled scene and a generator derived from the env's RNG at every
 episode start. After `reset` and after every `execute` it reads `physical_state()` and
 perceives the symbolic state from it (`utamp_gym.perception`); ``utamp2-perceived`` surveys
-the table (`survey`) and scores what it perceived by the cameras' instance ids (`cameras`).
+the table (`survey`) and scores what it perceived by the cameras' instance ids (`cameras`):
+that capability is `Surveying`, which a backend without cameras (symbolic grounding) lacks.
 The data types exchanged live in `utamp_gym.contract` (below both the simulator and
 perception); `MacroResult` and `Fault` here.
 """
@@ -89,10 +90,8 @@ class Cameras(Protocol):
 
 @runtime_checkable
 class PhysicsBackend(Protocol):
-    """What the env and the evaluation need from a simulator (see the module docstring).
-
-    On Python 3.11 ``isinstance(backend, PhysicsBackend)`` reads every member, `cameras`
-    included: check it after `reset`."""
+    """What the env needs from a simulator (see the module docstring). Backends with cameras
+    also implement `Surveying` (the MuJoCo one does; the symbolic one has no cameras)."""
 
     def reset(self, scene: Scene, rng: np.random.Generator) -> None: ...
 
@@ -116,17 +115,6 @@ class PhysicsBackend(Protocol):
 
     def render(self, width: int, height: int) -> np.ndarray: ...
 
-    def survey(self) -> ViewBundle:
-        """The first, careful look at the table: every scene camera's colour, depth and
-        object-level instance masks, and the robot's state (what ``utamp2-perceived``
-        perceives)."""
-        ...
-
-    @property
-    def cameras(self) -> Cameras:
-        """The cameras of the current episode (after `reset`)."""
-        ...
-
     def close(self) -> None: ...
 
 
@@ -136,6 +124,25 @@ class Disturbable(Protocol):
 
     def disturb(self, rng: np.random.Generator) -> Fault | None:
         """Inject one fault of `FAULT_KINDS` chosen with `rng` (None if none applies)."""
+        ...
+
+
+@runtime_checkable
+class Surveying(Protocol):
+    """A backend with cameras (the MuJoCo backend): what ``utamp2-perceived`` looks through.
+
+    On Python 3.11 ``isinstance(backend, Surveying)`` reads `cameras`: check it after
+    `reset`."""
+
+    def survey(self) -> ViewBundle:
+        """The first, careful look at the table: every scene camera's colour, depth and
+        object-level instance masks, and the robot's state (what ``utamp2-perceived``
+        perceives)."""
+        ...
+
+    @property
+    def cameras(self) -> Cameras:
+        """The cameras of the current episode (after `reset`)."""
         ...
 
 

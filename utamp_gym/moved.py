@@ -7,12 +7,16 @@ module and warns (`DeprecationWarning`) on each use, naming the new path::
     from utamp_gym.moved import forward
 
     __getattr__, __dir__ = forward(__name__, _new)
+
+A module whose names moved *up* (to a layer above it: `env.planner_policy` -> `agents`) must
+not import its new home when loaded: `moved` resolves each name on first use instead.
 """
 
 from __future__ import annotations
 
+import importlib
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from types import ModuleType
 from typing import Any
 
@@ -41,4 +45,21 @@ def forward(old: str, new: ModuleType) -> tuple[Callable[[str], Any], Callable[[
     return __getattr__, __dir__
 
 
-__all__ = ["forward"]
+def moved(old: str, new: str, names: Iterable[str]) -> Callable[[str], Any]:
+    """A module ``__getattr__`` for module `old`, whose `names` now live in module `new`."""
+    known = frozenset(names)
+
+    def __getattr__(name: str) -> Any:
+        if name not in known:
+            raise AttributeError(f"module {old!r} has no attribute {name!r}")
+        warnings.warn(
+            f"{old}.{name} moved to {new}.{name}; the old path goes away in the next release",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return getattr(importlib.import_module(new), name)
+
+    return __getattr__
+
+
+__all__ = ["forward", "moved"]

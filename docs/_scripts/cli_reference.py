@@ -114,9 +114,9 @@ def _table(parser: argparse.ArgumentParser) -> list[str]:
 
 def json_keys() -> dict[str, list[str]]:
     """The keys ``--json`` prints, read from the objects the CLI serialises."""
+    from utamp_gym.agents.runs import EpisodeResult
     from utamp_gym.eval.closed_loop import ClosedLoopResult
     from utamp_gym.planning.methods import PlanOutcome, plan_scene
-    from utamp_gym.sim.execute import EpisodeResult
     from utamp_gym.suites import resolve_scene
 
     plan = list(plan_scene(resolve_scene("kitchen-demo"), "utamp2-gt").to_json())

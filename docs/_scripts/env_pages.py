@@ -137,8 +137,8 @@ def _kind(value: Any) -> str:
 
 def _policy(env: gym.Env[Any, Any], seed: int = 0) -> Any:
     """The planner policy for the kitchen envs; a seeded masked-random policy otherwise."""
+    from utamp_gym.agents import PlannerPolicy
     from utamp_gym.env.kitchen import UTampKitchenEnv
-    from utamp_gym.env.planner_policy import PlannerPolicy
 
     base = env.unwrapped
     if isinstance(base, UTampKitchenEnv):

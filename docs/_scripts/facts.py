@@ -251,9 +251,9 @@ def constants() -> dict[str, Any]:
 def facts(envs: Iterable[EnvFacts]) -> dict[str, Any]:
     """The substitutions of every page (see the module docstring)."""
     from utamp_gym.affordances.sources import DEFAULT_NOISE
+    from utamp_gym.agents import MAX_BANS
     from utamp_gym.backend import DEFAULT_POSE_NOISE, MAX_POSE_NOISE
     from utamp_gym.dm import CONTROL_TIMESTEP
-    from utamp_gym.env.planner_policy import MAX_BANS
     from utamp_gym.eval.closed_loop import MAX_STEPS
     from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
     from utamp_gym.planning.methods import METHODS

@@ -13,7 +13,7 @@ from utamp_gym.outputs import output_file
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from utamp_gym.sim.execute import run_episode
+    from utamp_gym.agents.runs import run_episode
     from utamp_gym.suites import resolve_scene
 
     if args.closed_loop:
@@ -33,7 +33,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
         result = run_perceived_episode(scene, **physics)
     else:
-        result = run_episode(scene, args.method, **physics)
+        result = run_episode(args.scene, args.method, **physics)
     data = result.to_dict()
     if args.json:
         data.pop("steps", None)

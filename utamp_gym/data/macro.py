@@ -1,7 +1,7 @@
 """The macro track: planner-policy episodes of a kitchen env, step by step.
 
 An episode is ``env.reset(seed=s)`` (the env's RNG picks the scene) followed by the planner
-policy's actions (`utamp_gym.env.planner_policy.PlannerPolicy`: Fast Downward, replanning from
+policy's actions (`utamp_gym.agents.PlannerPolicy`: Fast Downward, replanning from
 the observed state) until the goal, a dead end, the time limit or a planner error. Each step
 keeps the observation, the action id, the reward, termination and truncation, and the env's
 info (its fixed structure: the macro action's PDDL string, the action mask, the failure reason,
@@ -19,8 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.agents import PlannerPolicy, run_policy
 from utamp_gym.data.minari_io import Episode
+from utamp_gym.scene.io import scene_to_toml
 
+#: a bound on an episode's steps beyond the env's own time limit (which ends it first)
+MAX_STEPS = 100_000
 #: env options of a recorded episode besides the grounding (fixed: infos must be reproducible)
 RECORDED = {"record_timings": False}
 
@@ -46,31 +50,26 @@ def make_env(env_id: str, env_options: Mapping[str, Any]) -> Any:
 
 
 def record_episode(task: MacroTask) -> Episode:
-    """Run the planner policy for one episode of `task` and keep every step."""
-    from utamp_gym.env.planner_policy import PlannerPolicy
-    from utamp_gym.errors import PlanningError
-    from utamp_gym.scene.io import scene_to_toml
-
+    """Run the planner policy for one episode of `task` (the one loop, `run_policy`; the
+    env's time limit ends it) and keep every step."""
     env = make_env(task.env_id, task.env_options)
     try:
         policy = PlannerPolicy(env, method=task.method)
-        obs, info = env.reset(seed=task.seed)
-        ep = Episode(seed=task.seed, observations=[obs], infos=[info])
-        error, done = "", False
-        while not done:
-            try:
-                action = policy(obs, info)
-            except PlanningError as exc:
-                error = str(exc)
-                break
-            obs, reward, terminated, truncated, info = env.step(action)
+        steps: list[tuple[Any, ...]] = []
+        run = run_policy(
+            env, policy, max_steps=MAX_STEPS, seed=task.seed,
+            on_step=lambda *step: steps.append(step),
+        )  # fmt: skip
+        assert run.first is not None
+        ep = Episode(seed=task.seed, observations=[run.first[0]], infos=[run.first[1]])
+        for action, obs, reward, terminated, truncated, info in steps:
             ep.observations.append(obs)
             ep.actions.append(int(action))
-            ep.rewards.append(float(reward))
-            ep.terminations.append(bool(terminated))
-            ep.truncations.append(bool(truncated))
+            ep.rewards.append(reward)
+            ep.terminations.append(terminated)
+            ep.truncations.append(truncated)
             ep.infos.append(info)
-            done = terminated or truncated
+        error = run.stopped
         if error and ep.actions:  # the planner gave up: the episode ends here
             ep.truncations[-1] = True
         scene = env.unwrapped.scene
@@ -83,7 +82,7 @@ def record_episode(task: MacroTask) -> Episode:
             "env_options": dict(task.env_options),
             "method": task.method,
             "macro_actions": [str(i["action"]) for i in ep.infos[1:]],
-            "success": bool(ep.terminations[-1] and ep.rewards[-1] >= 1.0) if ep.actions else False,
+            "success": run.success if ep.actions else False,
             "planner_error": error,
         }
         return ep

@@ -9,5 +9,8 @@ Import the modules directly; this package imports nothing and registers nothing
   protocol is `utamp_gym.backend`; the symbolic world model the env steps in, universe,
   atoms, state, poses and outcome model, is `utamp_gym.symbolic`: ``env.universe``,
   ``env.state`` ... are deprecated aliases);
-* `wrappers` (`SymbolicActionWrapper`), `planner_policy` (`PlannerPolicy`).
+* `grounding`, `physics`, `symbolic_backend` – what the env asks of its grounding, the
+  physics grounding (perception, faults) and symbolic grounding as a backend;
+* `wrappers` (`SymbolicActionWrapper`); `planner_policy` is a deprecated alias (the
+  policies live in `utamp_gym.agents`).
 """

@@ -6,9 +6,7 @@ physics, `KitchenTask` the reward and termination, this class the Gymnasium glue
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import replace
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -22,25 +20,25 @@ from utamp_gym.backend import (
     DEFAULT_POSE_NOISE,
     MacroResult,
     PhysicsBackend,
-    backend_factory,
 )
+from utamp_gym.env.grounding import ScenePresence, make_grounding
 from utamp_gym.env.info import step_info
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.options import EnvOptions, action_id
-from utamp_gym.env.physics import Executed, PhysicalGrounding, perceived_static, unexpected_atoms
-from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
-from utamp_gym.env.task import KitchenTask, home_joints, observation_space
+from utamp_gym.env.physics import NOT_RUN, Stepped
+from utamp_gym.env.task import KitchenTask, observation_space
 from utamp_gym.env.viewer import FRAME_RATE, Rendering
 from utamp_gym.env.views import KitchenViews
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.perception.abstraction import Perception
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.atoms import InitialAtoms
-from utamp_gym.symbolic.outcome import OutcomeModel
-from utamp_gym.symbolic.poses import SymbolicPoses
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe, ground_universe
 
+#: what ``reset(options=...)`` accepts: the episode's scene, and the seed of its simulated
+#: world (physics: the simulator's generator, and a second stream of it for injected
+#: faults; default: drawn from the env's RNG, which then also draws the faults)
+RESET_OPTIONS = ("scene", "world_seed")
 #: observation rows of `object_poses` / `present`: the suites' catalogue objects
 DEFAULT_OBJECTS = ("tray", "salt", "mug", "board", "pan")
 Obs = dict[str, np.ndarray]
@@ -74,7 +72,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     * ``image`` (only with ``camera=True``): ``Box((h, w, 3), uint8)``.
 
     Symbolic grounding moves poses by the rules of `utamp_gym.env.poses` and keeps the robot
-    at home; physics grounding reads both from the simulator.
+    at home; physics grounding reads both from the simulator. Both are backends behind one
+    interface (`utamp_gym.env.grounding`): `backend` is the simulator or the
+    `SymbolicBackend`.
 
     **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per object newly
     on the tower (over the episode's best) and −0.01 per failed action (`utamp_gym.env.task`).
@@ -113,7 +113,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5; 2–6 for procedural splits) restricts the scenes, ``scene`` fixes
       one (suite, packaged or file name); ``reset(options={"scene": name})`` picks the scene
-      of one episode;
+      of one episode, ``reset(options={"world_seed": s})`` seeds its simulated world (the
+      simulator's generator, and a second stream of it for injected faults; default: both
+      from the env's RNG; the open-loop runner, `utamp_gym.agents.runs`, uses it);
     * ``split``: a procedural split ("train", "test-instances", "test-families", "test-count";
       `utamp_gym.suites.procedural`): its scenes instead of a suite's. All splits share one
       action universe and the observation rows ``base, obj1 .. obj5``
@@ -138,8 +140,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       macro step, default 0), ``pose_noise`` (m, standard deviation of the robot's
       object-position estimates; `utamp_gym.backend`) and ``perception`` ("gaussian": the
       true pose plus ``pose_noise``; "rgbd": the poses and the perceived state's poses come
-      from rendered RGB-D cameras, `utamp_gym.sim.rgbd`; passed to the backend as
-      ``perception=`` when not "gaussian").
+      from rendered RGB-D cameras, fitted by `utamp_gym.perception.tracking`; passed to the
+      backend factory, `utamp_gym.grounding.physics_backend`, as ``perception=`` when not
+      "gaussian").
 
     **Closed loop (physics grounding).** The symbolic state is never assumed: after `reset`
     and after every executed step (success or failure) it is *perceived* from the simulator
@@ -223,31 +226,22 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             if opts.camera:
                 self.observation_space["image"] = self._grounded_space()["image"]
         self._state = SymbolicState(self.universe, opts.masks)
-        # masks geometric/none: the outcome model decides symbolic steps the mask allows
-        self._outcome = OutcomeModel(self.universe) if opts.masks != "affordances" else None
-        self._poses = SymbolicPoses(opts.objects)
-        self._renderer = SchematicRenderer(opts.objects)
+        self._grounding = make_grounding(opts, self.universe, self._state)
+        self._present = ScenePresence(opts.objects)
         self._task = KitchenTask(
             shaping=opts.reward_shaping, terminate_on_failure=opts.terminate_on_failure
         )
-        self._home = home_joints()
         self._initial_atoms = InitialAtoms(
             self.universe.domain, opts.domain, opts.affordances, opts.noise
         )
         self._scene: Scene | None = None
-        self._held: str | None = None
-        self._declared_static: frozenset[str] = frozenset()
         self._last: tuple[MacroResult | None, tuple[str, ...]] = (None, ())
-        self._backend: PhysicsBackend | None = None
-        self._physics: PhysicalGrounding | None = None
-        if opts.grounding == "physics":
-            factory = backend_factory(opts.backend)
-            extra = {} if opts.perception == DEFAULT_PERCEPTION else {"perception": opts.perception}
-            self._backend = factory(pose_noise=opts.pose_noise, **extra, **opts.backend_kwargs)
-            self._physics = PhysicalGrounding(self._backend, opts.disturbance)
-        self._labels = LabelledSchematic(opts.objects)
         self._rendering = Rendering(
-            render_mode, self._render_frame, self._draw_schematic, self._backend, "UTampKitchen"
+            render_mode,
+            self._render_frame,
+            self._grounding.draw,
+            self._grounding.simulator,
+            "UTampKitchen",
         )
         self.metadata = {**type(self).metadata, "render_fps": self._rendering.fps}
 
@@ -265,8 +259,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         super().reset(seed=seed)
         options = dict(options or {})
         name = options.pop("scene", None)
+        world_seed = options.pop("world_seed", None)
         if options:
-            raise UnknownNameError("reset option", next(iter(options)), ["scene"])
+            raise UnknownNameError("reset option", next(iter(options)), RESET_OPTIONS)
         if name is None:
             scene = self.scenes[int(self.np_random.integers(len(self.scenes)))]
         else:
@@ -274,64 +269,37 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             if name not in by_name:
                 raise UnknownNameError("scene of this env", str(name), by_name)
             scene = by_name[name]
-        self._scene, self._held = scene, None
+        self._scene = scene
         atoms = self._initial_atoms(scene, self.np_random)
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
-        self._declared_static = atoms.static
-        self._poses.reset(scene)
-        if self._outcome is not None:
-            self._outcome.reset(scene)
-        self._renderer.reset(scene)
-        self._labels.reset(scene)
-        if self._physics is not None:
-            rng = np.random.default_rng(self.np_random.integers(2**63))
-            self._observe(self._physics.reset(scene, rng))
+        self._present.reset(scene)
+        self._grounding.reset(scene, atoms.static, self.np_random, world_seed)
         goal, height = self._progress(self.options.reward_shaping)
         self._task.initialize_episode(height)
         self._rendering.reset()
         if self._objects is not None:  # drawn last: the other draws match the grounded env's
             self._objects.reset(scene, self.np_random)
-        return self._observation(), self._info(goal, None, None, {}, None)
+        return self._observation(), self._info(goal, None, None, NOT_RUN)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._scene is None:
             action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
             raise RuntimeError("call reset() before step()")
         a, failure = self._ground(action)
-        executed: Executed | None = None
-        timings: dict[str, float] = {}
-        unexpected: list[str] = []
+        stepped = NOT_RUN
         if a is None:  # an object-centric index without a ground action in this scene
             pass
         elif not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
             failure = self._state.failure(a)
-        elif self._physics is not None:
-            start = time.perf_counter()
-            predicted = self._predicted(a)
-            executed = self._physics.execute(self.universe.actions[a], self.np_random)
-            self._observe(executed.perception)
-            unexpected = unexpected_atoms(predicted, executed.perception.atoms)
-            macro = executed.macro
-            if self.options.record_timings:
-                timings = {
-                    **macro.timings,
-                    "perceive_s": executed.perceive_s,
-                    "step_s": time.perf_counter() - start,
-                }
-            else:  # wall-clock times would make info trajectories differ between runs
-                executed = replace(executed, macro=replace(macro, timings={}))
-            if not macro.success:
-                failure = macro.reason or f"{self.universe.actions[a]} failed in simulation"
-        else:  # masks geometric/none: the outcome model (ground truth) decides
-            failure = None if self._outcome is None else self._outcome.failure(self._state, a)
-            if failure is None:
-                self._apply(a)
+        else:  # the grounding runs it: the backend executes (or the outcome model decides)
+            stepped = self._grounding.step(a, self.np_random)
+            failure = stepped.failure
         goal, height = self._progress(self.options.reward_shaping)
         reward, terminated = self._task.outcome(
             goal=goal, failed=failure is not None, tower_height=height
         )
         terminated = terminated or self._state.dead_end() or bool(self._anomalies())
-        info = self._info(goal, a, failure, timings, executed, unexpected)
+        info = self._info(goal, a, failure, stepped)
         self._rendering.step()
         return self._observation(), reward, terminated, False, info
 
@@ -343,8 +311,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
 
     def close(self) -> None:
         self._rendering.close()
-        if self._backend is not None:
-            self._backend.close()  # kept: a closed env must not silently turn symbolic
+        self._grounding.close()
 
     # ------------------------------------------------------------------ internals
     def _grounded_space(self) -> spaces.Dict:
@@ -365,47 +332,12 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             )
         return a, None
 
-    def _observe(self, perception: Perception) -> None:
-        """Physics grounding: the symbolic state becomes the perceived one."""
-        static = perceived_static(self._declared_static, perception)
-        self._state.observe(perception.fluent, static)
-        self._held = perception.held
-
-    def _predicted(self, a: int) -> frozenset[str]:
-        """Atoms action `a` is predicted to yield: its successor; atoms outside the universe
-        and orientation atoms unchanged."""
-        assert self.perception is not None
-        fluent = self.universe.atoms_of(self.universe.successor(self._state.bits, a))
-        return frozenset((*fluent, *self._state.unrepresented)) | self.perception.orientation
-
-    def _apply(self, a: int) -> None:
-        self._state.apply(a)
-        kind, obj, target = self.universe.roles[a]
-        self._poses.apply(kind, obj, target)
-        if kind == "pick-support":
-            self._held = obj
-        elif kind == "place-support":
-            self._held = None
-
     def _progress(self, need_height: bool) -> tuple[bool, int]:
         """(goal reached, objects on the tower; 0 unless `need_height`), measured once."""
-        base = self.scene.tower_base
-        perception = self.perception
-        if perception is None:
-            height = len(self._poses.tower(base)) if need_height else 0
-            return self._state.goal_reached(), height
-        goal = self._state.goal_reached() and not perception.anomalies
-        return goal, len(perception.tower(base))
+        return self._grounding.progress(self.scene.tower_base, need_height)
 
     def _observation(self) -> Obs:
-        if self._backend is None:
-            poses, robot = self._poses.observation(), self._home.copy()
-        else:
-            poses = np.zeros((len(self.options.objects), 7), np.float32)
-            rows = {n: i for i, n in enumerate(self.options.objects)}
-            for name, pose in self._backend.object_poses().items():
-                poses[rows[name]] = pose
-            robot = np.asarray(self._backend.joint_positions(), np.float32).copy()
+        poses, robot = self._grounding.pose_rows(), self._grounding.robot()
         if self._objects is not None:
             rows = dict(zip(self.options.objects, poses, strict=True))
             obs = self._objects.observation(self._state.vector(), self._state.static_atoms, rows)
@@ -413,7 +345,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             obs = {
                 "symbolic": self._state.vector(),
                 "object_poses": poses,
-                "present": self._poses.present(),
+                "present": self._present.rows(),
                 "robot": robot,
             }
         if self.options.camera:
@@ -422,40 +354,27 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
 
     def _render_frame(self) -> np.ndarray:
         """What ``render()`` shows: the camera (physics) or the labelled schematic."""
-        if self._backend is not None:
-            return self._image(self.options.render_size)
-        poses, present = self._poses.observation(), self._poses.present()
-        return self._labels.render(poses, present, self._held, self.options.render_size)
-
-    def _draw_schematic(self, axes: Any) -> None:
-        """The labelled schematic into matplotlib axes (the symbolic human window)."""
-        self._labels.draw(axes, self._poses.observation(), self._poses.present(), self._held)
+        return self._grounding.frame(self.options.render_size)
 
     def _image(self, size: tuple[int, int]) -> np.ndarray:
-        if self._backend is not None:
-            return np.asarray(self._backend.render(size[1], size[0]), np.uint8)
-        return self._renderer.render(
-            self._poses.observation(), self._poses.present(), self._held, size
-        )
+        return self._grounding.image(size)
 
     def _info(
         self,
         goal: bool,
         a: int | None,
         failure: str | None,
-        timings: dict[str, float],
-        executed: Executed | None = None,
-        unexpected: list[str] | None = None,
+        stepped: Stepped,
     ) -> dict[str, Any]:
+        executed = stepped.executed
         fault = None if executed is None or executed.fault is None else str(executed.fault)
         macro = None if executed is None else executed.macro
-        self._last = (macro, tuple(unexpected or ()))
-        recorded = self._physics is not None and self.options.record_timings
+        self._last = (macro, stepped.unexpected)
         return step_info(
             action=None if a is None else self.universe.actions[a],
             mask=self.action_masks(),
             failure=failure,
-            timings=timings if recorded else None,
+            timings=stepped.timings if self._grounding.recorded else None,
             macro=macro,
             unexpected=self._last[1],
             objects=self.scene.object_names,

@@ -11,15 +11,20 @@ probability p drawn from the env's generator, by one fault of `utamp_gym.backend
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
 from utamp_gym.backend import Disturbable, Fault, MacroResult, PhysicsBackend
 from utamp_gym.perception.abstraction import Perception, perceive
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.state import SymbolicState
+from utamp_gym.symbolic.universe import Universe, UniverseByKey
 
+#: the second stream of an episode's world seed: its injected faults
+FAULT_STREAM = 0xFA17
 #: static predicates whose atoms perception re-derives (they follow the object's orientation)
 ORIENTATION_PREFIXES = ("(force ", "(base ")
 
@@ -32,6 +37,22 @@ class Executed:
     fault: Fault | None
     perception: Perception
     perceive_s: float  # wall time of reading the physical state and abstracting it
+
+
+@dataclass(frozen=True)
+class Stepped:
+    """One step the mask allowed: why it failed (None: it did not), the executed macro action
+    (None: nothing reached a simulator), unexpected atoms and timings (s)."""
+
+    failure: str | None
+    executed: Executed | None = None
+    unexpected: tuple[str, ...] = ()
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+#: the step result of an action that did not fail and reached no simulator (shared: never
+#: changed): an applied symbolic action, or nothing run (reset, a masked-out action)
+NOT_RUN = Stepped(None)
 
 
 def perceived_static(declared: frozenset[str], perception: Perception) -> frozenset[str]:
@@ -48,24 +69,75 @@ def unexpected_atoms(predicted: Iterable[str], perceived: Iterable[str]) -> list
     )
 
 
-class PhysicalGrounding:
-    """A physics backend plus perception and fault injection (see the module docstring)."""
+class PhysicalGrounding(UniverseByKey):
+    """A physics backend plus perception and fault injection (see the module docstring): the
+    env's grounding in physics (`utamp_gym.env.grounding.Grounding`); `state` is the env's
+    symbolic state, which becomes the perceived one after every reset and executed step."""
 
-    def __init__(self, backend: PhysicsBackend, disturbance: float = 0.0) -> None:
+    def __init__(
+        self,
+        backend: PhysicsBackend,
+        universe: Universe,
+        state: SymbolicState,
+        objects: Sequence[str],
+        disturbance: float = 0.0,
+        record_timings: bool = False,
+    ) -> None:
         if disturbance > 0 and not isinstance(backend, Disturbable):
             raise ValueError(
                 f"disturbance={disturbance} needs a backend that can inject faults "
                 f"(a disturb(rng) method); {type(backend).__name__} has none"
             )
         self.backend, self.disturbance = backend, disturbance
+        self.simulator = backend
+        self.universe, self.state, self.recorded = universe, state, record_timings
+        self._rows = {n: i for i, n in enumerate(objects)}
         self._scene: Scene | None = None
+        self._declared: frozenset[str] = frozenset()
+        self._faults = None
         self.perception: Perception | None = None
 
-    def reset(self, scene: Scene, rng: np.random.Generator) -> Perception:
-        """Reset the simulator to `scene` (noise from `rng`) and perceive its state."""
+    def reset(
+        self,
+        scene: Scene,
+        declared: frozenset[str],
+        np_random: np.random.Generator,
+        world_seed: int | None = None,
+    ) -> None:
+        """Reset the simulator to `scene` and perceive its state; `declared`: the episode's
+        static atoms. The simulator's generator is seeded with `world_seed`, and faults are
+        drawn from its second stream (`FAULT_STREAM`); without it, the generator's seed and
+        the faults are drawn from the env's `np_random`."""
+        if world_seed is None:
+            rng = np.random.default_rng(np_random.integers(2**63))
+            self._faults: np.random.Generator | None = None
+        else:
+            rng = np.random.default_rng(world_seed)
+            self._faults = np.random.default_rng([world_seed, FAULT_STREAM])
         self.backend.reset(scene, rng)
-        self._scene = scene
-        return self._perceive()[0]
+        self._scene, self._declared = scene, declared
+        self._observe(self._perceive()[0])
+
+    def step(self, a: int, np_random: np.random.Generator) -> Stepped:
+        """Run action `a` the mask allows, maybe inject a fault, perceive, compare."""
+        start = time.perf_counter()
+        action = self.universe.actions[a]
+        predicted = self._predicted(a)
+        executed = self.execute(action, np_random if self._faults is None else self._faults)
+        self._observe(executed.perception)
+        unexpected = unexpected_atoms(predicted, executed.perception.atoms)
+        macro = executed.macro
+        timings: dict[str, float] = {}
+        if self.recorded:
+            timings = {
+                **macro.timings,
+                "perceive_s": executed.perceive_s,
+                "step_s": time.perf_counter() - start,
+            }
+        else:  # wall-clock times would make info trajectories differ between runs
+            executed = replace(executed, macro=replace(macro, timings={}))
+        failure = None if macro.success else (macro.reason or f"{action} failed in simulation")
+        return Stepped(failure, executed, tuple(unexpected), timings)
 
     def execute(self, action: str, rng: np.random.Generator) -> Executed:
         """Run `action`, maybe inject a fault (drawn from `rng`), then perceive."""
@@ -76,6 +148,43 @@ class PhysicalGrounding:
             fault = self.backend.disturb(rng)
         perception, seconds = self._perceive()
         return Executed(macro, fault, perception, seconds)
+
+    def progress(self, base: str, need_height: bool) -> tuple[bool, int]:
+        """(goal reached, as perceived and with every object perceived; tower height)."""
+        assert self.perception is not None
+        goal = self.state.goal_reached() and not self.perception.anomalies
+        return goal, len(self.perception.tower(base))
+
+    def pose_rows(self) -> np.ndarray:
+        poses = np.zeros((len(self._rows), 7), np.float32)
+        for name, pose in self.backend.object_poses().items():
+            poses[self._rows[name]] = pose
+        return poses
+
+    def robot(self) -> np.ndarray:
+        return np.asarray(self.backend.joint_positions(), np.float32).copy()
+
+    def image(self, size: tuple[int, int]) -> np.ndarray:
+        return np.asarray(self.backend.render(size[1], size[0]), np.uint8)
+
+    frame = image  # render() shows the camera
+
+    def draw(self, axes: Any) -> None:
+        raise RuntimeError("physics grounding draws no schematic (its window is MuJoCo's)")
+
+    def close(self) -> None:
+        self.backend.close()
+
+    def _observe(self, perception: Perception) -> None:
+        """The env's symbolic state becomes the perceived one."""
+        self.state.observe(perception.fluent, perceived_static(self._declared, perception))
+
+    def _predicted(self, a: int) -> frozenset[str]:
+        """Atoms action `a` is predicted to yield: its successor; atoms outside the universe
+        and orientation atoms unchanged."""
+        assert self.perception is not None
+        fluent = self.universe.atoms_of(self.universe.successor(self.state.bits, a))
+        return frozenset((*fluent, *self.state.unrepresented)) | self.perception.orientation
 
     def _perceive(self) -> tuple[Perception, float]:
         assert self._scene is not None

@@ -15,8 +15,8 @@ from utamp_gym.symbolic.atoms import parse_atom
 
 if TYPE_CHECKING:
     from utamp_gym.backend import MacroResult, PhysicsBackend
+    from utamp_gym.env.grounding import Grounding
     from utamp_gym.env.objects import ObjectInterface
-    from utamp_gym.env.physics import PhysicalGrounding
     from utamp_gym.perception.abstraction import Perception
     from utamp_gym.scene.model import Scene
     from utamp_gym.symbolic.state import SymbolicState
@@ -30,8 +30,7 @@ class KitchenViews:
     _scene: Scene | None
     _state: SymbolicState
     _objects: ObjectInterface | None
-    _backend: PhysicsBackend | None
-    _physics: PhysicalGrounding | None
+    _grounding: Grounding
     _last: tuple[MacroResult | None, tuple[str, ...]]
 
     @property
@@ -85,9 +84,10 @@ class KitchenViews:
         return self._objects
 
     @property
-    def backend(self) -> PhysicsBackend | None:
-        """The physics backend (None in symbolic grounding), e.g. to read measured towers."""
-        return self._backend
+    def backend(self) -> PhysicsBackend:
+        """The backend that grounds the env's actions, e.g. to read measured towers: the
+        simulator (physics grounding) or the `SymbolicBackend` (symbolic grounding)."""
+        return self._grounding.backend
 
     @property
     def macro_result(self) -> MacroResult | None:
@@ -107,7 +107,7 @@ class KitchenViews:
     @property
     def perception(self) -> Perception | None:
         """The last perceived state (physics grounding; None in symbolic grounding)."""
-        return None if self._physics is None else self._physics.perception
+        return self._grounding.perception
 
     def _anomalies(self) -> dict[str, str]:
         perception = self.perception

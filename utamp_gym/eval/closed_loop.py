@@ -4,7 +4,7 @@ The paper's protocol is open-loop (plan once, execute, stop at the first failure
 loop (`utamp eval --closed-loop`), `PlannerPolicy` acts in a `UTampKitchenEnv` of the scene:
 in physics grounding the env perceives the symbolic state after every step and the policy
 replans whenever it differs from the prediction, banning an action that failed from a state
-(`utamp_gym.env.planner_policy`). The world is the ground truth (the env's affordances are
+(`utamp_gym.agents.planner`). The world is the ground truth (the env's affordances are
 ``"gt"``; its domain is the method's, so U-TAMP-1's actions exist); the method only decides
 what the policy believes. An episode ends at the goal, at a dead end, when the policy gives
 up (`PlanningError`), or after `MAX_STEPS` macro actions.
@@ -12,14 +12,16 @@ up (`PlanningError`), or after `MAX_STEPS` macro actions.
 
 from __future__ import annotations
 
-import time
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
-from utamp_gym.affordances.sources import DEFAULT_NOISE
-from utamp_gym.backend import DEFAULT_PERCEPTION
+from utamp_gym.affordances.sources import DEFAULT_NOISE, plan_affordances
+from utamp_gym.agents import PlannerPolicy, run_policy
+from utamp_gym.agents.episode import Policy
+from utamp_gym.backend import DEFAULT_PERCEPTION, Surveying
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
-from utamp_gym.env.planner_policy import PlannerPolicy
-from utamp_gym.errors import PlanningError
+from utamp_gym.methods.perceived import perceive_live, perceive_world
 from utamp_gym.planning.methods import method_spec
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, resolve_scene
@@ -74,59 +76,56 @@ def run_closed_loop(
         **physics,
     )
     policy = PlannerPolicy(env, method, timeout=timeout, noise=noise, seed=seed)
-    actions: list[str] = []
-    n_faults, failure, success = 0, "", False
-    execution = 0.0
+    world_seed = run_seed(resolve_scene(scene).name, seed)  # the one seed of the episode
+    acting: Policy = policy
+    if spec.affordances == "perceived":  # look at the episode's world before the first step
+        acting = _LookFirst(policy, env, world_seed)
     try:
-        start = time.perf_counter()
-        # counted as execution, as in `execute_plan`; seeded per (scene, seed) as it is
-        obs, info = env.reset(seed=run_seed(resolve_scene(scene).name, seed))
-        execution += time.perf_counter() - start
-        if spec.affordances == "perceived":  # look at the episode's world first
-            policy.believe(env.scene.name, _perceived_facts(env, seed))
-        for _ in range(max_steps):
-            try:
-                action = policy(obs, info)
-            except PlanningError as exc:
-                failure = str(exc)
-                break
-            start = time.perf_counter()
-            obs, reward, terminated, truncated, info = env.step(action)
-            execution += time.perf_counter() - start
-            actions.append(str(info["action"]))
-            n_faults += bool(info["fault"])
-            if terminated or truncated:
-                success = reward > 0
-                if not success:
-                    failure = _why_ended(info)
-                break
-        else:
-            failure = f"step budget of {max_steps} macro actions exhausted"
+        # the env's reset counts as execution, as in `execute_plan`
+        ep = run_policy(env, acting, max_steps=max_steps, seed=world_seed)
     finally:
         env.close()
-    planning = sum(policy.planning_times)
+    failure = ""
+    if ep.ended == "policy":
+        failure = ep.stopped
+    elif ep.ended == "budget":
+        failure = f"step budget of {max_steps} macro actions exhausted"
+    elif not ep.success:
+        failure = _why_ended(ep.info)
     return ClosedLoopResult(
-        success=success,
-        failure="" if success else failure,
-        actions=tuple(actions),
-        n_faults=n_faults,
+        success=ep.success,
+        failure="" if ep.success else failure,
+        actions=ep.actions,
+        n_faults=ep.n_faults,
         n_replans=policy.n_replans,
-        planning_time_s=planning,
-        execution_time_s=execution,
+        planning_time_s=sum(policy.planning_times),
+        execution_time_s=ep.reset_s + ep.step_s,
     )
 
 
-def _perceived_facts(env: UTampKitchenEnv, seed: int) -> frozenset:
-    """`utamp2-perceived`'s affordances of the env's scene, perceived in its world (physics)
-    or in the episode's world built for a look (symbolic), in the env's names."""
-    from utamp_gym.affordances.sources import plan_affordances
-    from utamp_gym.methods.perceived import perceive_live, perceive_scene
+class _LookFirst:
+    """`utamp2-perceived`'s planner policy: before its first decision it looks at the
+    episode's world and believes the affordances perceived there."""
 
-    seen = (
-        perceive_scene(env.scene, seed)
-        if env.backend is None
-        else perceive_live(env.scene, env.backend)
-    )
+    def __init__(self, policy: PlannerPolicy, env: UTampKitchenEnv, world_seed: int) -> None:
+        self.policy, self.env, self.world_seed = policy, env, world_seed
+
+    def __call__(self, obs: Any, info: Mapping[str, Any]) -> int:
+        if not info.get("action"):
+            facts = _perceived_facts(self.env, self.world_seed)
+            self.policy.believe(self.env.scene.name, facts)
+        return self.policy(obs, info)
+
+
+def _perceived_facts(env: UTampKitchenEnv, world_seed: int) -> frozenset:
+    """`utamp2-perceived`'s affordances of the env's scene, perceived in its world (a backend
+    with cameras: physics) or in the episode's world (`world_seed`) built for a look
+    (symbolic grounding has no cameras), in the env's names."""
+    backend = env.backend
+    if isinstance(backend, Surveying):
+        seen = perceive_live(env.scene, backend)
+    else:
+        seen = perceive_world(env.scene, world_seed)
     return seen.usable_facts(plan_affordances(seen.planning))
 
 

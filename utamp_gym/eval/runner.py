@@ -3,8 +3,8 @@
 Grounding ``symbolic``: success = a plan was found and it is valid under the
 ground-truth U-TAMP-2 model (`check_against_ground_truth`); the failure reason is the
 first violated precondition or the planner's reason. Grounding ``physics``: the plan is
-executed in MuJoCo by `execute_plan`, the executor behind `run_episode` (same seed, same
-rollout), and physics decides. An unsolved U-TAMP-2 run is explained
+played open loop in the physics env by `execute_plan` (`utamp_gym.agents.runs`, behind
+`run_episode`: same seed, same rollout), and the env decides. An unsolved U-TAMP-2 run is explained
 (`explain`). `run_task` never raises: a crash becomes a failure row.
 
 A method ``rl:PATH`` is a saved RL agent acting in the env of either grounding
@@ -21,6 +21,7 @@ from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
 from utamp_gym.affordances.sources import DEFAULT_NOISE
+from utamp_gym.agents.runs import execute_plan, open_loop_env
 from utamp_gym.errors import EndpointError, UnknownNameError
 from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
@@ -91,7 +92,9 @@ def _suite_of(name: str) -> str:
     return suite_of(name) or "custom"
 
 
-def _plan(scene: Scene, task: EvalTask) -> _Planned:
+def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
+    """Plan `scene` with the task's method (`look`: the simulator `utamp2-perceived` looks
+    through, the one its plan is then played in; None: a world built for the look)."""
     if task.method in VLM_METHODS:
         from utamp_gym.methods.vlm_client import VlmClient
 
@@ -108,7 +111,7 @@ def _plan(scene: Scene, task: EvalTask) -> _Planned:
     if task.method == "utamp2-perceived":
         from utamp_gym.methods.perceived import plan_perceived
 
-        o, seen = plan_perceived(scene, task.seed, timeout=task.timeout)
+        o, seen = plan_perceived(scene, task.seed, timeout=task.timeout, backend=look)
         accuracy = None if seen is None else seen.accuracy
         return _Planned(
             o.solved, o.plan, o.planning_time_s, o.reason, o.affordance_scores, o.facts, accuracy
@@ -207,8 +210,28 @@ def _run(task: EvalTask, start: float) -> ResultRow:
     if task.closed_loop:
         return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)
+    env = None  # physics: the env the plan is played in, made before planning to look through
+    if task.grounding == "physics" and task.method == "utamp2-perceived":
+        env = _open_loop_env(task)
+    try:
+        return _run_open_loop(task, scene, start, env)
+    finally:
+        if env is not None:
+            env.close()
+
+
+def _open_loop_env(task: EvalTask) -> Any:
+    assert task.pose_noise is not None
+    return open_loop_env(
+        task.scene, pose_noise=task.pose_noise, disturbance=task.disturbance,
+        perception=task.perception,
+    )  # fmt: skip
+
+
+def _run_open_loop(task: EvalTask, scene: Scene, start: float, env: Any) -> ResultRow:
+    """The open-loop protocol: plan once, then validate (symbolic) or play (physics)."""
     exec_time, n_faults = 0.0, 0
-    planned = _plan(scene, task)
+    planned = _plan(scene, task, None if env is None else env.backend)
     success, failure = False, ""
     valid_gt = None
     plan = planned.plan
@@ -218,17 +241,16 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         if task.grounding == "symbolic":
             success = check.valid
             failure = "" if check.valid else f"invalid under ground truth: {check.message}"
-        else:
-            from utamp_gym.sim.execute import execute_plan
-
+        else:  # the plan played open loop in the physics env (`OpenLoopPolicy`)
             assert task.pose_noise is not None
             ex = execute_plan(
-                scene,
+                task.scene,
                 plan,
                 task.seed,
                 pose_noise=task.pose_noise,
                 disturbance=task.disturbance,
                 perception=task.perception,
+                env=env,
             )
             success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
             n_faults = ex.n_faults

@@ -30,12 +30,15 @@ import numpy as np
 
 from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.affordances.sources import SEEN_SUFFIX, ground_truth_for, plan_affordances
+from utamp_gym.agents.runs import episode_result, open_loop_env
+from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, backend_factory
 from utamp_gym.errors import UtampError
 from utamp_gym.methods.attributes import ATTRIBUTES
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box
 from utamp_gym.scene.model import Scene
+from utamp_gym.seeding import run_seed
 
 #: what each ``acc_<attribute>`` column measures (`attribute_accuracy`):
 #: body (box or cylinder), members (Dice of the matched members), member_size (matched boxes
@@ -200,16 +203,19 @@ def build_perceived_scene(
 def perceive_scene(scene: Scene, seed: int = 0, *, backend: Any = None) -> PerceivedScene:
     """Look at the episode's world of (`scene`, `seed`) with the survey cameras and perceive
     every object (module docstring). `backend`: a `MujocoBackend` to reuse (it is reset)."""
-    import numpy as np
+    return perceive_world(scene, run_seed(scene.name, seed), backend=backend)
 
-    from utamp_gym.seeding import run_seed
-    from utamp_gym.sim.backend import MujocoBackend
 
+def perceive_world(scene: Scene, world_seed: int, *, backend: Any = None) -> PerceivedScene:
+    """`perceive_scene` of the world whose generator is seeded with `world_seed` (already
+    derived from the scene and the run's seed: `utamp_gym.seeding.run_seed`). Without a
+    `backend`, one of the default physics backend (`utamp_gym.backend.DEFAULT_BACKEND`) is
+    built for the look."""
     own = backend is None
-    sim = MujocoBackend() if own else backend
+    sim = backend_factory(DEFAULT_BACKEND)() if own else backend
     start = time.perf_counter()
     try:
-        sim.reset(scene, np.random.default_rng(run_seed(scene.name, seed)))
+        sim.reset(scene, np.random.default_rng(world_seed))
         return perceive_live(scene, sim, start)
     finally:
         if own:
@@ -291,18 +297,22 @@ def run_perceived_episode(
     disturbance: float = 0.0,
     perception: str = "gaussian",
 ) -> Any:
-    """`utamp run --method utamp2-perceived`: perceive, plan, execute in the declared world
-    (an `utamp_gym.sim.execute.EpisodeResult`)."""
-    from utamp_gym.backend import DEFAULT_POSE_NOISE
-    from utamp_gym.sim.execute import episode_result
-
-    t0 = time.perf_counter()
-    outcome, _ = plan_perceived(scene, seed)
-    plan = outcome.plan
+    """`utamp run --method utamp2-perceived`: perceive (through the simulator of the env the
+    plan is then played in), plan, execute in the declared world (an
+    `utamp_gym.agents.runs.EpisodeResult`)."""
     noise = DEFAULT_POSE_NOISE if pose_noise is None else pose_noise
-    return episode_result(
-        scene, outcome, plan, seed, video, t0, None, noise, disturbance, perception
+    env = open_loop_env(
+        scene.name, pose_noise=noise, disturbance=disturbance, perception=perception
     )
+    try:
+        t0 = time.perf_counter()
+        outcome, _ = plan_perceived(scene, seed, backend=env.backend)
+        return episode_result(
+            scene.name, outcome, outcome.plan, seed, video, t0, None, noise, disturbance,
+            perception, env=env,
+        )  # fmt: skip
+    finally:
+        env.close()
 
 
 __all__ = [
@@ -314,6 +324,7 @@ __all__ = [
     "build_perceived_scene",
     "perceive_live",
     "perceive_scene",
+    "perceive_world",
     "plan_perceived",
     "rename_fact",
     "run_perceived_episode",

@@ -18,14 +18,16 @@ time spent in the env's steps (the simulator in physics grounding).
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, fields
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from utamp_gym.agents.episode import run_policy
 from utamp_gym.rl.envs import n_fluents
 from utamp_gym.rl.saved import ModelError, ModelMeta, check_model, check_spaces, read_meta
+from utamp_gym.seeding import run_seed
+from utamp_gym.suites import resolve_scene
 
 if TYPE_CHECKING:
     from utamp_gym.rl.policy import RLPolicy
@@ -168,7 +170,6 @@ def run_rl_episode(
     from utamp_gym.env.registry import register_envs
 
     register_envs()  # explicitly: a worker process may have skipped it on import
-    from utamp_gym.env.task import GOAL_REWARD
 
     path = model_path(method)
     meta = check_rl_method(method, spaces=False)  # checked below on the env itself
@@ -192,39 +193,28 @@ def run_rl_episode(
         **options,
     )
     try:
-        kitchen = env.unwrapped
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         check_spaces(meta, path, n_actions, n_fluents(env))
-        from utamp_gym.seeding import run_seed
-        from utamp_gym.suites import resolve_scene
-
-        # seeded per (scene, seed), as the planners' runs are
-        obs, info = env.reset(
-            seed=run_seed(resolve_scene(scene).name, seed), options={"scene": scene}
-        )
-        budget = step_budget(kitchen.scene.n_objects)  # type: ignore[attr-defined]
-        actions: list[str] = []
-        failed, faults, decide, execute = 0, 0, 0.0, 0.0
-        last_failure: str | None = None
+        # seeded per (scene, seed), as the planners' runs are; the one episode loop
+        budget = step_budget(resolve_scene(scene).n_objects)
         policy.reset()
-        for _ in range(budget):
-            t0 = time.perf_counter()
-            action = policy(obs, info)
-            t1 = time.perf_counter()
-            obs, reward, terminated, _, info = env.step(action)
-            decide, execute = decide + t1 - t0, execute + time.perf_counter() - t1
-            actions.append(str(info["action"]))
-            faults += bool(info.get("fault"))
-            if info["failure_reason"]:
-                failed, last_failure = failed + 1, str(info["failure_reason"])
-            if terminated:
-                success = float(reward) >= GOAL_REWARD
-                why = "" if success else _terminal_reason(info, len(actions))
-                return RLEpisode(success, why, tuple(actions), failed, decide, execute, faults)
-        why = f"budget exhausted: no goal in {budget} steps ({failed} failed)"
-        if last_failure is not None:
-            why += f"; last failure: {last_failure}"
-        return RLEpisode(False, why, tuple(actions), failed, decide, execute, faults)
+        ep = run_policy(
+            env,
+            policy,
+            max_steps=budget,
+            seed=run_seed(resolve_scene(scene).name, seed),
+            options={"scene": scene},
+        )
+        why = ""
+        if ep.ended == "budget":
+            why = f"budget exhausted: no goal in {budget} steps ({ep.n_failed} failed)"
+            if ep.last_failure:
+                why += f"; last failure: {ep.last_failure}"
+        elif not ep.success:
+            why = _terminal_reason(dict(ep.info), len(ep.actions))
+        return RLEpisode(
+            ep.success, why, ep.actions, ep.n_failed, ep.decision_s, ep.step_s, ep.n_faults
+        )
     finally:
         env.close()
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from utamp_gym.symbolic.atoms import EpisodeAtoms
 from utamp_gym.symbolic.scene_cache import SceneCache
-from utamp_gym.symbolic.universe import Universe, ground_universe
+from utamp_gym.symbolic.universe import Universe, UniverseByKey
 
 MASK_MODES = ("affordances", "geometric", "none")
 
@@ -48,7 +48,7 @@ def _words(flat: np.ndarray, ptr: np.ndarray, n_words: int) -> np.ndarray:
     return out
 
 
-class SymbolicState:
+class SymbolicState(UniverseByKey):  # pickled with its universe by key
     """Fluent state over `universe.fluent_atoms`, the per-episode static filter and the mask."""
 
     def __init__(self, universe: Universe, masks: str = "affordances") -> None:
@@ -224,14 +224,3 @@ class SymbolicState:
         """Apply action `i`'s effects (delete, then add); the caller checked applicability."""
         self.bits = self.universe.successor(self.bits, i)
         self._refresh()
-
-    # ------------------------------------------------------------------ pickling
-    def __getstate__(self) -> dict[str, object]:
-        """Pickle the universe by its key: it is re-grounded (or taken from the cache)."""
-        state = self.__dict__.copy()
-        state["universe"] = self.universe.key
-        return state
-
-    def __setstate__(self, state: dict[str, object]) -> None:
-        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
-        self.__dict__.update(state)

@@ -410,3 +410,19 @@ def _ground(key: UniverseKey) -> Universe:
         fluent_index=MappingProxyType(f_index),
         static_index=MappingProxyType(s_index),
     )
+
+
+class UniverseByKey:
+    """Pickles its ``universe`` by the universe's key: re-grounded (or taken from this
+    process's cache, or the store) on load."""
+
+    universe: Universe
+
+    def __getstate__(self) -> dict[str, object]:
+        state = self.__dict__.copy()
+        state["universe"] = self.universe.key
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        state["universe"] = ground_universe(state["universe"])  # type: ignore[arg-type]
+        self.__dict__.update(state)

@@ -1,0 +1,112 @@
+"""`SymbolicBackend`: symbolic grounding as a backend of the kitchen envs.
+
+Why a backend: the env asks a grounding the same questions in both groundings (reset to a
+scene, execute a macro action, the object poses, the robot's joints, the tower, a picture),
+so it has no branch on the grounding. This backend answers them without a simulator: the
+outcome model (`utamp_gym.env.outcome`, with ``masks`` geometric / none: the ground-truth
+U-TAMP-2 precondition) decides whether an action the mask allows succeeds, a successful
+action's effect is applied to the episode's symbolic state (`utamp_gym.env.state`), the poses
+follow the documented rules of `utamp_gym.env.poses`, the robot stays at home, and pictures
+are the top-down schematic (`utamp_gym.env.render`). It implements the `PhysicsBackend`
+calls (`utamp_gym.backend`) except `physical_state` (nothing is simulated, nothing is
+perceived: the symbolic state is the truth).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from utamp_gym.backend import MacroResult
+from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
+from utamp_gym.env.task import home_joints
+from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.outcome import OutcomeModel
+from utamp_gym.symbolic.poses import SymbolicPoses
+from utamp_gym.symbolic.state import SymbolicState
+from utamp_gym.symbolic.universe import Universe, UniverseByKey
+
+
+class SymbolicBackend(UniverseByKey):
+    """The outcome model, the rule-moved poses and the schematic of one env's episodes.
+
+    `state` is the env's symbolic state, advanced here by every successful action.
+    """
+
+    def __init__(
+        self, universe: Universe, state: SymbolicState, objects: Sequence[str], masks: str
+    ) -> None:
+        self.universe, self.state = universe, state
+        # masks geometric/none: the outcome model decides the steps the mask allows
+        self.outcome = OutcomeModel(universe) if masks != "affordances" else None
+        self.poses = SymbolicPoses(objects)
+        self.renderer = SchematicRenderer(objects)
+        self.labels = LabelledSchematic(objects)
+        self.held: str | None = None
+        self._home = home_joints()
+        self._scene: Scene | None = None
+
+    # ------------------------------------------------------------------ PhysicsBackend
+    def reset(self, scene: Scene, rng: np.random.Generator | None = None) -> None:
+        """Start an episode in `scene` (nothing is random: `rng` is not drawn from)."""
+        self._scene, self.held = scene, None
+        self.poses.reset(scene)
+        if self.outcome is not None:
+            self.outcome.reset(scene)
+        self.renderer.reset(scene)
+        self.labels.reset(scene)
+
+    def execute(self, action: str) -> MacroResult:
+        """Run the ground action `action` (PDDL string) on the symbolic state."""
+        failure = self.execute_id(self.universe.index(action))
+        return MacroResult(failure is None, failure)
+
+    def execute_id(self, a: int) -> str | None:
+        """Run universe action `a`; why it failed (None: applied)."""
+        failure = None if self.outcome is None else self.outcome.failure(self.state, a)
+        if failure is None:
+            self.state.apply(a)
+            kind, obj, target = self.universe.roles[a]
+            self.poses.apply(kind, obj, target)
+            if kind == "pick-support":
+                self.held = obj
+            elif kind == "place-support":
+                self.held = None
+        return failure
+
+    def physical_state(self) -> Any:
+        raise NotImplementedError("symbolic grounding simulates nothing: no physical state")
+
+    def object_poses(self) -> dict[str, np.ndarray]:
+        """Object name -> ``[x, y, z, qw, qx, qy, qz]`` (the scene's objects only)."""
+        poses, present = self.poses.observation(), self.poses.present()
+        return {n: poses[i] for i, n in enumerate(self.poses.names) if present[i]}
+
+    def joint_positions(self) -> np.ndarray:
+        """The Panda's ready pose with the fingers open (the robot never moves)."""
+        return self._home.copy()
+
+    def stacked_on_tray(self) -> list[str]:
+        """The tower on the scene's base, bottom to top."""
+        assert self._scene is not None, "reset() first"
+        return self.poses.tower(self._scene.tower_base)
+
+    def render(self, width: int, height: int) -> np.ndarray:
+        """The unlabelled top-down schematic (what ``camera=True`` observes)."""
+        poses, present = self.poses.observation(), self.poses.present()
+        return self.renderer.render(poses, present, self.held, (height, width))
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+    # ------------------------------------------------------------------ schematic views
+    def labelled(self, size: tuple[int, int]) -> np.ndarray:
+        """The labelled schematic, (height, width) `size` (what ``render()`` shows)."""
+        poses, present = self.poses.observation(), self.poses.present()
+        return self.labels.render(poses, present, self.held, size)
+
+    def draw(self, axes: Any) -> None:
+        """The labelled schematic into matplotlib axes (the human window)."""
+        self.labels.draw(axes, self.poses.observation(), self.poses.present(), self.held)
