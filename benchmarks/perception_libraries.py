@@ -52,10 +52,8 @@ def _this_command(python: str = "python") -> str:
     """This step's command line as run, from the repository (`python`: the interpreter to
     name; the open3d step names its own, which lives in a venv of its own)."""
     script = Path(sys.argv[0]).resolve()
-    try:
+    if script.is_relative_to(ROOT):
         script = script.relative_to(ROOT)
-    except ValueError:
-        pass
     return shlex.join([python, str(script), *sys.argv[1:]])
 
 
