@@ -195,7 +195,7 @@ def bench_env(workers: dict[str, Worker], suite: str, rounds: int, steps: int) -
         row: dict[str, Any] = {"round": k}
         for v in VERSIONS if k % 2 == 0 else VERSIONS[::-1]:
             ans = workers[v].ask(op="env", suite=suite, steps=steps, seed=k)
-            row[v], row[f"{v}cpu"] = ans["steps_per_s"], ans["cpu_steps_per_s"]
+            row[v], row[f"{v}_cpu"] = ans["steps_per_s"], ans["cpu_steps_per_s"]
         rows.append(row)
         print(f"env round {k}: this {row['this']:,.0f}/s, base {row['base']:,.0f}/s", flush=True)
     return rows
