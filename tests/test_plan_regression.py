@@ -1,6 +1,8 @@
 """Plans and SAS tasks stay what they were: every scene of the paper's suites and a sample
-of each procedural-v1 split, planned with UTAMP-2-GT (and the pick-place suite with
-UTAMP-1), must give the recorded plan and the recorded SAS task, byte for byte.
+of each procedural-v1 split, planned with UTAMP-2-GT, must give the recorded plan and the
+recorded SAS task, byte for byte; the pick-place suite under UTAMP-1 its recorded SAS task
+(not searched: a five-object UTAMP-1 blind search takes seconds to minutes, and the search
+binary reads nothing but that text).
 
 The record (``tests/data/expected_plans.json``) was written by this file's ``record`` on
 commit 2c0b0d1, before the planner's speed work (`symbolic.joins`, `symbolic.store`):
@@ -19,6 +21,7 @@ from pathlib import Path
 import pytest
 
 from utamp_gym.planning import state_planner
+from utamp_gym.planning.downward import PlanResult
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.suites import resolve_scene, suite_scenes
@@ -48,6 +51,8 @@ def planned(scene: str, method: str) -> dict[str, object]:
 
     def keep(text: str, **kw: object) -> object:
         texts.append(text)
+        if method == "utamp1":
+            return PlanResult(False, (), None, 0.0, 0.0, 0.0, "not searched", None)
         return search(text, **kw)
 
     state_planner.search_sas = keep
@@ -57,6 +62,8 @@ def planned(scene: str, method: str) -> dict[str, object]:
     finally:
         state_planner.search_sas = search
     sas = hashlib.sha256(texts[0].encode()).hexdigest()[:16] if texts else None
+    if method == "utamp1":
+        return {"sas": sas}
     return {"solved": out.solved, "plan": list(out.plan), "sas": sas, "reason": out.reason}
 
 
