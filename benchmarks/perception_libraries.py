@@ -18,6 +18,9 @@ data this script dumps, without importing utamp_gym:
     python benchmarks/perception_libraries.py dump /tmp/perception.npz
     /path/to/open3d-venv/bin/python benchmarks/perception_libraries.py open3d /tmp/perception.npz
     python benchmarks/perception_libraries.py report /tmp/perception.npz
+
+(an open3d venv: ``python -m venv /tmp/o3d && /tmp/o3d/bin/pip install open3d numpy``). The
+report records the two steps before it, as they were run, in its provenance note.
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import shlex
+import sys
 import time
 from pathlib import Path
 
@@ -41,6 +46,15 @@ def _median_ms(f, repeats: int = REPEATS) -> tuple[float, object]:
         out = f()
         times.append(time.perf_counter() - t)
     return 1000 * float(np.median(times)), out
+
+
+def _this_command(python: str = "python") -> str:
+    """This step's command line as run, from the repository (`python`: the interpreter to
+    name; the open3d step names its own, which lives in a venv of its own)."""
+    script = Path(sys.argv[0]).resolve()
+    if script.is_relative_to(ROOT):
+        script = script.relative_to(ROOT)
+    return shlex.join([python, str(script), *sys.argv[1:]])
 
 
 def dump(path: Path) -> None:
@@ -69,6 +83,7 @@ def dump(path: Path) -> None:
             i = v.intrinsics
             data[f"intr{k}"] = np.array([i.width, i.height, i.fx, i.fy, i.cx, i.cy])
         results = {
+            "command": _this_command(),
             "fuse_numpy_ms": fuse_ms,
             "fuse_numpy_points": int(sum(len(c) for c in fused.objects.values())),
         }
@@ -115,6 +130,7 @@ def with_open3d(path: Path) -> None:
 
     ms, cloud = _median_ms(clouds)
     out = {
+        "command": _this_command(sys.executable),
         "open3d_version": o3d.__version__,
         "fuse_open3d_ms": ms,
         "fuse_open3d_points": len(cloud.points),
@@ -213,10 +229,16 @@ def report(path: Path, results_dir: Path = ROOT / "docs" / "results") -> None:
     )
     lines += ["", " ".join(why)]
     # imported here: the open3d step runs this file in a Python without utamp_gym
-    from utamp_gym.provenance import write_json, write_markdown
+    from utamp_gym.provenance import provenance, write_json, write_markdown
 
+    steps = [s["command"] for s in (ours, theirs) if s and "command" in s]
+    prov = provenance()
+    if steps:  # the steps before this one, as they were run
+        prov["note"] = "after " + " and ".join(f"`{c}`" for c in steps)
     results_dir.mkdir(parents=True, exist_ok=True)
-    prov = write_json(results_dir / "libraries.json", {"ours": ours, "open3d": theirs}, indent=1)
+    prov = write_json(
+        results_dir / "libraries.json", {**prov, "ours": ours, "open3d": theirs}, indent=1
+    )
     write_markdown(results_dir / "libraries.md", "\n".join(lines) + "\n", prov)
     print("\n".join(lines))
 

@@ -35,143 +35,32 @@ import json
 import os
 import resource
 import shlex
-import statistics
 import subprocess
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from compare import Worker, base_worktree, git, med, rounded  # benchmarks/ is on sys.path when run
+from compare import Worker, base_worktree, git, med, rounded  # benchmarks/ is on sys.path
+from planning_speed_report import VERSIONS, summarise, table
+from planning_speed_worker import cpu, worker
 
+ONE_THREAD = {"OMP_NUM_THREADS": "1"}  # the workers' environment
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-VERSIONS = ("this", "base")
-ONE_THREAD = {"OMP_NUM_THREADS": "1"}  # the workers' environment
-TARGETS = {"cold_vs_base": 1.0, "cold_vs_driver": 0.15, "process_vs_driver": 0.5, "env": 1.0}
-
-
-# --------------------------------------------------------------------------- worker
-def _cpu(who: int = resource.RUSAGE_SELF) -> float:
-    own = resource.getrusage(who)
-    return own.ru_utime + own.ru_stime
-
-
-def _plan(name: str) -> dict[str, Any]:
-    """Plan a scene with a fresh `StatePlanner` in this process; its figures."""
-    from utamp_gym.planning.methods import plan_scene
-    from utamp_gym.planning.state_planner import StatePlanner
-    from utamp_gym.suites import resolve_scene
-
-    scene = resolve_scene(name)
-    cpu = _cpu() + _cpu(resource.RUSAGE_CHILDREN)
-    out = plan_scene(scene, "utamp2-gt", planner=StatePlanner("utamp2"))
-    cpu = _cpu() + _cpu(resource.RUSAGE_CHILDREN) - cpu
-    return {
-        "s": out.planning_time_s,
-        "cpu_s": cpu,
-        "solved": out.solved,
-        "length": out.plan_length,
-        "domain": out.domain,
-        "problem": out.problem,
-    }
-
-
-def _cold(name: str) -> dict[str, Any]:
-    """`_plan` in a forked child: a fresh process state, imports done."""
-    read, write = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # the child: plan, answer, leave without clean-up
-        os.close(read)
-        try:
-            data = json.dumps(_plan(name)).encode()
-        except BaseException as exc:  # the parent reports it
-            data = json.dumps({"error": repr(exc)}).encode()
-        with os.fdopen(write, "wb") as f:
-            f.write(data)
-        os._exit(0)
-    os.close(write)
-    with os.fdopen(read, "rb") as f:
-        data = f.read()
-    os.waitpid(pid, 0)
-    out = json.loads(data)
-    if "error" in out:
-        raise RuntimeError(f"cold plan of {name}: {out['error']}")
-    return out
-
-
-def _warm(name: str, repeats: int) -> dict[str, Any]:
-    """`_plan` `repeats` times in this (long-lived) process: medians."""
-    runs = [_plan(name) for _ in range(repeats)]
-    return {
-        "s": statistics.median(r["s"] for r in runs),
-        "cpu_s": statistics.median(r["cpu_s"] for r in runs),
-    }
-
-
-class _Env:
-    """The raw symbolic env of `benchmarks/env_throughput.py`, kept across rounds."""
-
-    def __init__(self, suite: str) -> None:
-        from utamp_gym.env.kitchen import UTampKitchenEnv
-
-        self.env = UTampKitchenEnv(suite=suite, grounding="symbolic")
-        self.run(2_000, 0)  # warm-up
-
-    def run(self, steps: int, seed: int) -> dict[str, Any]:
-        """Masked random steps (`env_throughput.run`): steps/s inside `env.step`."""
-        import numpy as np
-
-        draws = np.random.default_rng(seed).random(steps)
-        _, info = self.env.reset(seed=seed)
-        in_step, cpu = 0.0, time.process_time()
-        for k in range(steps):
-            valid = np.flatnonzero(info["action_mask"])
-            action = valid[int(draws[k] * len(valid))] if len(valid) else np.int64(0)
-            t = time.perf_counter()
-            _, _, terminated, truncated, info = self.env.step(action)
-            in_step += time.perf_counter() - t
-            if terminated or truncated:
-                _, info = self.env.reset()
-        return {
-            "steps_per_s": steps / in_step,
-            "cpu_steps_per_s": steps / (time.process_time() - cpu),
-        }
-
-
-def worker(kind: str) -> None:
-    """Serve measurements: one JSON request per stdin line, one JSON answer per stdout line.
-
-    ``plan`` workers import the planner and plan nothing before the first request (the cold
-    forks see a fresh process); ``env`` workers build the env on their first request."""
-    import utamp_gym
-
-    out = sys.stdout
-    sys.stdout = sys.stderr  # nothing else may write to the answer stream
-    if kind == "plan":
-        import utamp_gym.planning.methods
-        import utamp_gym.planning.state_planner
-        import utamp_gym.suites
-    env: _Env | None = None
-    print(json.dumps({"ready": utamp_gym.__file__}), file=out, flush=True)
-    for line in sys.stdin:
-        req = json.loads(line)
-        if req["op"] == "cold":
-            ans = _cold(req["scene"])
-        elif req["op"] == "warm":
-            ans = _warm(req["scene"], req["repeats"])
-        else:
-            env = env or _Env(req["suite"])
-            ans = env.run(req["steps"], req["seed"])
-        print(json.dumps(ans), file=out, flush=True)
 
 
 # --------------------------------------------------------------------------- driver side
+def _worker(label: str, tree: Path, kind: str) -> Worker:
+    """A worker of `kind` (plan | env) running `tree`'s code, one thread."""
+    return Worker(label, tree, Path(__file__), "--worker", kind, env=ONE_THREAD)
+
+
 def wall_cpu(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]:
     """(wall s, CPU s of the child) of one whole command."""
-    c, t = _cpu(resource.RUSAGE_CHILDREN), time.perf_counter()
+    c, t = cpu(resource.RUSAGE_CHILDREN), time.perf_counter()
     subprocess.run(cmd, env=env, cwd=cwd, check=True, capture_output=True)
-    return time.perf_counter() - t, _cpu(resource.RUSAGE_CHILDREN) - c
+    return time.perf_counter() - t, cpu(resource.RUSAGE_CHILDREN) - c
 
 
 def bench_plans(
@@ -201,9 +90,9 @@ def bench_plans(
         p.write_text(cold["this"][0]["problem"])
         drv = []
         for _ in range(repeats):
-            c = _cpu(resource.RUSAGE_CHILDREN)
+            c = cpu(resource.RUSAGE_CHILDREN)
             res = solve_with_driver(d, p, search=DEFAULT_SEARCH)
-            drv.append((res.planning_time_s, _cpu(resource.RUSAGE_CHILDREN) - c))
+            drv.append((res.planning_time_s, cpu(resource.RUSAGE_CHILDREN) - c))
         row["driver"] = {
             "s": med(w for w, _ in drv),
             "cpu_s": med(c for _, c in drv),
@@ -280,113 +169,6 @@ def bench_env(workers: dict[str, Worker], suite: str, rounds: int, steps: int) -
     return rows
 
 
-# --------------------------------------------------------------------------- report
-def summarise(plans: list[dict], procs: list[dict], env: list[dict]) -> dict[str, Any]:
-    s: dict[str, Any] = {}
-    for v in VERSIONS:
-        s[v] = {
-            "cold_s": med(r[v]["cold_s"] for r in plans),
-            "cold_cpu_s": med(r[v]["cold_cpu_s"] for r in plans),
-            "warm_s": med(r[v]["warm_s"] for r in plans),
-            "warm_cpu_s": med(r[v]["warm_cpu_s"] for r in plans),
-            "process_s": med(r[v]["s"] for r in procs),
-            "process_cpu_s": med(r[v]["cpu_s"] for r in procs),
-            "env_steps_per_s": med(r[v] for r in env),
-            "env_cpu_steps_per_s": med(r[f"{v}_cpu"] for r in env),
-        }
-    s["driver"] = {
-        "s": med(r["driver"]["s"] for r in plans),
-        "cpu_s": med(r["driver"]["cpu_s"] for r in plans),
-        "process_s": med(r["driver"]["s"] for r in procs),
-        "process_cpu_s": med(r["driver"]["cpu_s"] for r in procs),
-    }
-    t, b, d = s["this"], s["base"], s["driver"]
-    s["ratio"] = {
-        "cold_vs_base": t["cold_s"] / b["cold_s"],
-        "cold_vs_base_per_scene": med(r["this"]["cold_s"] / r["base"]["cold_s"] for r in plans),
-        "cold_cpu_vs_base": t["cold_cpu_s"] / b["cold_cpu_s"],
-        "cold_cpu_vs_base_per_scene": med(
-            r["this"]["cold_cpu_s"] / r["base"]["cold_cpu_s"] for r in plans
-        ),
-        "warm_vs_base_per_scene": med(r["this"]["warm_s"] / r["base"]["warm_s"] for r in plans),
-        "process_vs_base_per_scene": med(r["this"]["s"] / r["base"]["s"] for r in procs),
-        "warm_vs_base": t["warm_s"] / b["warm_s"],
-        "cold_vs_driver": t["cold_s"] / d["s"],
-        "base_cold_vs_driver": b["cold_s"] / d["s"],
-        "warm_vs_driver": t["warm_s"] / d["s"],
-        "process_vs_driver": t["process_s"] / d["process_s"],
-        "base_process_vs_driver": b["process_s"] / d["process_s"],
-        "process_cpu_vs_driver": t["process_cpu_s"] / d["process_cpu_s"],
-        "process_vs_base": t["process_s"] / b["process_s"],
-        "env": t["env_steps_per_s"] / b["env_steps_per_s"],
-        "env_cpu": t["env_cpu_steps_per_s"] / b["env_cpu_steps_per_s"],
-        "env_per_round": med(r["this"] / r["base"] for r in env),
-        "env_cpu_per_round": med(r["this_cpu"] / r["base_cpu"] for r in env),
-    }
-    same = [r["scene"] for r in plans if r["this"]["length"] != r["driver"]["length"]]
-    s["plan_length_differs_from_driver"] = same
-    return s
-
-
-def table(s: dict[str, Any], base: str, this: str, n_plans: int, n_procs: int, args: Any,
-          run: str, command: str) -> str:  # fmt: skip
-    t, b, d, q = s["this"], s["base"], s["driver"], s["ratio"]
-
-    def ms(x: float) -> str:
-        return f"{1000 * x:.1f}"
-
-    def met(key: str, value: float, below: bool = True) -> str:
-        ok = value <= TARGETS[key] if below else value >= TARGETS[key]
-        return f"{'met' if ok else 'NOT met'} ({'<=' if below else '>='} {TARGETS[key]})"
-
-    lines = [
-        f"| figure | base `{base}` | this `{this}` | this / base | paired | driver "
-        "| this / driver | target |",
-        "|---|---|---|---|---|---|---|---|",
-        f"| cold planning, fresh process (ms) | {ms(b['cold_s'])} | {ms(t['cold_s'])} "
-        f"| **{q['cold_vs_base']:.2f}** | {q['cold_vs_base_per_scene']:.2f} | {ms(d['s'])} "
-        f"| **{q['cold_vs_driver']:.2f}** "
-        f"| this / base {met('cold_vs_base', q['cold_vs_base'])}; this / driver "
-        f"{met('cold_vs_driver', q['cold_vs_driver'])} |",
-        f"| cold planning, fresh process, CPU (ms) | {ms(b['cold_cpu_s'])} "
-        f"| {ms(t['cold_cpu_s'])} | {q['cold_cpu_vs_base']:.2f} "
-        f"| {q['cold_cpu_vs_base_per_scene']:.2f} | {ms(d['cpu_s'])} "
-        f"| {t['cold_cpu_s'] / d['cpu_s']:.2f} | |",
-        f"| cold planning, warm process (ms) | {ms(b['warm_s'])} | {ms(t['warm_s'])} "
-        f"| {q['warm_vs_base']:.2f} | {q['warm_vs_base_per_scene']:.2f} | {ms(d['s'])} "
-        f"| {q['warm_vs_driver']:.2f} | |",
-        f"| `utamp plan SCENE --json`, whole process (ms) | {ms(b['process_s'])} "
-        f"| {ms(t['process_s'])} | {q['process_vs_base']:.2f} "
-        f"| {q['process_vs_base_per_scene']:.2f} | {ms(d['process_s'])} "
-        f"| **{q['process_vs_driver']:.2f}** "
-        f"| {met('process_vs_driver', q['process_vs_driver'])} |",
-        f"| symbolic env steps/s | {b['env_steps_per_s']:,.0f} | {t['env_steps_per_s']:,.0f} "
-        f"| **{q['env']:.2f}** | {q['env_per_round']:.2f} | | "
-        f"| {met('env', q['env'], below=False)} |",
-        f"| symbolic env steps/s, CPU (whole loop) | {b['env_cpu_steps_per_s']:,.0f} "
-        f"| {t['env_cpu_steps_per_s']:,.0f} | {q['env_cpu']:.2f} | {q['env_cpu_per_round']:.2f} "
-        "| | | |",
-        "",
-        f"Five-object {args.suite} scenes, UTAMP-2-GT, search `astar-blind`; medians over "
-        "scenes of per-scene medians; *this / base* divides the two medians, *paired* is the "
-        "median of the per-scene (env: per-round) ratios, steadier when the load drifts. "
-        f"Cold: {n_plans} scenes x {args.repeats} plans per tree, "
-        "each in a process forked from a worker that has imported the planner and planned "
-        "nothing (warm process: the same scenes planned again and again in one process, a fresh "
-        "`StatePlanner` each time). Driver: `fast-downward.py` with the same search on the "
-        "same PDDL files (whole process: `--alias lama-first`, "
-        f"{n_procs} scenes x {args.process_runs} runs). Env: the raw symbolic env, "
-        f"{args.env_rounds} alternating rounds of {args.env_steps:,} masked random steps, "
-        "steps/s inside `env.step` (CPU: steps per CPU second of the whole loop, the agent's "
-        "choice and resets included). "
-        f"The base's `utamp plan` takes {q['base_process_vs_driver']:.2f}x the driver's whole "
-        f"process, its cold planning {q['base_cold_vs_driver']:.2f}x the driver. {run}",
-        "",
-        f"_Written by `{command}` at commit `{this}`._",
-    ]
-    return "\n".join(lines) + "\n"
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", choices=("plan", "env"), help=argparse.SUPPRESS)
@@ -426,18 +208,12 @@ def main() -> None:
         trees = {"this": ROOT, "base": tree}
         workers: dict[str, Worker] = {}
         try:
-            workers = {
-                v: Worker(v, trees[v], Path(__file__), "--worker", "plan", env=ONE_THREAD)
-                for v in VERSIONS
-            }
+            workers = {v: _worker(v, trees[v], "plan") for v in VERSIONS}
             plans = bench_plans(workers, names, args.repeats, Path(tmp))
             for w in workers.values():
                 w.close()
             process = bench_process(trees, procs, args.process_runs, Path(tmp))
-            workers = {
-                v: Worker(v, trees[v], Path(__file__), "--worker", "env", env=ONE_THREAD)
-                for v in VERSIONS
-            }
+            workers = {v: _worker(v, trees[v], "env") for v in VERSIONS}
             env = bench_env(workers, args.suite, args.env_rounds, args.env_steps)
         finally:
             for w in workers.values():

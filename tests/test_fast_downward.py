@@ -22,6 +22,7 @@ import pytest
 from procs import downward_children, process_alive, user_env
 
 from utamp_gym.errors import PddlError, PlanningError, PlanningTimeout, UnknownNameError
+from utamp_gym.planning import downward, processes
 from utamp_gym.planning import fast_downward as fd
 
 DOMAIN = """
@@ -195,7 +196,7 @@ def test_lama_first_matches_installed_driver_alias():
         text=True,
         check=True,
     ).stdout
-    assert out.strip() == repr(list(fd._SEARCH_ARGS["lama-first"]))
+    assert out.strip() == repr(list(downward.SEARCH_ARGS["lama-first"]))
 
 
 def test_unknown_search_name():
@@ -330,7 +331,7 @@ def test_interrupt_while_a_planner_process_starts_kills_it(ctrl_c, monkeypatch, 
     (tmp_path / "domain.pddl").write_text(DOMAIN)
     (tmp_path / "big.pddl").write_text(BIG_PROBLEM)
     before = live_children()
-    monkeypatch.setattr(fd.subprocess, "Popen", _InterruptedStart)
+    monkeypatch.setattr(processes.subprocess, "Popen", _InterruptedStart)
     with pytest.raises(KeyboardInterrupt):
         fd.solve_with_driver(tmp_path / "domain.pddl", tmp_path / "big.pddl", timeout=60)
     with pytest.raises(KeyboardInterrupt):
@@ -347,7 +348,7 @@ def test_interrupt_handled_by_another_thread_ends_the_wait(ctrl_c):
     threading.Timer(0.3, lambda: signal.pthread_kill(threading.get_ident(), signal.SIGINT)).start()
     start = time.monotonic()
     with pytest.raises(KeyboardInterrupt):
-        fd._run(["sleep", "40"], stdin=None, timeout=40, what="sleep", limit=40)
+        processes.run(["sleep", "40"], stdin=None, timeout=40, what="sleep", limit=40)
     assert time.monotonic() - start < 20
     assert not any(
         Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"sleep") for pid in live_children()

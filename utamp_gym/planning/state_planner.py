@@ -18,17 +18,21 @@ the grounder keeps its join orders between calls.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import time
 from collections import OrderedDict
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Collection, Iterable, Iterator, Mapping
 from types import MappingProxyType
 from typing import NamedTuple
 
 from utamp_gym.deadline import Deadline, check_timeout
 from utamp_gym.errors import PddlError, UnknownNameError
-from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS, PlanResult, search_sas
+from utamp_gym.planning.downward import DEFAULT_SEARCH, SEARCH_CONFIGS, PlanResult, search_sas
+from utamp_gym.planning.postprocess import eliminate
 from utamp_gym.planning.sas import SasTask, build_sas
 from utamp_gym.symbolic.pddl import Atom, Domain, Literal, Problem, cached_domain
+from utamp_gym.symbolic.problem import domain_text
 from utamp_gym.symbolic.reach import Grounder
 
 #: searches whose plans greedy action elimination can shorten (the others are optimal)
@@ -61,6 +65,20 @@ def parse_literal(text: str) -> Literal:
 def action_name(action: str) -> str:
     """``"(pick-support  A b)"`` -> ``"pick-support a b"``: the form the SAS task uses."""
     return " ".join(action.strip().strip("()").lower().split())
+
+
+@contextlib.contextmanager
+def paused_gc() -> Iterator[None]:
+    """No cyclic garbage collection inside: grounding builds thousands of tuples and dicts
+    and no cycles, and each collection the allocations set off would walk them in vain."""
+    if not gc.isenabled():
+        yield
+        return
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
 
 
 class CacheInfo(NamedTuple):
@@ -102,8 +120,6 @@ class StatePlanner:
         max_tasks_per_key: int = 4,
     ) -> None:
         if isinstance(domain, str):
-            from utamp_gym.symbolic.problem import domain_text
-
             domain = cached_domain(domain_text(domain), f"{domain}.pddl")
         if search not in SEARCH_CONFIGS:
             raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
@@ -113,7 +129,8 @@ class StatePlanner:
         self.timeout = check_timeout(timeout)
         self.object_type = object_type
         self._fluent = domain.fluent_predicates()
-        self._grounder = Grounder(domain)
+        with paused_gc():
+            self._grounder = Grounder(domain)
         self._cache: OrderedDict[tuple[object, ...], _KeyTasks] = OrderedDict()
         self._max_keys, self._max_tasks = max_keys, max_tasks_per_key
         self._hits = self._groundings = self._uncovered = 0
@@ -154,19 +171,18 @@ class StatePlanner:
             if isinstance(objects, Mapping)
             else dict.fromkeys(objects, self.object_type)
         )
-        key = (frozenset(objs.items()), frozenset(static_atoms), tuple(goal_atoms))
-        state = frozenset(self._atoms(fluent_atoms, fluent=True))
-        task, found = self._task(key, objs, state, deadline, source)
-        if not task.solvable:
-            elapsed = time.perf_counter() - start
-            return PlanResult(False, (), None, elapsed, elapsed, 0.0, UNREACHABLE, None)
-        drop = {task.op_index[n] for n in map(action_name, exclude) if n in task.op_index}
-        text = task.text(state, drop)
+        with paused_gc():
+            key = (frozenset(objs.items()), frozenset(static_atoms), tuple(goal_atoms))
+            state = frozenset(self._atoms(fluent_atoms, fluent=True))
+            task, found = self._task(key, objs, state, deadline, source)
+            if not task.solvable:
+                elapsed = time.perf_counter() - start
+                return PlanResult(False, (), None, elapsed, elapsed, 0.0, UNREACHABLE, None)
+            drop = {task.op_index[n] for n in map(action_name, exclude) if n in task.op_index}
+            text = task.text(state, drop)
         deadline.check("sas")
         result = search_sas(text, search=self.search, deadline=deadline, start=start)
         if result.solved and len(result.plan) > 1 and self.search in SATISFICING_SEARCHES:
-            from utamp_gym.planning.postprocess import eliminate
-
             ops = {op.name: op for op in task.ops}
             plan = eliminate(result.plan, ops, state | found.static, found.goal)
             result = result._replace(

@@ -18,8 +18,9 @@ from collections.abc import Iterable, Mapping
 from functools import lru_cache
 from types import MappingProxyType
 
-from utamp_gym.errors import PddlError
+from utamp_gym.symbolic import store
 from utamp_gym.symbolic.pddl_model import Action, Atom, CondEffect, Domain, Literal, Problem
+from utamp_gym.symbolic.pddl_reader import Node, Parser, fail
 
 __all__ = [
     "Action",
@@ -42,188 +43,33 @@ SUPPORTED_REQUIREMENTS = (
     ":equality",
     ":conditional-effects",
 )
-_TOKEN = re.compile(r"\(|\)|[^\s()]+")
 _STEP = re.compile(r"\(\s*([^\s()]+(?:\s+[^\s()]+)*)\s*\)")
-_KEYWORDS = ("and", "not", "or", "imply", "forall", "exists", "when", "either", "increase")
-
-
-class _Node:
-    """A parenthesised list with the line it opens on (tokens keep their original case)."""
-
-    __slots__ = ("items", "line")
-
-    def __init__(self, line: int, items: list[str | _Node] | None = None) -> None:
-        self.line = line
-        self.items: list[str | _Node] = [] if items is None else items
-
-
-def _fail(source: str, line: int | None, message: str) -> PddlError:
-    return PddlError(f"{source}:{line}: {message}" if line else f"{source}: {message}")
-
-
-def _read(text: str, source: str) -> list[str | _Node]:
-    """Tokenise and nest; `;` starts a comment. Unbalanced parentheses report the line.
-
-    For a '(' never closed, the line reported is the first list still open when a '(' starts
-    a later line at or left of its column (in indented PDDL, the likely culprit), else the
-    innermost unclosed list.
-    """
-    stack, cols, suspect = [_Node(0)], [-1], None
-    for lineno, raw in enumerate(text.splitlines(), 1):
-        for match in _TOKEN.finditer(raw.split(";", 1)[0]):
-            tok = match.group()
-            if tok == "(":
-                if suspect is None and stack[-1].line < lineno and cols[-1] >= match.start():
-                    suspect = stack[-1].line
-                stack[-1].items.append(node := _Node(lineno))
-                stack.append(node)
-                cols.append(match.start())
-            elif tok == ")":
-                if len(stack) == 1:
-                    raise _fail(source, lineno, "unbalanced parentheses: ')' has no matching '('")
-                stack.pop()
-                cols.pop()
-            else:
-                stack[-1].items.append(tok)
-    if len(stack) > 1:
-        raise _fail(
-            source, suspect or stack[-1].line, "unbalanced parentheses: '(' is never closed"
-        )
-    return stack[0].items
-
-
-class _Parser:
-    """Shared helpers. `source` is named in every error; `predicates` None = syntax only."""
-
-    def __init__(self, source: str, predicates: Mapping[str, tuple[str, ...]] | None = None):
-        self.source = source
-        self.predicates = predicates
-
-    def fail(self, where: _Node | int | None, message: str) -> PddlError:
-        return _fail(self.source, where.line if isinstance(where, _Node) else where, message)
-
-    def sym(self, item: str | _Node, what: str) -> str:
-        if isinstance(item, _Node):
-            raise self.fail(item, f"expected {what}, got a parenthesised list")
-        return item.lower()
-
-    def node(self, item: str | _Node, line: int, what: str) -> _Node:
-        if not isinstance(item, _Node):
-            raise self.fail(line, f"expected {what}, got '{item}'")
-        return item
-
-    def define(self, text: str, kind: str) -> tuple[str, _Node]:
-        """Check ``(define (kind NAME) ...)``; return NAME and the define node."""
-        top = _read(text, self.source)
-        root = top[0] if len(top) == 1 and isinstance(top[0], _Node) else None
-        head = root.items[1] if root is not None and len(root.items) > 1 else None
-        if not (
-            root
-            and str(root.items[0]).lower() == "define"
-            and isinstance(head, _Node)
-            and len(head.items) == 2
-            and str(head.items[0]).lower() == kind
-        ):
-            raise self.fail(root, f"expected exactly one (define ({kind} NAME) ...)")
-        return self.sym(head.items[1], f"{kind} name"), root
-
-    def sections(self, root: _Node) -> Iterable[tuple[str, _Node]]:
-        for item in root.items[2:]:
-            sec = self.node(item, root.line, "a (:section ...)")
-            yield (self.sym(sec.items[0], "a section keyword") if sec.items else ""), sec
-
-    def typed_list(
-        self,
-        items: list[str | _Node],
-        line: int,
-        variables: bool,
-        types: Mapping[str, object] | None = None,
-    ) -> list[tuple[str, str]]:
-        """Parse ``a b - t c`` into [(a, t), (b, t), (c, object)]; check types if given."""
-        out: list[tuple[str, str]] = []
-        pending: list[str] = []
-        it = iter(items)
-        for item in it:
-            name = self.sym(item, "a name")
-            if name == "-":
-                typ = next(it, None)
-                if typ is None or isinstance(typ, _Node):
-                    raise self.fail(line, "'-' must be followed by a plain type name")
-                out += [(p, typ.lower()) for p in pending]
-                pending = []
-            elif variables != name.startswith("?"):
-                kind = "a variable ?x" if variables else "a name (not a variable)"
-                raise self.fail(line, f"expected {kind}, got '{name}'")
-            else:
-                pending.append(name)
-        out += [(p, "object") for p in pending]
-        for name, typ in out if types is not None else ():
-            if typ not in types:
-                raise self.fail(
-                    line, f"unknown type '{typ}' of '{name}'; declared: {', '.join(sorted(types))}"
-                )
-        return out
-
-    def literals(
-        self, item: str | _Node, line: int, ok: Iterable[str] | None, allow_eq: bool, what: str
-    ) -> list[Literal]:
-        """Parse a conjunction (``(and ...)``, ``()`` or a single literal)."""
-        node = self.node(item, line, what)
-        if not node.items:
-            return []
-        conj = node.items[1:] if str(node.items[0]).lower() == "and" else [node]
-        out = []
-        for x in conj:
-            lit = self.node(x, node.line, f"a literal in {what}")
-            neg = len(lit.items) == 2 and str(lit.items[0]).lower() == "not"
-            atom = self.node(lit.items[1], lit.line, f"an atom in {what}") if neg else lit
-            out.append(Literal(self.atom(atom, ok, allow_eq, what), not neg))
-        return out
-
-    def atom(self, node: _Node, ok: Iterable[str] | None, allow_eq: bool, what: str) -> Atom:
-        """Parse ``(pred arg ...)`` checking predicate, arity and that every arg is in `ok`."""
-        if not node.items:
-            raise self.fail(node, f"empty atom in {what}")
-        pred = self.sym(node.items[0], "a predicate")
-        if pred in _KEYWORDS or (pred == "=" and not allow_eq):
-            raise self.fail(
-                node,
-                f"unsupported '{pred}' in {what} (supported: a conjunction of "
-                f"atoms and (not atom){' and (= a b)' if allow_eq else ''})",
-            )
-        args = tuple(self.sym(x, "an argument") for x in node.items[1:])
-        if self.predicates is None and pred != "=":
-            return Atom(pred, args)
-        if pred != "=" and pred not in self.predicates:
-            raise self.fail(
-                node,
-                f"unknown predicate '{pred}' in {what}; "
-                f"declared: {', '.join(sorted(self.predicates))}",
-            )
-        arity = 2 if pred == "=" else len(self.predicates[pred])
-        if len(args) != arity:
-            raise self.fail(
-                node,
-                f"wrong arity for '{pred}' in {what}: expects {arity} argument(s), got {len(args)}",
-            )
-        bad = [a for a in args if ok is not None and a not in ok]
-        if bad:
-            kind = "variable" if bad[0].startswith("?") else "object"
-            raise self.fail(node, f"unknown {kind} '{bad[0]}' in {what}")
-        return Atom(pred, args)
 
 
 @lru_cache(maxsize=16)
 def cached_domain(text: str, source: str = "<string>") -> Domain:
     """`parse_domain`, remembered: a `Domain` is immutable, and planners parse the same
-    domain text on every call."""
-    return parse_domain(text, source)
+    domain text on every call; kept on disk too (`symbolic.store`), for the next process."""
+    try:
+        code = store.sources(__name__, Domain.__module__, Parser.__module__)
+        key = store.key_of(code, source, text)
+    except OSError:  # the parser's source cannot be read: no store
+        return parse_domain(text, source)
+    data = store.load("domain", key)
+    if data is not None:
+        try:
+            return store.decode_domain(data)
+        except store.UNREADABLE:
+            pass
+    domain = parse_domain(text, source)
+    store.save("domain", key, store.encode_domain(domain))
+    return domain
 
 
 def parse_domain(text: str, source: str = "<string>") -> Domain:
     """Parse domain text; `source` (usually the file path) is named in every error."""
     preds: dict[str, tuple[str, ...]] = {}
-    p = _Parser(source, preds)
+    p = Parser(source, preds)
     name, root = p.define(text, "domain")
     reqs: list[str] = []
     types: dict[str, str | None] = {"object": None}
@@ -288,7 +134,7 @@ def parse_domain(text: str, source: str = "<string>") -> Domain:
 
 
 def _parse_action(
-    p: _Parser, sec: _Node, types: Mapping[str, str | None], constants: Mapping[str, str]
+    p: Parser, sec: Node, types: Mapping[str, str | None], constants: Mapping[str, str]
 ) -> Action:
     name = p.sym(sec.items[1], "an action name") if len(sec.items) > 1 else ""
     rest = sec.items[2:]
@@ -300,30 +146,30 @@ def _parse_action(
             f"action '{name}': expected (:action NAME :parameters (...) "
             ":precondition (...) :effect (...))",
         )
-    pnode = p.node(fields.get(":parameters", _Node(sec.line)), sec.line, "a parameter list")
+    pnode = p.node(fields.get(":parameters", Node(sec.line)), sec.line, "a parameter list")
     params = p.typed_list(pnode.items, pnode.line, True, types)
     if len({v for v, _ in params}) != len(params):
         raise p.fail(pnode, f"action '{name}': duplicate parameter name")
     ok = {v for v, _ in params} | set(constants)
     pre = p.literals(
-        fields.get(":precondition", _Node(sec.line)),
+        fields.get(":precondition", Node(sec.line)),
         sec.line,
         ok,
         True,
         f"precondition of '{name}'",
     )
-    eff = fields.get(":effect", _Node(sec.line))
+    eff = fields.get(":effect", Node(sec.line))
     adds, dels, conds = _parse_effect(p, eff, sec.line, ok, f"effect of '{name}'", types)
     return Action(name, tuple(params), tuple(pre), tuple(adds), tuple(dels), tuple(conds))
 
 
-def _head(item: str | _Node) -> str:
-    return str(item.items[0]).lower() if isinstance(item, _Node) and item.items else ""
+def _head(item: str | Node) -> str:
+    return str(item.items[0]).lower() if isinstance(item, Node) and item.items else ""
 
 
 def _parse_effect(
-    p: _Parser,
-    item: str | _Node,
+    p: Parser,
+    item: str | Node,
     line: int,
     ok: set[str],
     what: str,
@@ -346,11 +192,11 @@ def _parse_effect(
 
 
 def _parse_cond_effect(
-    p: _Parser, node: _Node, ok: set[str], what: str, types: Mapping[str, str | None]
+    p: Parser, node: Node, ok: set[str], what: str, types: Mapping[str, str | None]
 ) -> CondEffect:
     """``(forall (?v - t ...) (when COND EFF))`` or ``(when COND EFF)``; see the module doc."""
     variables: list[tuple[str, str]] = []
-    body: str | _Node = node
+    body: str | Node = node
     if _head(node) == "forall":
         if len(node.items) != 3:
             raise p.fail(node, f"expected (forall (?v - type ...) (when ...)) in {what}")
@@ -367,7 +213,7 @@ def _parse_cond_effect(
             f"unsupported conditional effect in {what}: expected (forall (?v - type ...) "
             "(when CONDITION EFFECTS)) or (when CONDITION EFFECTS)",
         )
-    assert isinstance(body, _Node)
+    assert isinstance(body, Node)
     inner = ok | {v for v, _ in variables}
     cond = p.literals(body.items[1], body.line, inner, True, f"the condition of a when in {what}")
     effect = p.literals(body.items[2], body.line, inner, False, f"a when in {what}")
@@ -403,7 +249,7 @@ def _is_subtype(types: Mapping[str, str | None], sub: str, sup: str) -> bool:
 
 
 def _check_static_conditions(
-    p: _Parser, actions: Iterable[Action], lines: Mapping[str, int]
+    p: Parser, actions: Iterable[Action], lines: Mapping[str, int]
 ) -> None:
     """Conditions of conditional effects may use static predicates only (resolved when
     grounding); a fluent one raises `PddlError`."""
@@ -431,7 +277,7 @@ def _check_static_conditions(
 
 def parse_problem(text: str, source: str = "<string>", domain: Domain | None = None) -> Problem:
     """Parse problem text; with `domain`, also `check_problem` (errors give the line)."""
-    p = _Parser(source)
+    p = Parser(source)
     name, root = p.define(text, "problem")
     dom_name, objects, init, goal = "", {}, [], None
     lines: dict[object, int] = {}
@@ -471,7 +317,7 @@ def check_problem(
     `lines` optionally maps objects, init atoms and goal literals to their source line.
     """
     lines = lines or {}
-    p = _Parser(problem.source, domain.predicates)
+    p = Parser(problem.source, domain.predicates)
     if problem.domain_name and problem.domain_name != domain.name:
         raise p.fail(None, f"problem is for domain '{problem.domain_name}', not '{domain.name}'")
     for o, t in problem.objects.items():
@@ -483,11 +329,9 @@ def check_problem(
             )
     ok = set(domain.constants) | set(problem.objects)
     for a in sorted(problem.init, key=lambda a: (lines.get(a, 0), str(a))):
-        p.atom(_Node(lines.get(a, 0), [a.predicate, *a.args]), ok, False, "the initial state")
+        p.atom(Node(lines.get(a, 0), [a.predicate, *a.args]), ok, False, "the initial state")
     for lit in problem.goal:
-        p.atom(
-            _Node(lines.get(lit, 0), [lit.atom.predicate, *lit.atom.args]), ok, False, "the goal"
-        )
+        p.atom(Node(lines.get(lit, 0), [lit.atom.predicate, *lit.atom.args]), ok, False, "the goal")
 
 
 def parse_plan(text: str, source: str = "<string>") -> list[tuple[str, ...]]:
@@ -503,6 +347,6 @@ def parse_plan(text: str, source: str = "<string>") -> list[tuple[str, ...]]:
             continue
         match = _STEP.fullmatch(body)
         if match is None:
-            raise _fail(source, lineno, f"expected one '(action arg ...)' per line, got '{body}'")
+            raise fail(source, lineno, f"expected one '(action arg ...)' per line, got '{body}'")
         steps.append(tuple(match.group(1).lower().split()))
     return steps

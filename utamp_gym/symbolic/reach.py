@@ -14,25 +14,23 @@ Fast Downward's translator computes, specialised to our subset and fast enough t
 every planning call.
 
 Join orders come from the shapes of the literals alone (so one order suits every task);
-they are computed once per process and kept between calls. `Grounder` grounds tasks of one
-domain; `reachable_ops` grounds once with a fresh grounder. A `Deadline` is checked inside
-the joins.
+they are worked out once per domain and kept on disk (`symbolic.join_store`). `Grounder`
+grounds tasks of one domain; `reachable_ops` grounds once with a fresh grounder. A
+`Deadline` is checked inside the joins (`symbolic.joins`).
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Callable, Mapping
-from functools import lru_cache
-from operator import itemgetter
+from collections.abc import Mapping
 from typing import NamedTuple
 
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PddlError
-from utamp_gym.symbolic.pddl import Action, Atom, Domain, Literal, Problem
+from utamp_gym.symbolic.join_store import join_plans
+from utamp_gym.symbolic.joins import Context, Index, Join, run_join, variables
+from utamp_gym.symbolic.pddl import Action, Atom, Domain, Problem
 
-Tuple = tuple[str, ...]
-_CHECK_EVERY = 255  # join steps between two deadline checks (a mask: 2**k - 1)
 _CHECK_OPS = 31  # ground operators between two deadline checks (a mask: 2**k - 1)
 
 
@@ -46,68 +44,11 @@ class GroundOp(NamedTuple):
     delete: tuple[Atom, ...]
 
 
-Key = object  # a table key: () for no variable, the value for one, a tuple for several
-
-
-class _Index:
-    """Atoms of one predicate (argument tuples) with hash tables for lookups: a table holds
-    the tuples with given constants at some positions, keyed by the values at others. Tables
-    are built on first use and kept up to date as tuples are added."""
-
-    def __init__(self) -> None:
-        self.tuples: set[Tuple] = set()
-        self._tables: dict[tuple[object, ...], dict[Key, list[Tuple]]] = {}
-        self._specs: list[tuple[tuple[tuple[int, str], ...], Callable | None, dict]] = []
-
-    def add(self, args: Tuple) -> bool:
-        if args in self.tuples:
-            return False
-        self.tuples.add(args)
-        for consts, getter, table in self._specs:
-            for p, v in consts:
-                if args[p] != v:
-                    break
-            else:
-                table.setdefault(() if getter is None else getter(args), []).append(args)
-        return True
-
-    def lookup(
-        self, consts: tuple[tuple[int, str], ...], positions: tuple[int, ...]
-    ) -> dict[Key, list[Tuple]]:
-        """The tuples with `consts` (position, value), keyed by their values at `positions`."""
-        spec = (consts, positions)
-        table = self._tables.get(spec)
-        if table is None:
-            table = self._tables[spec] = {}
-            getter = itemgetter(*positions) if positions else None
-            self._specs.append((consts, getter, table))
-            for args in self.tuples:
-                for p, v in consts:
-                    if args[p] != v:
-                        break
-                else:
-                    table.setdefault(() if getter is None else getter(args), []).append(args)
-        return table
-
-
-def _variables(atom: Atom) -> list[str]:
-    return [a for a in atom.args if a[0] == "?"]
-
-
-class _Join(NamedTuple):
-    """A conjunction to enumerate: positive atoms, checks tested once their variables are bound
-    (static negative literals, equalities) and the variables of each result."""
-
-    positive: tuple[Atom, ...]
-    checks: tuple[Literal, ...]
-    variables: tuple[str, ...]
-
-
 class _Group(NamedTuple):
     """Connected positive static literals of a schema, joined once per task into the relation
     of the synthetic atom `atom` (predicate ``#action/k``, its variables as arguments)."""
 
-    join: _Join
+    join: Join
     atom: Atom
 
 
@@ -115,186 +56,10 @@ class _Schema(NamedTuple):
     action: Action
     types: Mapping[str, str]
     groups: tuple[_Group, ...]
-    main: _Join  # group atoms, then positive fluent literals; variables = the parameters
+    main: Join  # group atoms, then positive fluent literals; variables = the parameters
     fluent_positions: tuple[int, ...]  # indexes into `main.positive` of fluent literals
     pre: tuple[Atom, ...]  # positive fluent preconditions (templates)
     pre_neg: tuple[Atom, ...]  # negative fluent preconditions (templates)
-
-
-class _Step(NamedTuple):
-    """One literal of a join plan: look its tuples up in the table of its constants keyed by
-    the variables bound earlier (`getter` reads them from the binding) and bind the new
-    variables (`free`)."""
-
-    atom: Atom
-    use_delta: bool
-    checks: tuple[Literal, ...]  # checks whose variables are all bound after this step
-    consts: tuple[tuple[int, str], ...]  # (position, constant)
-    positions: tuple[int, ...]  # positions of variables bound before this step
-    getter: Callable[[Mapping[str, str]], Key] | None  # their values from the binding
-    free: tuple[tuple[int, str], ...]  # (position, variable) first bound here
-    repeats: tuple[tuple[int, int], ...]  # positions that must hold equal values (?x ... ?x)
-
-
-Plan = tuple[tuple[_Step, ...], tuple[Literal, ...], tuple[str, ...]]  # steps, late, unbound
-
-
-@lru_cache(maxsize=4096)
-def _plan(join: _Join, seed: int | None) -> Plan:
-    """A fixed join order from the literals' shapes alone (no statistics, so one order
-    serves every task of the domain): the seed (delta) literal first; then a literal whose
-    variables are all bound (a membership test), else a static group relation sharing a bound
-    variable (an exact filter), else the literal with the smallest share of free arguments
-    (then the fewest; static relations first). A pure function of hashable data, remembered
-    per process: every grounder of a domain shares its orders."""
-    shapes = [
-        (frozenset(_variables(a)), a.predicate[0] == "#", len(a.args), a) for a in join.positive
-    ]
-    remaining = list(range(len(join.positive)))
-    order: list[int] = []
-    bound: set[str] = set()
-
-    def score(i: int) -> tuple[float, int, bool]:
-        variables, is_group, arity, atom = shapes[i]
-        free = len(variables - bound)
-        known = sum(1 for a in atom.args if a[0] != "?" or a in bound)
-        return 1.0 - known / (arity or 1), free, not is_group
-
-    if seed is not None:
-        order.append(seed)
-        remaining.remove(seed)
-        bound |= shapes[seed][0]
-    while remaining:
-        tests = [i for i in remaining if shapes[i][0] <= bound]
-        connected = [i for i in remaining if shapes[i][1] and shapes[i][0] & bound]
-        best = min(tests or connected or remaining, key=score)
-        order.append(best)
-        remaining.remove(best)
-        bound |= shapes[best][0]
-    steps, done = [], set()
-    bound = set()
-    for i in order:
-        atom = join.positive[i]
-        consts = tuple((k, a) for k, a in enumerate(atom.args) if a[0] != "?")
-        known = [(k, a) for k, a in enumerate(atom.args) if a in bound]
-        first: dict[str, int] = {}
-        free, repeats = [], []
-        for k, a in enumerate(atom.args):
-            if a[0] != "?" or a in bound:
-                continue
-            if a in first:
-                repeats.append((first[a], k))
-            else:
-                first[a] = k
-                free.append((k, a))
-        bound |= set(_variables(atom))
-        ready = tuple(
-            c
-            for c in join.checks
-            if c not in done and all(a in bound or a[0] != "?" for a in c.atom.args)
-        )
-        done |= set(ready)
-        getter = itemgetter(*(a for _, a in known)) if known else None
-        steps.append(
-            _Step(
-                atom,
-                i == seed,
-                ready,
-                consts,
-                tuple(k for k, _ in known),
-                getter,
-                tuple(free),
-                tuple(repeats),
-            )
-        )
-    late = tuple(c for c in join.checks if c not in done)
-    return tuple(steps), late, tuple(v for v in join.variables if v not in bound)
-
-
-def _holds_static(lit: Literal, binding: Mapping[str, str], static: Mapping[str, _Index]) -> bool:
-    args = tuple(binding.get(a, a) for a in lit.atom.args)
-    if lit.atom.predicate == "=":
-        value = args[0] == args[1]
-    else:
-        idx = static.get(lit.atom.predicate)
-        value = idx is not None and args in idx.tuples
-    return value == lit.positive
-
-
-class _Context:
-    """What one grounding call joins against, and its deadline."""
-
-    def __init__(
-        self,
-        static: Mapping[str, _Index],
-        objects_of: Mapping[str, list[str]],
-        deadline: Deadline | None,
-    ):
-        self.static, self.objects_of, self.deadline = static, objects_of, deadline
-
-
-def _join(
-    plan: Plan,
-    types: Mapping[str, str],
-    ctx: _Context,
-    atoms: Mapping[str, _Index],
-    delta: Mapping[str, _Index],
-) -> list[dict[str, str]]:
-    """Bindings satisfying the positive atoms (the seed step over `delta`) and the checks;
-    variables no atom binds range over the objects of their type."""
-    steps, late, unbound = plan
-    static, deadline = ctx.static, ctx.deadline
-    binding: dict[str, str] = {}
-    out: list[dict[str, str]] = []
-    sources = []
-    for step in steps:
-        idx = (delta if step.use_delta else atoms).get(step.atom.predicate)
-        if idx is None:
-            return out
-        sources.append(idx)
-    tables: list[dict[Key, list[Tuple]] | None] = [None] * len(steps)  # fetched when reached
-    n_steps, ticks = len(steps), 0
-
-    def finish(j: int) -> None:
-        if j < len(unbound):
-            var = unbound[j]
-            for obj in ctx.objects_of[types[var]]:
-                binding[var] = obj
-                finish(j + 1)
-            binding.pop(var, None)
-        elif not late or all(_holds_static(c, binding, static) for c in late):
-            out.append(dict(binding))
-
-    def rec(k: int) -> None:
-        nonlocal ticks
-        if k == n_steps:
-            finish(0)
-            return
-        ticks += 1
-        if deadline is not None and not ticks & _CHECK_EVERY:
-            deadline.check("grounding")
-        step = steps[k]
-        table = tables[k]
-        if table is None:
-            table = tables[k] = sources[k].lookup(step.consts, step.positions)
-        getter = step.getter
-        matches = table.get(() if getter is None else getter(binding))
-        if not matches:
-            return
-        free, repeats, checks = step.free, step.repeats, step.checks
-        for tup in matches:
-            for pos, var in free:
-                binding[var] = tup[pos]
-            if repeats and any(tup[a] != tup[b] for a, b in repeats):
-                continue
-            if checks and not all(_holds_static(c, binding, static) for c in checks):
-                continue
-            rec(k + 1)
-        for _, var in free:
-            del binding[var]
-
-    rec(0)
-    return out
 
 
 def check_problem_atoms(domain: Domain, problem: Problem) -> None:
@@ -330,7 +95,7 @@ def _schema(action: Action, fluent: frozenset[str]) -> _Schema:
     # connected components of the static literals (literals sharing a variable)
     components: list[tuple[list[Atom], set[str]]] = []
     for atom in static:
-        vs = set(_variables(atom))
+        vs = set(variables(atom))
         touching = [c for c in components if c[1] & vs]
         merged = ([atom], set(vs))
         for c in touching:
@@ -341,13 +106,13 @@ def _schema(action: Action, fluent: frozenset[str]) -> _Schema:
     groups = []
     left = list(checks)
     for k, (lits, vs) in enumerate(components):
-        mine = [c for c in left if set(_variables(c.atom)) and set(_variables(c.atom)) <= vs]
+        mine = [c for c in left if set(variables(c.atom)) and set(variables(c.atom)) <= vs]
         left = [c for c in left if c not in mine]
-        order = tuple(dict.fromkeys(v for a in lits for v in _variables(a)))
-        join = _Join(tuple(lits), tuple(mine), order)
+        order = tuple(dict.fromkeys(v for a in lits for v in variables(a)))
+        join = Join(tuple(lits), tuple(mine), order)
         groups.append(_Group(join, Atom(f"#{action.name}/{k}", order)))
     fluent_pos = [lit.atom for lit in pre if lit.positive and lit.atom.predicate in fluent]
-    main = _Join(
+    main = Join(
         (*(g.atom for g in groups), *fluent_pos),
         tuple(left),
         tuple(v for v, _ in action.parameters),
@@ -380,11 +145,16 @@ class Grounder:
         self._conditions = domain.condition_predicates()
         self._schemas = tuple(_schema(a, self.fluent) for a in domain.actions.values())
         # join orders, computed once: per schema, one per static group and one per seed
+        wanted = [
+            *((g.join, None) for schema in self._schemas for g in schema.groups),
+            *((s.main, seed) for s in self._schemas for seed in (None, *s.fluent_positions)),
+        ]
+        plans = iter(join_plans(wanted))  # in the order of `wanted`
         self._group_plans = tuple(
-            tuple(_plan(g.join, None) for g in schema.groups) for schema in self._schemas
+            tuple(next(plans) for _ in schema.groups) for schema in self._schemas
         )
         self._main_plans = tuple(
-            {seed: _plan(schema.main, seed) for seed in (None, *schema.fluent_positions)}
+            {seed: next(plans) for seed in (None, *schema.fluent_positions)}
             for schema in self._schemas
         )
 
@@ -408,19 +178,19 @@ class Grounder:
             objects_of.setdefault(t, [])
         objects_of.setdefault("object", [n for n in (*domain.constants, *problem.objects)])
 
-        atoms: dict[str, _Index] = defaultdict(_Index)  # fluent atoms and group relations
-        static: dict[str, _Index] = defaultdict(_Index)
+        atoms: dict[str, Index] = defaultdict(Index)  # fluent atoms and group relations
+        static: dict[str, Index] = defaultdict(Index)
         for a in problem.init:
             (static if a.predicate not in fluent else atoms)[a.predicate].add(a.args)
         cond_facts = frozenset(a for a in problem.init if a.predicate in self._conditions)
-        ctx = _Context(static, objects_of, deadline)
+        ctx = Context(static, objects_of, deadline)
 
         live = []  # schemas whose static groups are all non-empty
         for s, schema in enumerate(self._schemas):
             for g, group in enumerate(schema.groups):
                 plan = self._group_plans[s][g]
-                rel = atoms[group.atom.predicate] = _Index()
-                for b in _join(plan, schema.types, ctx, static, {}):
+                rel = atoms[group.atom.predicate] = Index()
+                for b in run_join(plan, schema.types, ctx, static, {}):
                     rel.add(tuple(b[v] for v in group.join.variables))
                 if not rel.tuples:
                     break
@@ -428,16 +198,16 @@ class Grounder:
                 live.append((s, schema))
 
         ops: dict[str, GroundOp] = {}
-        delta: dict[str, _Index] | None = None  # None: first round, join over everything
+        delta: dict[str, Index] | None = None  # None: first round, join over everything
         while delta is None or delta:
-            new: dict[str, _Index] = defaultdict(_Index)
+            new: dict[str, Index] = defaultdict(Index)
             for s, schema in live:
                 act = schema.action
                 for seed in (None,) if delta is None else schema.fluent_positions:
                     if seed is not None and schema.main.positive[seed].predicate not in delta:
                         continue
                     plan = self._main_plans[s][seed]
-                    for b in _join(plan, schema.types, ctx, atoms, delta or {}):
+                    for b in run_join(plan, schema.types, ctx, atoms, delta or {}):
                         name = " ".join((act.name, *map(b.__getitem__, schema.main.variables)))
                         if name in ops:
                             continue
