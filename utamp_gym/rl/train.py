@@ -56,6 +56,9 @@ if TYPE_CHECKING:
     from utamp_gym.distributed import Executor
 
 GROUNDINGS = ("symbolic", "physics")
+#: PPO epochs per rollout of the slot policy: the update is most of its training time, and 4
+#: epochs learn as much per env step as 10 did (benchmarks/train_speed_learning.py)
+OBJECTS_EPOCHS = 4
 #: what `train` trains: the RL algorithms, and behaviour cloning from demonstrations
 TRAIN_ALGOS = (*ALGOS, "bc")
 
@@ -161,8 +164,8 @@ def default_hyperparams(algo: str, n_envs: int, interface: str = "grounded") -> 
         }  # fmt: skip
     return {
         "learning_rate": 3e-4, "n_steps": max(16, 1024 // n_envs), "batch_size": 256,
-        "n_epochs": 10, "gamma": 0.99, "gae_lambda": 0.95, "ent_coef": 0.01,
-        "policy_kwargs": net,
+        "n_epochs": OBJECTS_EPOCHS if objects else 10, "gamma": 0.99, "gae_lambda": 0.95,
+        "ent_coef": 0.01, "policy_kwargs": net,
     }  # fmt: skip
 
 
