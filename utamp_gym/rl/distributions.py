@@ -8,7 +8,8 @@ masked, one ``logsumexp`` of a 256-row minibatch takes ~20 ms instead of ~1.5 ms
 ``benchmarks/train_speed.py``). `MaskedCategorical` is the same distribution (same
 probabilities, log-probabilities, entropy and gradients, up to float rounding) normalised
 once, with ``log_softmax``, whose kernel has no such slow path; argument validation is off
-(actions come from the policy itself); samples are drawn by the Gumbel-max trick. The policies select it with `use_fast_masked`.
+(actions come from the policy itself); samples are drawn by the Gumbel-max trick. The
+policies select it with `use_fast_masked`.
 """
 
 from __future__ import annotations
