@@ -132,7 +132,7 @@ def main() -> None:
 
     from utamp_gym.data.record import dataset_id
     from utamp_gym.distributed import LocalExecutor
-    from utamp_gym.rl.train import train_seeds
+    from utamp_gym.rl.seeds import train_seeds
 
     out, docs = Path(args.out), Path(args.docs)
     load_at_start = load()

@@ -18,11 +18,11 @@ from sb3_contrib.common.maskable.distributions import MaskableCategorical
 from utamp_gym.cli import main
 from utamp_gym.env.objects import N_ACTIONS, N_ENTITIES, observation_space
 from utamp_gym.rl import slots
+from utamp_gym.rl.config import TrainConfig
 from utamp_gym.rl.distributions import MaskedCategorical
 from utamp_gym.rl.envs import OBJECT_OBS_KEYS, default_interface, make_vec_env
 from utamp_gym.rl.harness import shares_actions
 from utamp_gym.rl.saved import ModelError, ModelMeta, check_model
-from utamp_gym.rl.train import TrainConfig
 
 
 def test_masked_categorical_is_sb3_contribs_distribution() -> None:

@@ -42,10 +42,6 @@ from utamp_gym.rl.policies import _TrainedKeys
 from utamp_gym.scene.geometry import PARTS, SIDES
 
 D_MODEL = 64  # the width of a slot policy saved without ``features_extractor_kwargs``
-#: the width `utamp train` builds (`train_policy_kwargs`): half of `D_MODEL` trains the
-#: objects interface several times faster per env step (benchmarks/train_speed.py) and learns
-#: as much per env step (benchmarks/train_speed_learning.py)
-TRAIN_D_MODEL = 32
 N_HEADS = 4
 N_LAYERS = 2
 _K, _R, _S, _M, _G = MAX_OBJECTS, MAX_REGIONS, MAX_SPACES, MAX_MEMBERS, len(GRASPS)
@@ -239,12 +235,6 @@ class _Value(nn.Module):
 
     def forward(self, features: th.Tensor) -> th.Tensor:
         return self.net(_split(features, self.d)[1])
-
-
-def train_policy_kwargs() -> dict[str, Any]:
-    """The slot policy's ``policy_kwargs`` for `utamp train` (saved with the model, so it
-    loads at the width it was trained with)."""
-    return {"features_extractor_kwargs": {"d_model": TRAIN_D_MODEL}, "head": "pointer"}
 
 
 class SlotPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
