@@ -105,6 +105,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--demos", type=int, default=300, help="planner episodes for BC")
     p.add_argument("--bc-epochs", type=int, default=30)
     p.add_argument("--eval-every", type=int, default=4_096)
+    p.add_argument(
+        "--plateau",
+        type=float,
+        default=None,
+        help="stop a MaskablePPO seed once the last 20 %% of its curve gains less than this "
+        "(e.g. 0.02; utamp_gym.rl.callbacks.plateaued)",
+    )
     p.add_argument("--workers", type=int, default=0, help="evaluation worker processes")
     p.add_argument("--limit", type=int, default=None, help="scenes per split (smoke runs)")
     p.add_argument("--train-workers", type=int, default=0, help="seeds trained in parallel")
@@ -147,7 +154,8 @@ def main() -> None:
     start = time.perf_counter()
     if args.only in (None, "ppo"):
         ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
-                          steps=args.ppo_steps, eval_every=args.eval_every, **common)  # fmt: skip
+                          steps=args.ppo_steps, eval_every=args.eval_every,
+                          stop_at_plateau=args.plateau, **common)  # fmt: skip
         runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
         if args.only:
             return
@@ -161,7 +169,8 @@ def main() -> None:
         init = out / "bc" / f"seed_{s}" / "model.zip"
         ft_aggs.append(train_seeds(1, seed=s, out=out / "ft" / f"from_bc_{s}",
                                    algo="maskable-ppo", steps=args.ft_steps, init_from=str(init),
-                                   eval_every=max(1, args.ft_steps // 3), **ft_common))  # fmt: skip
+                                   eval_every=min(args.eval_every, max(1, args.ft_steps // 3)),
+                                   stop_at_plateau=args.plateau, **ft_common))  # fmt: skip
     runs["BC, then MaskablePPO fine-tuning"] = {"dir": out / "ft", "aggs": ft_aggs}
     if args.only:
         return
@@ -256,8 +265,8 @@ def write(table: dict[str, Any], docs: Path) -> None:
             f"{s} (`{table['splits'][s]}`, {ceiling[s][0]}/{ceiling[s][1]} achievable)"
             for s in splits_
         )
-        + " | gap train − test (mean) | steps / seed | wall s / seed |",
-        "|---" * (len(splits_) + 5) + "|",
+        + " | gap train − test (mean) | steps / seed | wall s / seed | curve flat / seed |",
+        "|---" * (len(splits_) + 6) + "|",
     ]
     curves = {}
     for label, m in table["methods"].items():
@@ -265,7 +274,7 @@ def write(table: dict[str, Any], docs: Path) -> None:
             cells = [f"{m['success'][s]['rate']:.2f} (n={m['success'][s]['n']})" for s in splits_]
             gaps = [m["success"][train]["rate"] - m["success"][s]["rate"] for s in splits_[1:]]
             lines.append(f"| {label} | – | " + " | ".join(cells)
-                         + f" | {statistics.fmean(gaps):+.2f} | – | – |")  # fmt: skip
+                         + f" | {statistics.fmean(gaps):+.2f} | – | – | – |")  # fmt: skip
             continue
         seeds = m["per_seed"]
         cells, means = [], {}
@@ -281,12 +290,20 @@ def write(table: dict[str, Any], docs: Path) -> None:
         gaps = [means[train] - means[s] for s in splits_[1:]]
         steps = "/".join(str(p["steps"]) for p in seeds)
         wall = "/".join(f"{p['wall_time_s']:.0f}" for p in seeds)
+        flat = "/".join(flat_curve(p["curve"]) for p in seeds)
+        gap = statistics.fmean(gaps)
         lines.append(f"| {label} | {len(seeds)} | " + " | ".join(cells)
-                     + f" | {statistics.fmean(gaps):+.2f} | {steps} | {wall} |")  # fmt: skip
+                     + f" | {gap:+.2f} | {steps} | {wall} | {flat} |")  # fmt: skip
         curves[label] = [p["curve"] for p in seeds]
     train_wall = sum(p["wall_time_s"] for m in table["methods"].values()
                      for p in m.get("per_seed", []))  # fmt: skip
     lines += ["", budgets(table), ""]
+    lines += [
+        "Curve flat: the last 20 % of a seed's evaluation curve on the training split gained less "
+        "than 0.02 success (running mean of three evaluations; `utamp_gym.rl.callbacks."
+        "plateaued`, at least 10 evaluations); BC's curve counts demonstration samples.",
+        "",
+    ]
     lines += [
         f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes "
         f"({table['demos'].get('left_out', 0)} more left out: no plan, the goal unreachable), "
@@ -309,6 +326,13 @@ def write(table: dict[str, Any], docs: Path) -> None:
         docs / "agents_learning_curves.png",
         f"evaluation success on {table['splits'][train]} during training",
     )
+
+
+def flat_curve(curve: list[dict[str, Any]]) -> str:
+    """Whether the last 20 % of a curve gained less than 0.02 (`plateaued`): "yes" or "no"."""
+    from utamp_gym.rl.callbacks import EvalPoint, plateaued
+
+    return "yes" if plateaued([EvalPoint(**p) for p in curve], 0.02) else "no"
 
 
 def budgets(table: dict[str, Any]) -> str:

@@ -211,3 +211,23 @@ def test_a_stored_universe_is_the_grounded_one(tmp_path: Path, monkeypatch) -> N
     assert universe_store.load(key) is not None
     monkeypatch.setenv("UTAMP_UNIVERSE_CACHE", "0")
     assert universe_store.path_of(key) is None
+
+
+def _curve(rates: list[float], every: int = 1000) -> list:
+    from utamp_gym.rl.callbacks import EvalPoint
+
+    return [EvalPoint((i + 1) * every, 0.0, r, 0.0, 0, "") for i, r in enumerate(rates)]
+
+
+def test_a_curve_is_flat_only_when_its_last_fifth_gains_little() -> None:
+    from utamp_gym.rl.callbacks import plateaued
+
+    rising = [0.05 * i for i in range(12)]
+    assert not plateaued(_curve(rising))
+    flat = [0.05 * i for i in range(6)] + [0.3] * 10  # steady for the last 10 of 16
+    assert plateaued(_curve(flat))
+    assert not plateaued(_curve([0.3] * 9))  # too few evaluations to tell
+    # one lucky evaluation at the end does not count as a gain: three are averaged
+    assert plateaued(_curve([0.3] * 12 + [0.33]))
+    assert not plateaued(_curve([0.3] * 12 + [0.4, 0.4, 0.4]))
+    assert not plateaued(_curve(flat), min_gain=-1.0)  # nothing gains less than -1

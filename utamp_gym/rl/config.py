@@ -47,7 +47,9 @@ class TrainConfig:
     `interface` is the env option (``objects``: MaskablePPO with `utamp_gym.rl.slots.SlotPolicy`
     over all of the objects interface's entries; ``""``: the env's own, `default_interface`);
     `init_from` is a model zip whose policy weights the run starts from (fine-tuning a
-    behaviour-cloned policy).
+    behaviour-cloned policy); `stop_at_plateau` (a success gain, e.g. 0.02) stops training at
+    the first evaluation where the last 20 % of the curve gained less
+    (`utamp_gym.rl.callbacks.plateaued`).
     """
 
     env_id: str = "UTampKitchen-v0"
@@ -63,6 +65,7 @@ class TrainConfig:
     eval_masks: bool = True
     target_success: float = 0.9
     stop_at_target: bool = False
+    stop_at_plateau: float | None = None
     reward_shaping: bool = True
     terminate_on_failure: bool = False
     obs_keys: tuple[str, ...] = DEFAULT_OBS_KEYS
