@@ -20,7 +20,8 @@ train on ``train``; ``test-instances`` has new instances of the training familie
 training scene).
 
     python benchmarks/agents.py [--seeds 3] [--ppo-steps 24576] [--ft-steps 4096]
-        [--demos 300] [--bc-epochs 30] [--eval-every 4096] [--out runs/agents]
+        [--demos 300] [--bc-epochs 30] [--eval-every 4096] [--plateau GAIN] [--time-limit S]
+        [--train-workers N [--executor local|ray]] [--out runs/agents]
         [--docs docs/results] [--only ppo|imitation] [--workers N]
 
 The defaults are the budgets of docs/results/agents.md.
@@ -31,6 +32,7 @@ Runs resume: a finished seed (same configuration) and finished evaluation rows a
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -115,6 +117,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=0, help="evaluation worker processes")
     p.add_argument("--limit", type=int, default=None, help="scenes per split (smoke runs)")
     p.add_argument("--train-workers", type=int, default=0, help="seeds trained in parallel")
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        help="stop a MaskablePPO seed at its first evaluation after this many training seconds "
+        "(the steps it reached are recorded)",
+    )
+    p.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="what trains the seeds in parallel with --train-workers: local processes or Ray "
+        "tasks (utamp train --executor)",
+    )
     p.add_argument("--out", default="runs/agents")
     p.add_argument("--docs", default="docs/results")
     p.add_argument(
@@ -138,7 +154,7 @@ def main() -> None:
         return
 
     from utamp_gym.data.record import dataset_id
-    from utamp_gym.distributed import LocalExecutor
+    from utamp_gym.distributed import make_executor
     from utamp_gym.rl.seeds import train_seeds
 
     out, docs = Path(args.out), Path(args.docs)
@@ -148,14 +164,15 @@ def main() -> None:
     common = {"env_id": env_id, "masks": "geometric", "interface": "objects",
               "eval_episodes": 30, "progress": False, **env_opts}  # fmt: skip
     if args.train_workers:
-        common["executor"] = LocalExecutor(args.train_workers)
+        common["executor"] = make_executor(args.executor, workers=args.train_workers)
     runs: dict[str, dict[str, Any]] = {}
 
     start = time.perf_counter()
     if args.only in (None, "ppo"):
         ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
                           steps=args.ppo_steps, eval_every=args.eval_every,
-                          stop_at_plateau=args.plateau, **common)  # fmt: skip
+                          stop_at_plateau=args.plateau, time_limit_s=args.time_limit,
+                          **common)  # fmt: skip
         runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
         if args.only:
             return
@@ -163,14 +180,11 @@ def main() -> None:
     bc = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=demo["path"],
                      hyperparams={"epochs": args.bc_epochs}, **common)  # fmt: skip
     runs[f"BC from {demo['episodes']} planner episodes"] = {"dir": out / "bc", "agg": bc}
-    ft_aggs = []
-    ft_common = {k: v for k, v in common.items() if k != "executor"}
-    for s in range(args.seeds):  # each fine-tuning seed starts from the BC seed of its number
-        init = out / "bc" / f"seed_{s}" / "model.zip"
-        ft_aggs.append(train_seeds(1, seed=s, out=out / "ft" / f"from_bc_{s}",
-                                   algo="maskable-ppo", steps=args.ft_steps, init_from=str(init),
-                                   eval_every=min(args.eval_every, max(1, args.ft_steps // 3)),
-                                   stop_at_plateau=args.plateau, **ft_common))  # fmt: skip
+    ft_kwargs = {"algo": "maskable-ppo", "steps": args.ft_steps,
+                 "eval_every": min(args.eval_every, max(1, args.ft_steps // 3)),
+                 "stop_at_plateau": args.plateau, "time_limit_s": args.time_limit,
+                 **{k: v for k, v in common.items() if k != "executor"}}  # fmt: skip
+    ft_aggs = fine_tune(args.seeds, out, ft_kwargs, common.get("executor"))
     runs["BC, then MaskablePPO fine-tuning"] = {"dir": out / "ft", "aggs": ft_aggs}
     if args.only:
         return
@@ -223,6 +237,30 @@ def main() -> None:
     table["total_wall_time_s"] = round(time.perf_counter() - start, 1)
     table["training_wall_time_s"] = round(train_wall, 1)
     write(table, docs)
+
+
+def _fine_tune_seed(seed: int, *, out: str, kwargs: dict[str, Any]) -> tuple[int, Any]:
+    """Fine-tune the BC model of `seed` (``out/bc/seed_<s>``) into ``out/ft/from_bc_<s>``."""
+    from utamp_gym.rl.seeds import train_seeds
+
+    init = Path(out) / "bc" / f"seed_{seed}" / "model.zip"
+    return seed, train_seeds(1, seed=seed, out=Path(out) / "ft" / f"from_bc_{seed}",
+                             init_from=str(init), **kwargs)  # fmt: skip
+
+
+def fine_tune(seeds: int, out: Path, kwargs: dict[str, Any], executor: Any) -> list[Any]:
+    """Each fine-tuning seed from the BC seed of its number: one after another, or as the
+    executor's parallel tasks (a finished seed is reused either way)."""
+    task = functools.partial(_fine_tune_seed, out=str(out), kwargs=kwargs)
+    if executor is None:
+        return [task(s)[1] for s in range(seeds)]
+    done: dict[int, Any] = {}
+    executor.run(task, list(range(seeds)), lambda item: done.__setitem__(*item),
+                 lambda s, reason: (s, reason))  # fmt: skip
+    failed = {s: r for s, r in done.items() if isinstance(r, str)}
+    if failed:
+        raise RuntimeError(f"fine-tuning failed: {failed}")
+    return [done[s] for s in range(seeds)]
 
 
 def record_or_reuse_demos(suite: str, episodes: int, root: Path) -> dict[str, Any]:

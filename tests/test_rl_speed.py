@@ -231,3 +231,17 @@ def test_a_curve_is_flat_only_when_its_last_fifth_gains_little() -> None:
     assert plateaued(_curve([0.3] * 12 + [0.33]))
     assert not plateaued(_curve([0.3] * 12 + [0.4, 0.4, 0.4]))
     assert not plateaued(_curve(flat), min_gain=-1.0)  # nothing gains less than -1
+
+
+def test_masked_categorical_samples_its_probabilities_and_never_a_masked_action() -> None:
+    th.manual_seed(0)
+    raw = th.randn(3, 60) * 2
+    masks = th.rand(3, 60) < 0.3
+    masks[:, 3] = True
+    masks[0, 0], masks[1, 59] = False, True  # a masked first action; a shown last one
+    d = MaskedCategorical(raw, masks)
+    draws = d.sample(th.Size([40_000]))
+    assert draws.shape == (40_000, 3) and d.sample().shape == (3,)
+    freq = th.stack([th.bincount(draws[:, i], minlength=60).float() / 40_000 for i in range(3)])
+    assert bool((freq[~masks] == 0).all())
+    assert float((freq - d.probs).abs().max()) < 0.015

@@ -66,7 +66,8 @@ class PeriodicEval(BaseCallback):
     to ``out/checkpoints/step_<n>.zip``, written by ``save(model, path)`` (default
     ``model.save``). With `stop_at` set, training stops at the first evaluation whose success
     rate reaches it; with `plateau` set, at the first evaluation where the curve has flattened
-    (`plateaued`).
+    (`plateaued`); with `time_limit_s` set, at the first evaluation after that much training
+    time (evaluations left out).
     """
 
     def __init__(
@@ -79,12 +80,14 @@ class PeriodicEval(BaseCallback):
         masks: bool = True,
         stop_at: float | None = None,
         plateau: float | None = None,
+        time_limit_s: float | None = None,
         save: Callable[[Any, Path], None] | None = None,
     ) -> None:
         super().__init__()
         self.env, self.episodes, self.out, self.every = env, episodes, out, max(1, every)
         self.save = save
         self.masks, self.stop_at, self.plateau = masks, stop_at, plateau
+        self.time_limit_s = time_limit_s
         self.points: list[EvalPoint] = []
         self._start = time.perf_counter()
         self._next = self.every
@@ -105,6 +108,8 @@ class PeriodicEval(BaseCallback):
         self._next = (self.num_timesteps // self.every + 1) * self.every
         point = self.evaluate()
         if self.plateau is not None and plateaued(self.points, self.plateau):
+            return False
+        if self.time_limit_s is not None and point.wall_time_s >= self.time_limit_s:
             return False
         return self.stop_at is None or point.success_rate < self.stop_at
 

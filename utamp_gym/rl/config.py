@@ -31,9 +31,9 @@ def slot_policy_kwargs() -> dict[str, Any]:
 
 
 GROUNDINGS = ("symbolic", "physics")
-#: PPO epochs per rollout of the slot policy: the update is most of its training time, and 4
-#: epochs learn as much per env step as 10 did (benchmarks/train_speed_learning.py)
-OBJECTS_EPOCHS = 4
+#: PPO epochs per rollout of the slot policy: the update is most of its training time, and 3
+#: epochs learn within the interval of 10 per env step (benchmarks/train_speed_learning.py)
+OBJECTS_EPOCHS = 3
 #: what `train` trains: the RL algorithms, and behaviour cloning from demonstrations
 TRAIN_ALGOS = (*ALGOS, "bc")
 
@@ -49,7 +49,8 @@ class TrainConfig:
     `init_from` is a model zip whose policy weights the run starts from (fine-tuning a
     behaviour-cloned policy); `stop_at_plateau` (a success gain, e.g. 0.02) stops training at
     the first evaluation where the last 20 % of the curve gained less
-    (`utamp_gym.rl.callbacks.plateaued`).
+    (`utamp_gym.rl.callbacks.plateaued`); `time_limit_s` stops it at the first evaluation after
+    that much training time (a budget on a shared machine; the steps reached are recorded).
     """
 
     env_id: str = "UTampKitchen-v0"
@@ -66,6 +67,7 @@ class TrainConfig:
     target_success: float = 0.9
     stop_at_target: bool = False
     stop_at_plateau: float | None = None
+    time_limit_s: float | None = None
     reward_shaping: bool = True
     terminate_on_failure: bool = False
     obs_keys: tuple[str, ...] = DEFAULT_OBS_KEYS

@@ -113,7 +113,7 @@ def train(
     evaluator = PeriodicEval(
         eval_env, eval_episodes_of(config), out, eval_every, save=save,
         masks=config.eval_masks, stop_at=config.target_success if config.stop_at_target else None,
-        plateau=config.stop_at_plateau,
+        plateau=config.stop_at_plateau, time_limit_s=config.time_limit_s,
     )  # fmt: skip
     callbacks: list[Any] = [evaluator]
     if progress:
