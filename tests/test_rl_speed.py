@@ -245,3 +245,28 @@ def test_masked_categorical_samples_its_probabilities_and_never_a_masked_action(
     freq = th.stack([th.bincount(draws[:, i], minlength=60).float() / 40_000 for i in range(3)])
     assert bool((freq[~masks] == 0).all())
     assert float((freq - d.probs).abs().max()) < 0.015
+
+
+def test_the_slot_head_is_saved_with_the_model_and_old_models_keep_theirs(tmp_path: Path) -> None:
+    """`utamp train` saves the pointer head's keyword with the model; a model saved without
+    one (before the pointer head) loads with the pair head it was trained with."""
+    from sb3_contrib import MaskablePPO
+
+    from utamp_gym.rl.config import slot_policy_kwargs
+
+    vec = make_vec_env("UTampKitchenProcedural-v0", 1, seed=0, obs_keys=OBJECT_OBS_KEYS,
+                       masks="geometric", interface="objects")  # fmt: skip
+    for kwargs, head in (({}, slots.SlotActionHead), (slot_policy_kwargs(), slots.SlotPointerHead)):
+        model = MaskablePPO(slots.SlotPolicy, vec, n_steps=16, policy_kwargs=kwargs)
+        assert type(model.policy.action_net) is head
+        model.save(tmp_path / "m.zip")
+        loaded = MaskablePPO.load(tmp_path / "m.zip", device="cpu")
+        assert type(loaded.policy.action_net) is head
+        obs = vec.reset()
+        want = model.policy.state_dict()
+        assert all(th.equal(v, loaded.policy.state_dict()[k]) for k, v in want.items())
+        action, _ = loaded.predict(obs, action_masks=np.stack(vec.env_method("action_masks")))
+        assert vec.env_method("action_masks")[0][int(action[0])]
+    with pytest.raises(ValueError, match="unknown slot head 'flat'"):
+        MaskablePPO(slots.SlotPolicy, vec, policy_kwargs={"head": "flat"})
+    vec.close()
