@@ -125,6 +125,12 @@ def build_parser() -> argparse.ArgumentParser:
         "(the steps it reached are recorded)",
     )
     p.add_argument(
+        "--ft-time-limit",
+        type=float,
+        default=None,
+        help="--time-limit for the fine-tuning seeds (default: --time-limit)",
+    )
+    p.add_argument(
         "--executor",
         choices=("local", "ray"),
         default="local",
@@ -192,7 +198,8 @@ def main() -> None:
     runs[f"BC from {demo['episodes']} planner episodes"] = {"dir": out / "bc", "agg": bc}
     ft_kwargs = {"algo": "maskable-ppo", "steps": args.ft_steps,
                  "eval_every": min(args.eval_every, max(1, args.ft_steps // 3)),
-                 "stop_at_plateau": args.plateau, "time_limit_s": args.time_limit,
+                 "stop_at_plateau": args.plateau,
+                 "time_limit_s": args.ft_time_limit or args.time_limit,
                  **{k: v for k, v in common.items() if k != "executor"}}  # fmt: skip
     ft_aggs = fine_tune(args.seeds, out, ft_kwargs, common.get("executor"))
     runs["BC, then MaskablePPO fine-tuning"] = {"dir": out / "ft", "aggs": ft_aggs}
