@@ -149,13 +149,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--rewrite", action="store_true", help="only rewrite the docs from the measured agents.json"
     )
-    p.add_argument(
-        "--training-summary",
-        action="store_true",
-        help="only summarise the finished training runs under --out (steps reached, stop "
-        "reason, curve flat, training-split evaluation during training) into "
-        "<docs>/agents_training.{md,json} and agents_training_curves.png; no split evaluation",
-    )
     return p
 
 
@@ -164,9 +157,6 @@ def main() -> None:
     commit()  # the provenance of what this run writes: the code as it is now
     if args.rewrite:
         write(json.loads((Path(args.docs) / "agents.json").read_text()), Path(args.docs))
-        return
-    if args.training_summary:
-        training_summary(Path(args.out), Path(args.docs), args)
         return
 
     from utamp_gym.data.record import dataset_id
@@ -381,71 +371,6 @@ def write(table: dict[str, Any], docs: Path) -> None:
         docs / "agents_learning_curves.png",
         f"evaluation success on {table['splits'][train]} during training",
     )
-
-
-#: the training runs of each learned row under --out (train.json of every finished seed)
-ROW_RUNS = {"MaskablePPO, slot transformer": "ppo/seed_*", "BC": "bc/seed_*",
-            "BC, then MaskablePPO fine-tuning": "ft/from_bc_*/seed_*"}  # fmt: skip
-
-
-def training_summary(out: Path, docs: Path, args: argparse.Namespace) -> None:
-    """``agents_training.{md,json}`` and ``agents_training_curves.png`` from the finished
-    training runs under `out` (see ``--training-summary``)."""
-    from utamp_gym.rl.callbacks import plot_learning_curves
-
-    docs.mkdir(parents=True, exist_ok=True)
-    rows, curves = [], {}
-    for label, pattern in ROW_RUNS.items():
-        for run in sorted(out.glob(pattern)):
-            if not (run / "train.json").is_file():
-                continue
-            r = json.loads((run / "train.json").read_text())
-            c = r["config"]
-            flat = flat_curve(r["curve"]) == "yes"
-            budget = c["steps"]
-            limit = c.get("time_limit_s")
-            if c["algo"] == "bc":
-                why = f"{r['hyperparams'].get('epochs')} epochs"
-            elif r["steps"] >= budget:
-                why = "step budget"
-            elif flat and c.get("stop_at_plateau") is not None:
-                why = "curve flat"
-            else:
-                why = f"time limit ({limit:.0f} s training)" if limit else "stopped"
-            rows.append({"row": label, "seed": c["seed"], "run": str(run), "steps": r["steps"],
-                         "budget": budget, "stopped_by": why, "curve_flat": flat,
-                         "final_success": r["final_success"],
-                         "best_success": max(p["success_rate"] for p in r["curve"]),
-                         "train_time_s": r["train_time_s"], "wall_time_s": r["wall_time_s"],
-                         "curve": r["curve"]})  # fmt: skip
-            curves.setdefault(label, []).append(r["curve"])
-    lines = [
-        "| row | seed | steps reached | budget | stopped by | curve flat (last 20 % gains "
-        "< 0.02) | training-split success at the end (30 episodes) | best | training s | "
-        "wall s |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['row']} | {r['seed']} | {r['steps']:,} "
-            f"| {'–' if r['row'] == 'BC' else format(r['budget'], ',')} | {r['stopped_by']} "
-            f"| {'yes' if r['curve_flat'] else 'no'} | {r['final_success']:.2f} "
-            f"| {r['best_success']:.2f} | {r['train_time_s']:.0f} | {r['wall_time_s']:.0f} |"
-        )
-    lines += [
-        "",
-        "Training runs only: the success column is the evaluation during training (30 fixed "
-        "episodes of the training split, deterministic masked policy); the four splits are "
-        "evaluated by the full run (`docs/results/agents.md`). BC's steps are demonstration "
-        f"steps. Run folder `{out}`; shared 2-core machine, runs niced, load average "
-        f"{load()} when this summary was written.",
-    ]
-    data = {"rows": rows, "load_average": load(), "out": str(out)}
-    prov = write_json(docs / "agents_training.json", data, indent=1, default=str)
-    write_markdown(docs / "agents_training.md", "\n".join(lines) + "\n", prov)
-    plot_learning_curves(curves, docs / "agents_training_curves.png",
-                         "evaluation success on procedural-v1/train during training")  # fmt: skip
-    print("\n".join(lines))
 
 
 def flat_curve(curve: list[dict[str, Any]]) -> str:
