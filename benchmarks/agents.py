@@ -20,7 +20,8 @@ train on ``train``; ``test-instances`` has new instances of the training familie
 training scene).
 
     python benchmarks/agents.py [--seeds 3] [--ppo-steps 24576] [--ft-steps 4096]
-        [--demos 300] [--bc-epochs 30] [--eval-every 4096] [--out runs/agents]
+        [--demos 300] [--bc-epochs 30] [--eval-every 4096] [--plateau GAIN] [--time-limit S]
+        [--train-workers N [--executor local|ray]] [--out runs/agents]
         [--docs docs/results] [--only ppo|imitation] [--workers N]
 
 The defaults are the budgets of docs/results/agents.md.
@@ -31,6 +32,7 @@ Runs resume: a finished seed (same configuration) and finished evaluation rows a
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import statistics
 import time
@@ -92,9 +94,36 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--demos", type=int, default=300, help="planner episodes for BC")
     p.add_argument("--bc-epochs", type=int, default=30)
     p.add_argument("--eval-every", type=int, default=4_096)
+    p.add_argument(
+        "--plateau",
+        type=float,
+        default=None,
+        help="stop a MaskablePPO seed once the last 20 %% of its curve gains less than this "
+        "(e.g. 0.02; utamp_gym.rl.callbacks.plateaued)",
+    )
     p.add_argument("--workers", type=int, default=0, help="evaluation worker processes")
     p.add_argument("--limit", type=int, default=None, help="scenes per split (smoke runs)")
     p.add_argument("--train-workers", type=int, default=0, help="seeds trained in parallel")
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        help="stop a MaskablePPO seed at its first evaluation after this many training seconds "
+        "(the steps it reached are recorded)",
+    )
+    p.add_argument(
+        "--ft-time-limit",
+        type=float,
+        default=None,
+        help="--time-limit for the fine-tuning seeds (default: --time-limit)",
+    )
+    p.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="what trains the seeds in parallel with --train-workers: local processes or Ray "
+        "tasks (utamp train --executor)",
+    )
     p.add_argument("--out", default="runs/agents")
     p.add_argument("--docs", default="docs/results")
     p.add_argument(
@@ -118,8 +147,8 @@ def main() -> None:
         return
 
     from utamp_gym.data.record import dataset_id
-    from utamp_gym.distributed import LocalExecutor
-    from utamp_gym.rl.train import train_seeds
+    from utamp_gym.distributed import make_executor
+    from utamp_gym.rl.seeds import train_seeds
 
     out, docs = Path(args.out), Path(args.docs)
     load_at_start = load()
@@ -128,13 +157,15 @@ def main() -> None:
     common = {"env_id": env_id, "masks": "geometric", "interface": "objects",
               "eval_episodes": 30, "progress": False, **env_opts}  # fmt: skip
     if args.train_workers:
-        common["executor"] = LocalExecutor(args.train_workers)
+        common["executor"] = make_executor(args.executor, workers=args.train_workers)
     runs: dict[str, dict[str, Any]] = {}
 
     start = time.perf_counter()
     if args.only in (None, "ppo"):
         ppo = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
-                          steps=args.ppo_steps, eval_every=args.eval_every, **common)  # fmt: skip
+                          steps=args.ppo_steps, eval_every=args.eval_every,
+                          stop_at_plateau=args.plateau, time_limit_s=args.time_limit,
+                          **common)  # fmt: skip
         runs["MaskablePPO, slot transformer"] = {"dir": out / "ppo", "agg": ppo}
         if args.only:
             return
@@ -142,13 +173,12 @@ def main() -> None:
     bc = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=demo["path"],
                      hyperparams={"epochs": args.bc_epochs}, **common)  # fmt: skip
     runs[f"BC from {demo['episodes']} planner episodes"] = {"dir": out / "bc", "agg": bc}
-    ft_aggs = []
-    ft_common = {k: v for k, v in common.items() if k != "executor"}
-    for s in range(args.seeds):  # each fine-tuning seed starts from the BC seed of its number
-        init = out / "bc" / f"seed_{s}" / "model.zip"
-        ft_aggs.append(train_seeds(1, seed=s, out=out / "ft" / f"from_bc_{s}",
-                                   algo="maskable-ppo", steps=args.ft_steps, init_from=str(init),
-                                   eval_every=max(1, args.ft_steps // 3), **ft_common))  # fmt: skip
+    ft_kwargs = {"algo": "maskable-ppo", "steps": args.ft_steps,
+                 "eval_every": min(args.eval_every, max(1, args.ft_steps // 3)),
+                 "stop_at_plateau": args.plateau,
+                 "time_limit_s": args.ft_time_limit or args.time_limit,
+                 **{k: v for k, v in common.items() if k != "executor"}}  # fmt: skip
+    ft_aggs = fine_tune(args.seeds, out, ft_kwargs, common.get("executor"))
     runs["BC, then MaskablePPO fine-tuning"] = {"dir": out / "ft", "aggs": ft_aggs}
     if args.only:
         return
@@ -203,6 +233,30 @@ def main() -> None:
     write(table, docs)
 
 
+def _fine_tune_seed(seed: int, *, out: str, kwargs: dict[str, Any]) -> tuple[int, Any]:
+    """Fine-tune the BC model of `seed` (``out/bc/seed_<s>``) into ``out/ft/from_bc_<s>``."""
+    from utamp_gym.rl.seeds import train_seeds
+
+    init = Path(out) / "bc" / f"seed_{seed}" / "model.zip"
+    return seed, train_seeds(1, seed=seed, out=Path(out) / "ft" / f"from_bc_{seed}",
+                             init_from=str(init), **kwargs)  # fmt: skip
+
+
+def fine_tune(seeds: int, out: Path, kwargs: dict[str, Any], executor: Any) -> list[Any]:
+    """Each fine-tuning seed from the BC seed of its number: one after another, or as the
+    executor's parallel tasks (a finished seed is reused either way)."""
+    task = functools.partial(_fine_tune_seed, out=str(out), kwargs=kwargs)
+    if executor is None:
+        return [task(s)[1] for s in range(seeds)]
+    done: dict[int, Any] = {}
+    executor.run(task, list(range(seeds)), lambda item: done.__setitem__(*item),
+                 lambda s, reason: (s, reason))  # fmt: skip
+    failed = {s: r for s, r in done.items() if isinstance(r, str)}
+    if failed:
+        raise RuntimeError(f"fine-tuning failed: {failed}")
+    return [done[s] for s in range(seeds)]
+
+
 def record_or_reuse_demos(suite: str, episodes: int, root: Path) -> dict[str, Any]:
     """`utamp demos`' recording of `episodes` planner episodes of `suite` (reset seeds from
     100,000, symbolic grounding, objects interface), or the one already under `root`."""
@@ -243,8 +297,8 @@ def write(table: dict[str, Any], docs: Path) -> None:
             f"{s} (`{table['splits'][s]}`, {ceiling[s][0]}/{ceiling[s][1]} achievable)"
             for s in splits_
         )
-        + " | gap train − test (mean) | steps / seed | wall s / seed |",
-        "|---" * (len(splits_) + 5) + "|",
+        + " | gap train − test (mean) | steps / seed | wall s / seed | curve flat / seed |",
+        "|---" * (len(splits_) + 6) + "|",
     ]
     curves = {}
     for label, m in table["methods"].items():
@@ -252,7 +306,7 @@ def write(table: dict[str, Any], docs: Path) -> None:
             cells = [f"{m['success'][s]['rate']:.2f} (n={m['success'][s]['n']})" for s in splits_]
             gaps = [m["success"][train]["rate"] - m["success"][s]["rate"] for s in splits_[1:]]
             lines.append(f"| {label} | – | " + " | ".join(cells)
-                         + f" | {statistics.fmean(gaps):+.2f} | – | – |")  # fmt: skip
+                         + f" | {statistics.fmean(gaps):+.2f} | – | – | – |")  # fmt: skip
             continue
         seeds = m["per_seed"]
         cells, means = [], {}
@@ -268,12 +322,20 @@ def write(table: dict[str, Any], docs: Path) -> None:
         gaps = [means[train] - means[s] for s in splits_[1:]]
         steps = "/".join(str(p["steps"]) for p in seeds)
         wall = "/".join(f"{p['wall_time_s']:.0f}" for p in seeds)
+        flat = "/".join(flat_curve(p["curve"]) for p in seeds)
+        gap = statistics.fmean(gaps)
         lines.append(f"| {label} | {len(seeds)} | " + " | ".join(cells)
-                     + f" | {statistics.fmean(gaps):+.2f} | {steps} | {wall} |")  # fmt: skip
+                     + f" | {gap:+.2f} | {steps} | {wall} | {flat} |")  # fmt: skip
         curves[label] = [p["curve"] for p in seeds]
     train_wall = sum(p["wall_time_s"] for m in table["methods"].values()
                      for p in m.get("per_seed", []))  # fmt: skip
     lines += ["", budgets(table), ""]
+    lines += [
+        "Curve flat: the last 20 % of a seed's evaluation curve on the training split gained less "
+        "than 0.02 success (running mean of three evaluations; `utamp_gym.rl.callbacks."
+        "plateaued`, at least 10 evaluations); BC's curve counts demonstration samples.",
+        "",
+    ]
     lines += [
         f"Demonstrations: {table['demos']['episodes']} planner (utamp2-gt) episodes "
         f"({table['demos'].get('left_out', 0)} more left out: no plan, the goal unreachable), "
@@ -296,6 +358,13 @@ def write(table: dict[str, Any], docs: Path) -> None:
         docs / "agents_learning_curves.png",
         f"evaluation success on {table['splits'][train]} during training",
     )
+
+
+def flat_curve(curve: list[dict[str, Any]]) -> str:
+    """Whether the last 20 % of a curve gained less than 0.02 (`plateaued`): "yes" or "no"."""
+    from utamp_gym.rl.callbacks import EvalPoint, plateaued
+
+    return "yes" if plateaued([EvalPoint(**p) for p in curve], 0.02) else "no"
 
 
 def budgets(table: dict[str, Any]) -> str:

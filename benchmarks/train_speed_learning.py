@@ -58,7 +58,8 @@ def main() -> None:
         write(json.loads(Path(args.out).with_suffix(".json").read_text()), Path(args.out))
         return
 
-    from utamp_gym.rl.train import default_hyperparams, train
+    from utamp_gym.rl.config import default_hyperparams
+    from utamp_gym.rl.train import train
 
     hyper = json.loads(args.hyperparams)
     runs = Path(args.runs)

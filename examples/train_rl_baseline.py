@@ -42,7 +42,7 @@ from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.eval.summary import summarize, write_summary
 from utamp_gym.provenance import commit, write_markdown
 from utamp_gym.rl.callbacks import plot_learning_curves
-from utamp_gym.rl.train import train_seeds
+from utamp_gym.rl.seeds import train_seeds
 from utamp_gym.suites import suite_scenes
 
 

@@ -25,10 +25,13 @@ from utamp_gym.cli import main
 from utamp_gym.env.options import MASKS
 from utamp_gym.eval.sweep import SweepConfig
 from utamp_gym.rl.cli import MASK_CHOICES, add_train_parser
+from utamp_gym.rl.config import TrainConfig
 from utamp_gym.rl.harness import STEPS_PER_OBJECT
 from utamp_gym.rl.policy import RLPolicy, algo_of, evaluate_rl, load_rl_policy
+from utamp_gym.rl.runs import finished_run
 from utamp_gym.rl.saved import META_NAME, ModelError, read_meta, write_meta
-from utamp_gym.rl.train import TrainConfig, finished_run, train, train_seed
+from utamp_gym.rl.seeds import train_seed
+from utamp_gym.rl.train import train
 
 ROW_KEYS = {"scene", "n_objects", "seed", "success", "steps", "invalid_actions", "episode_time_s"}
 

@@ -18,11 +18,11 @@ from sb3_contrib.common.maskable.distributions import MaskableCategorical
 from utamp_gym.cli import main
 from utamp_gym.env.objects import N_ACTIONS, N_ENTITIES, observation_space
 from utamp_gym.rl import slots
+from utamp_gym.rl.config import TrainConfig
 from utamp_gym.rl.distributions import MaskedCategorical
 from utamp_gym.rl.envs import OBJECT_OBS_KEYS, default_interface, make_vec_env
 from utamp_gym.rl.harness import shares_actions
 from utamp_gym.rl.saved import ModelError, ModelMeta, check_model
-from utamp_gym.rl.train import TrainConfig
 
 
 def test_masked_categorical_is_sb3_contribs_distribution() -> None:
@@ -211,3 +211,62 @@ def test_a_stored_universe_is_the_grounded_one(tmp_path: Path, monkeypatch) -> N
     assert universe_store.load(key) is not None
     monkeypatch.setenv("UTAMP_UNIVERSE_CACHE", "0")
     assert universe_store.path_of(key) is None
+
+
+def _curve(rates: list[float], every: int = 1000) -> list:
+    from utamp_gym.rl.callbacks import EvalPoint
+
+    return [EvalPoint((i + 1) * every, 0.0, r, 0.0, 0, "") for i, r in enumerate(rates)]
+
+
+def test_a_curve_is_flat_only_when_its_last_fifth_gains_little() -> None:
+    from utamp_gym.rl.callbacks import plateaued
+
+    rising = [0.05 * i for i in range(12)]
+    assert not plateaued(_curve(rising))
+    flat = [0.05 * i for i in range(6)] + [0.3] * 10  # steady for the last 10 of 16
+    assert plateaued(_curve(flat))
+    assert not plateaued(_curve([0.3] * 9))  # too few evaluations to tell
+    # one lucky evaluation at the end does not count as a gain: three are averaged
+    assert plateaued(_curve([0.3] * 12 + [0.33]))
+    assert not plateaued(_curve([0.3] * 12 + [0.4, 0.4, 0.4]))
+    assert not plateaued(_curve(flat), min_gain=-1.0)  # nothing gains less than -1
+
+
+def test_masked_categorical_samples_its_probabilities_and_never_a_masked_action() -> None:
+    th.manual_seed(0)
+    raw = th.randn(3, 60) * 2
+    masks = th.rand(3, 60) < 0.3
+    masks[:, 3] = True
+    masks[0, 0], masks[1, 59] = False, True  # a masked first action; a shown last one
+    d = MaskedCategorical(raw, masks)
+    draws = d.sample(th.Size([40_000]))
+    assert draws.shape == (40_000, 3) and d.sample().shape == (3,)
+    freq = th.stack([th.bincount(draws[:, i], minlength=60).float() / 40_000 for i in range(3)])
+    assert bool((freq[~masks] == 0).all())
+    assert float((freq - d.probs).abs().max()) < 0.015
+
+
+def test_the_slot_head_is_saved_with_the_model_and_old_models_keep_theirs(tmp_path: Path) -> None:
+    """`utamp train` saves the pointer head's keyword with the model; a model saved without
+    one (before the pointer head) loads with the pair head it was trained with."""
+    from sb3_contrib import MaskablePPO
+
+    from utamp_gym.rl.config import slot_policy_kwargs
+
+    vec = make_vec_env("UTampKitchenProcedural-v0", 1, seed=0, obs_keys=OBJECT_OBS_KEYS,
+                       masks="geometric", interface="objects")  # fmt: skip
+    for kwargs, head in (({}, slots.SlotActionHead), (slot_policy_kwargs(), slots.SlotPointerHead)):
+        model = MaskablePPO(slots.SlotPolicy, vec, n_steps=16, policy_kwargs=kwargs)
+        assert type(model.policy.action_net) is head
+        model.save(tmp_path / "m.zip")
+        loaded = MaskablePPO.load(tmp_path / "m.zip", device="cpu")
+        assert type(loaded.policy.action_net) is head
+        obs = vec.reset()
+        want = model.policy.state_dict()
+        assert all(th.equal(v, loaded.policy.state_dict()[k]) for k, v in want.items())
+        action, _ = loaded.predict(obs, action_masks=np.stack(vec.env_method("action_masks")))
+        assert vec.env_method("action_masks")[0][int(action[0])]
+    with pytest.raises(ValueError, match="unknown slot head 'flat'"):
+        MaskablePPO(slots.SlotPolicy, vec, policy_kwargs={"head": "flat"})
+    vec.close()

@@ -1,6 +1,7 @@
 """RL baselines: MaskablePPO (with the env's action masks), PPO and DQN (without).
 
-`utamp_gym.rl.train.train` trains one seed and writes a run directory (`train_seeds`: several
+`utamp_gym.rl.train.train` trains one seed and writes a run directory (`utamp_gym.rl.config`:
+what defines a run; `utamp_gym.rl.runs`: its files; `utamp_gym.rl.seeds.train_seeds`: several
 seeds and their aggregate), `utamp_gym.rl.policy` loads a model as ``policy(obs, info) ->
 action`` (`load_rl_policy`) and scores it (`evaluate_rl`), `utamp_gym.rl.saved` reads and
 writes the env a model was trained on (inside its zip), `utamp_gym.rl.harness` runs a saved

@@ -21,6 +21,11 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.errors import UtampError
+from utamp_gym.rl.callbacks import PeriodicEval, plot_learning_curve
+from utamp_gym.rl.config import TrainResult
+from utamp_gym.rl.envs import make_env
+from utamp_gym.rl.runs import eval_episodes_of, model_meta, save_model
+from utamp_gym.rl.slots import SlotPolicy
 
 BC_DEFAULTS = {"learning_rate": 3e-4, "batch_size": 128, "epochs": 30, "eval_every_epochs": 5}
 
@@ -107,11 +112,6 @@ def train_bc(config: Any, out: Path, *, progress: bool = False) -> Any:
     the curve's ``steps`` are demonstration samples seen (epochs x transitions)."""
     import torch as th
     from sb3_contrib import MaskablePPO
-
-    from utamp_gym.rl.callbacks import PeriodicEval, plot_learning_curve
-    from utamp_gym.rl.envs import make_env
-    from utamp_gym.rl.slots import SlotPolicy
-    from utamp_gym.rl.train import TrainResult, eval_episodes_of, model_meta, save_model
 
     th.manual_seed(config.seed)
     start = time.perf_counter()

@@ -65,7 +65,9 @@ class PeriodicEval(BaseCallback):
     `episodes` are (scene, seed) pairs replayed at every evaluation on `env`; checkpoints go
     to ``out/checkpoints/step_<n>.zip``, written by ``save(model, path)`` (default
     ``model.save``). With `stop_at` set, training stops at the first evaluation whose success
-    rate reaches it.
+    rate reaches it; with `plateau` set, at the first evaluation where the curve has flattened
+    (`plateaued`); with `time_limit_s` set, at the first evaluation after that much training
+    time (evaluations left out).
     """
 
     def __init__(
@@ -77,12 +79,15 @@ class PeriodicEval(BaseCallback):
         *,
         masks: bool = True,
         stop_at: float | None = None,
+        plateau: float | None = None,
+        time_limit_s: float | None = None,
         save: Callable[[Any, Path], None] | None = None,
     ) -> None:
         super().__init__()
         self.env, self.episodes, self.out, self.every = env, episodes, out, max(1, every)
         self.save = save
-        self.masks, self.stop_at = masks, stop_at
+        self.masks, self.stop_at, self.plateau = masks, stop_at, plateau
+        self.time_limit_s = time_limit_s
         self.points: list[EvalPoint] = []
         self._start = time.perf_counter()
         self._next = self.every
@@ -102,6 +107,10 @@ class PeriodicEval(BaseCallback):
             return True
         self._next = (self.num_timesteps // self.every + 1) * self.every
         point = self.evaluate()
+        if self.plateau is not None and plateaued(self.points, self.plateau):
+            return False
+        if self.time_limit_s is not None and point.wall_time_s >= self.time_limit_s:
+            return False
         return self.stop_at is None or point.success_rate < self.stop_at
 
     def _on_training_end(self) -> None:
@@ -130,6 +139,29 @@ class PeriodicEval(BaseCallback):
         self.points.append(point)
         self._eval_s += time.perf_counter() - begin
         return point
+
+
+#: `plateaued`: the fewest evaluations a curve needs before it can be called flat
+PLATEAU_MIN_POINTS = 10
+#: `plateaued`: the share of the curve's steps whose gain is measured
+PLATEAU_TAIL = 0.2
+
+
+def plateaued(points: Sequence[EvalPoint], min_gain: float = 0.02) -> bool:
+    """Whether the last `PLATEAU_TAIL` (20 %) of the curve's steps gained less than
+    `min_gain` in success: the running mean of three evaluations at the end against the same
+    at the last evaluation at or before 80 % of the steps (the mean damps the noise of
+    evaluations of a few episodes). Never before `PLATEAU_MIN_POINTS` evaluations."""
+    if len(points) < PLATEAU_MIN_POINTS:
+        return False
+    rates = [p.success_rate for p in points]
+    cut = max(i for i, p in enumerate(points) if p.steps <= (1 - PLATEAU_TAIL) * points[-1].steps)
+
+    def smooth(i: int) -> float:
+        window = rates[max(0, i - 2) : i + 1]
+        return sum(window) / len(window)
+
+    return smooth(len(rates) - 1) - smooth(cut) < min_gain
 
 
 def plot_learning_curve(

@@ -21,6 +21,7 @@ from typing import Any
 from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
+from utamp_gym.rl.config import GROUNDINGS, TRAIN_ALGOS, TrainConfig
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
 #: the parser imports no env code; a test keeps the two equal)
@@ -38,7 +39,9 @@ def _cmd_train(args: argparse.Namespace) -> int:
     require("utamp train", "rl")
     if args.algo == "bc":  # reads a Minari dataset
         require("utamp train --algo bc", "data")
-    from utamp_gym.rl.train import train, train_seeds
+    # the rl extra (torch, stable-baselines3) is checked above, before these load it
+    from utamp_gym.rl.seeds import train_seeds
+    from utamp_gym.rl.train import train
 
     kwargs: dict[str, Any] = {
         "env_id": args.env,
@@ -56,8 +59,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "init_from": args.init_from or "",
         "demos": args.demos or "",
     }
-    from utamp_gym.rl.train import TrainConfig
-
     try:  # every option checked before anything is built or trained
         config = TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
     except ValueError as exc:
@@ -107,7 +108,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
 def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``train`` command to `subparsers` (from ``parser.add_subparsers()``)."""
     from utamp_gym.env.registry import env_ids
-    from utamp_gym.rl.train import GROUNDINGS, TRAIN_ALGOS
 
     p = subparsers.add_parser(
         "train",

@@ -8,7 +8,8 @@ masked, one ``logsumexp`` of a 256-row minibatch takes ~20 ms instead of ~1.5 ms
 ``benchmarks/train_speed.py``). `MaskedCategorical` is the same distribution (same
 probabilities, log-probabilities, entropy and gradients, up to float rounding) normalised
 once, with ``log_softmax``, whose kernel has no such slow path; argument validation is off
-(actions come from the policy itself). The policies select it with `use_fast_masked`.
+(actions come from the policy itself); samples are drawn by inverting the cumulative
+distribution. The policies select it with `use_fast_masked`.
 """
 
 from __future__ import annotations
@@ -47,6 +48,20 @@ class MaskedCategorical(MaskableCategorical):
         self._param = self.logits
         self._num_events = raw.size(-1)
         Distribution.__init__(self, raw.size()[:-1], validate_args=False)
+
+    def sample(self, sample_shape: th.Size = th.Size()) -> th.Tensor:  # noqa: B008
+        """A draw by inverting the cumulative distribution: the first action whose cumulative
+        probability exceeds ``u · total``, ``u ~ U[0, 1)``. A masked action has probability 0
+        (its cumulative equals its predecessor's), so it is never the first to exceed; ``u``
+        is scaled by 1 − 1e-6 so that the draw stays below the total under rounding. On CPU it
+        costs a small fraction of ``torch.multinomial`` or ``exp`` over the 2,676
+        objects-interface logits (each ~0.5 ms per rollout step of 8 envs: ``exp`` of the
+        masked logits leaves the vectorised path)."""
+        probs = self.logits.softmax(-1)
+        cdf = probs.expand(th.Size(sample_shape) + probs.shape).cumsum(-1)
+        u = th.rand((*cdf.shape[:-1], 1), dtype=cdf.dtype, device=cdf.device)
+        u = u * cdf[..., -1:] * (1 - 1e-6)
+        return th.searchsorted(cdf, u, right=True).squeeze(-1)
 
 
 class MaskedCategoricalDistribution(MaskableCategoricalDistribution):

@@ -19,6 +19,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.wrappers import FilterObservation
 
+from utamp_gym.env.registry import env_definitions, register_envs
+
 #: observation entries the RL agents see (None in `make_env` keeps them all)
 DEFAULT_OBS_KEYS = ("symbolic", "present")
 #: the entries of the objects interface (`utamp_gym.env.objects.observation_space`)
@@ -34,8 +36,6 @@ def default_interface(env_id: str, algo: str = "maskable-ppo") -> str:
     """The interface `utamp_gym.rl.train.train` uses unless told: the env's own (its
     ``interface`` option, as ``gym.make`` has it: ``objects`` for UTampKitchenProcedural-v0),
     except ``grounded`` for PPO and DQN, which the objects interface cannot train."""
-    from utamp_gym.env.registry import env_definitions
-
     own = next((d.kwargs.get("interface") for d in env_definitions() if d.id == env_id), None)
     if algo not in ("maskable-ppo", "bc"):
         return "grounded"
@@ -52,8 +52,6 @@ def make_env(
     **kwargs: Any,
 ) -> gym.Env:
     """``gym.make(env_id, ...)`` reduced to `obs_keys`, optionally in an SB3 ``Monitor``."""
-    from utamp_gym.env.registry import register_envs
-
     # explicitly: `import utamp_gym` registers nothing in a worker of the `utamp` process
     # (its argv is the command's), e.g. SubprocVecEnv's for `utamp train --grounding physics`
     register_envs()

@@ -21,7 +21,9 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
-from utamp_gym.rl.saved import trained_entries
+from utamp_gym.env.registry import register_envs
+from utamp_gym.env.task import GOAL_REWARD
+from utamp_gym.rl.saved import ModelError, read_meta, trained_entries
 
 if TYPE_CHECKING:
     from utamp_gym.rl.saved import ModelMeta
@@ -33,8 +35,6 @@ Policy = Callable[[Mapping[str, np.ndarray], Mapping[str, Any] | None], int]
 def algo_of(path: str | Path) -> str:
     """Which of `ALGOS` saved the SB3 zip at `path` (from its `ModelMeta`, else its policy
     class)."""
-    from utamp_gym.rl.saved import ModelError, read_meta
-
     try:
         return read_meta(path).algo
     except ModelError:
@@ -158,8 +158,6 @@ def load_rl_policy(
     `ModelMeta` (None for zips without it) becomes the policy's `meta`."""
     import torch
 
-    from utamp_gym.rl.saved import ModelError, read_meta
-
     torch.set_num_threads(1)
     model = algo_class(algo_of(path)).load(str(path), device="cpu")
     policy = RLPolicy(model, env=env, masks=masks, deterministic=deterministic, seed=seed)
@@ -179,8 +177,6 @@ def run_episodes(
     `invalid_actions` counts actions outside the mask, `failed_actions` every step with a
     ``failure_reason`` (invalid ones and, in physics grounding, physical failures).
     """
-    from utamp_gym.env.task import GOAL_REWARD
-
     kitchen = env.unwrapped
     rows = []
     for scene, seed in episodes:
@@ -230,8 +226,6 @@ def evaluate_rl(
     episode_time_s``; the env is built without reward shaping or termination on failure.
     The env id and options (``masks``) default to the model's saved ones (`ModelMeta`).
     """
-    from utamp_gym.env.registry import register_envs
-
     register_envs()  # explicitly: a worker process may have skipped it on import
 
     policy = path if isinstance(path, RLPolicy) else load_rl_policy(path, masks=masks)

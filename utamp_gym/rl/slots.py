@@ -42,10 +42,6 @@ from utamp_gym.rl.policies import _TrainedKeys
 from utamp_gym.scene.geometry import PARTS, SIDES
 
 D_MODEL = 64  # the width of a slot policy saved without ``features_extractor_kwargs``
-#: the width `utamp train` builds (`train_policy_kwargs`): half of `D_MODEL` trains the
-#: objects interface several times faster per env step (benchmarks/train_speed.py) and learns
-#: as much per env step (benchmarks/train_speed_learning.py)
-TRAIN_D_MODEL = 32
 N_HEADS = 4
 N_LAYERS = 2
 _K, _R, _S, _M, _G = MAX_OBJECTS, MAX_REGIONS, MAX_SPACES, MAX_MEMBERS, len(GRASPS)
@@ -166,6 +162,10 @@ class SlotActionHead(nn.Module):
         self.place = nn.Sequential(nn.Linear(4 * d, d), nn.ReLU(), nn.Linear(d, 1))
         self.slide = nn.Sequential(nn.Linear(3 * d, d), nn.ReLU(), nn.Linear(d, _M * _G))
 
+    def last_layers(self) -> tuple[nn.Linear, ...]:
+        """The layers whose small initial weights make the first policy near-uniform."""
+        return self.pick[-1], self.place[-1], self.slide[-1]
+
     def forward(self, features: th.Tensor) -> th.Tensor:
         x, g = _split(features, self.d)
         b = x.shape[0]
@@ -184,6 +184,49 @@ class SlotActionHead(nn.Module):
         return logits
 
 
+class SlotPointerHead(nn.Module):
+    """`SlotActionHead` with a place scored as a pointer: the object's query (from its token
+    and the pooled context) dotted with each support's key, instead of an MLP over every
+    (object, support) pair. The pair MLP was most of a training step's time (its hidden layer
+    is K·(K+R)·d per sample, benchmarks/train_speed.py); the pointer's pairs are one product.
+    Picks and slides are scored as in `SlotActionHead` (the same layers, the same order)."""
+
+    def __init__(self, d: int) -> None:
+        super().__init__()
+        self.d = d
+        self.pick = nn.Sequential(nn.Linear(2 * d, d), nn.ReLU(), nn.Linear(d, _M * _G))
+        self.query = nn.Sequential(nn.Linear(2 * d, d), nn.ReLU(), nn.Linear(d, d))
+        self.key = nn.Sequential(nn.Linear(d, d), nn.ReLU(), nn.Linear(d, d))
+        self.slide = nn.Sequential(nn.Linear(3 * d, d), nn.ReLU(), nn.Linear(d, _M * _G))
+
+    def last_layers(self) -> tuple[nn.Linear, ...]:
+        """The layers whose small initial weights make the first policy near-uniform."""
+        return self.pick[-1], self.query[-1], self.slide[-1]
+
+    def forward(self, features: th.Tensor) -> th.Tensor:
+        x, g = _split(features, self.d)
+        b = x.shape[0]
+        obj, supports, space = x[:, :_K], x[:, : _K + _R], x[:, _K + _R :]
+        ctx = g[:, None]  # (b, 1, d)
+        hidden = _first_layer(self.pick[0], obj, ctx).relu()
+        pick = self.pick[2](hidden).reshape(b, -1)  # (i, m, g)
+        query = self.query[2](_first_layer(self.query[0], obj, ctx).relu())  # (b, K, d)
+        key = self.key(supports)  # (b, K + R, d)
+        place = (query @ key.transpose(1, 2)).reshape(b, -1) / math.sqrt(self.d)  # (i, j)
+        oi = obj[:, :, None]
+        hidden = _first_layer(self.slide[0], oi, space[:, None], ctx[:, None]).relu()
+        slide = self.slide[2](hidden)  # (i, s, m*g) -> (i, m, g, s)
+        slide = slide.permute(0, 1, 3, 2).reshape(b, -1)
+        logits = th.cat([pick, place, slide], 1)
+        assert logits.shape[1] == N_ACTIONS
+        return logits
+
+
+#: the slot policy's action heads by the name of its ``head`` keyword ("pairs" for a model
+#: saved without one)
+HEADS: dict[str, type[nn.Module]] = {"pairs": SlotActionHead, "pointer": SlotPointerHead}
+
+
 class _Value(nn.Module):
     def __init__(self, d: int) -> None:
         super().__init__()
@@ -194,18 +237,15 @@ class _Value(nn.Module):
         return self.net(_split(features, self.d)[1])
 
 
-def train_policy_kwargs() -> dict[str, Any]:
-    """The slot policy's ``policy_kwargs`` for `utamp train` (saved with the model, so it
-    loads at the width it was trained with)."""
-    return {"features_extractor_kwargs": {"d_model": TRAIN_D_MODEL}}
-
-
 class SlotPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
     """MaskablePPO's policy over the objects interface: `SlotEncoder` and the slot heads."""
 
     utamp_algo = "maskable-ppo"
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, head: str = "pairs", **kwargs: Any) -> None:
+        if head not in HEADS:
+            raise ValueError(f"unknown slot head {head!r}; valid: {', '.join(HEADS)}")
+        self.head = head
         kwargs.setdefault("features_extractor_class", SlotEncoder)
         kwargs["net_arch"] = []  # the heads read the tokens themselves
         super().__init__(*args, **kwargs)
@@ -214,14 +254,16 @@ class SlotPolicy(_TrainedKeys, MaskableMultiInputActorCriticPolicy):
     def _build(self, lr_schedule: Any) -> None:
         super()._build(lr_schedule)
         d = self.features_extractor.d_model
-        self.action_net = SlotActionHead(d)
+        self.action_net = HEADS[self.head](d)
         self.value_net = _Value(d)
         for module in (*self.action_net.modules(), *self.value_net.modules()):
             self.init_weights(module, gain=np.sqrt(2))  # orthogonal, as SB3 does
-        head = self.action_net
-        for last in (head.pick[-1], head.place[-1], head.slide[-1]):
+        for last in self.action_net.last_layers():
             self.init_weights(last, gain=0.01)  # near-uniform first policy
         self.init_weights(self.value_net.net[-1], gain=1.0)
         self.optimizer = self.optimizer_class(
             self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs
         )
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        return {**super()._get_constructor_parameters(), "head": self.head}

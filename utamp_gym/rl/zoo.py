@@ -32,7 +32,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.env.registry import register_envs
 from utamp_gym.extras import MissingExtraError, require
+from utamp_gym.rl.policy import RLPolicy, run_episodes
 
 HYPERPARAMS = Path(__file__).with_name("zoo_maskable_ppo.yml")
 ALGO = "maskable-ppo"
@@ -46,8 +48,6 @@ def register() -> None:
     import rl_zoo3.utils
     from sb3_contrib import MaskablePPO
     from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
-
-    from utamp_gym.env.registry import register_envs
 
     register_envs()
     for table in (rl_zoo3.utils.ALGOS, rl_zoo3.ALGOS):
@@ -110,8 +110,6 @@ def evaluate(run: str | Path, episodes: int = 60, seed: int = 10_000) -> dict[st
     from sb3_contrib import MaskablePPO
     from sb3_contrib.common.maskable.evaluation import evaluate_policy
     from stable_baselines3.common.monitor import Monitor
-
-    from utamp_gym.rl.policy import RLPolicy, run_episodes
 
     register()
     run = Path(run)
