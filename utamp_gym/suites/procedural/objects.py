@@ -30,11 +30,11 @@ from utamp_gym.suites.procedural.spec import (
     LEVEL_ATTEMPTS,
     MAX_TOTAL_HEIGHT,
     MIN_CARRY,
-    OBJECT_NAMES,
     POOLS,
-    SPECS,
     TOWERS,
+    V1,
     VERSION,
+    Config,
     NoLayout,
 )
 
@@ -93,7 +93,7 @@ def goal_achievable(
 
 
 def _draw_objects(
-    split: str, seed: int
+    split: str, seed: int, config: Config = V1
 ) -> tuple[Any, list[str], list[str], list[ObjectType], frozenset[Fact], dict[str, str]]:
     """(rng, names, families, types, facts, orientation per name) of a seed's objects.
 
@@ -105,8 +105,8 @@ def _draw_objects(
     achievable. The other seeds
     draw every object freely (these goals are often unachievable: a bowl too heavy to
     pinch, two bottles)."""
-    spec = SPECS[split]
-    rng = rng_for("utamp-procedural", VERSION, split, seed)
+    spec = config.specs[split]
+    rng = rng_for("utamp-procedural", config.version, split, seed)
     n = int(spec.sizes[int(rng.integers(len(spec.sizes)))])
     free = bool(rng.random() < FREE_SHARE)
     held_out_at = int(rng.integers(n)) if spec.new else -1
@@ -126,7 +126,7 @@ def _draw_objects(
     else:
         families, types, orient = _goal_tower(rng, n, family_for, (lo, hi))
     facts = _facts(types)
-    names = list(OBJECT_NAMES[:n])
+    names = list(config.names[:n])
     if free:  # orientations it can rest in (picked up in, where possible)
         for k in range(1, n):
             options, _ = _orientations(facts, types[k].name)
