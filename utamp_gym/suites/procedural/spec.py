@@ -72,6 +72,8 @@ class Config(NamedTuple):
     version: str
     specs: dict[str, SplitSpec]
     names: tuple[str, ...]
+    free_share: float = FREE_SHARE
+    max_height: float = MAX_TOTAL_HEIGHT  # m, all objects of a scene stacked
 
 
 V1 = Config(SUITE, VERSION, SPECS, OBJECT_NAMES)
