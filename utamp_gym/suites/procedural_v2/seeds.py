@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 import tomli
 
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.resources import asset_path
+from utamp_gym.resources import assets_dir
 from utamp_gym.scene.io import scene_from_dict, scene_to_dict, scene_to_toml
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites.procedural.objects import _catalogue
@@ -43,7 +43,7 @@ class V2Scene(NamedTuple):
 
 @lru_cache(maxsize=1)
 def _seed_table() -> dict[str, Any]:
-    path = asset_path(*SEEDS_FILE)
+    path = assets_dir().joinpath(*SEEDS_FILE)  # not yet written: no split generated
     return tomli.loads(path.read_text()) if path.is_file() else {}
 
 

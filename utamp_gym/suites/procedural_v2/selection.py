@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from utamp_gym.resources import asset_path
+from utamp_gym.resources import assets_dir
 from utamp_gym.suites.procedural.spec import NoLayout
 from utamp_gym.suites.procedural_v2.labels import fd_agrees, label
 from utamp_gym.suites.procedural_v2.scenes import generate_scene
@@ -123,7 +123,7 @@ def write_split_file(parts: Sequence[dict[str, Any]]) -> None:
     header = _HEADER.format(
         held_out=", ".join(HELD_OUT_TEMPLATES), compositions=", ".join(HELD_OUT_COMPOSITIONS)
     )
-    asset_path(*SEEDS_FILE[:-1]).joinpath(SEEDS_FILE[-1]).write_text(header + tomli_w.dumps(out))
+    assets_dir().joinpath(*SEEDS_FILE).write_text(header + tomli_w.dumps(out))
     _seed_table.cache_clear()
 
 
