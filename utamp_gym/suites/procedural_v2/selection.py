@@ -37,8 +37,20 @@ from utamp_gym.suites.procedural_v2.spec import (
 )
 
 
-def select_seeds(split: str, n: int, *, check_fd: bool = True, log: Any = None) -> dict[str, Any]:
-    """The first `n` seeds that fill the split's quotas (module docstring), with labels."""
+def select_seeds(
+    split: str,
+    n: int,
+    *,
+    check_fd: bool = True,
+    log: Any = None,
+    relax_after: int | None = None,
+    resume: Sequence[tuple[int, str, bool, int]] = (),
+) -> dict[str, Any]:
+    """The first `n` seeds that fill the split's quotas (module docstring), with labels.
+
+    After seed `relax_after` the per-template quotas no longer hold (a template whose goals
+    are seldom achievable in a split, the tower of 6-8 objects in test-count, cannot stall
+    it); `resume` continues a run from its kept (seed, template, achievable, plan length)."""
     templates = SPLIT_TEMPLATES[split]
     share = 0.0 if split == "hard" else UNACHIEVABLE_SHARE
     want_bad = round(n * share)
@@ -48,8 +60,14 @@ def select_seeds(split: str, n: int, *, check_fd: bool = True, log: Any = None) 
     kept: list[tuple[int, bool, int]] = []
     skipped = {"layout": 0, "timed out": 0, "fd disagrees": 0, "share full": 0, "short": 0}
     seed = -1
+    for seed, template, ok, length in resume:
+        kept.append((seed, ok, length))
+        good[template] += ok
+        bad += not ok
     while len(kept) < n:
         seed += 1
+        if relax_after is not None and seed > relax_after:
+            per_template = n
         try:
             g = generate_scene(split, seed)
         except NoLayout:
@@ -87,6 +105,7 @@ def select_seeds(split: str, n: int, *, check_fd: bool = True, log: Any = None) 
         "unachievable": bad,
         "skipped": skipped,
         "fd_checked": check_fd,
+        "relaxed_after_seed": relax_after,
     }
 
 
@@ -113,6 +132,11 @@ def write_split_file(parts: Sequence[dict[str, Any]]) -> None:
             "domain": DOMAIN,
             "labeller": LABEL_METHOD,
             "labels_checked_with_fd_translator": bool(part["fd_checked"]),
+            **(
+                {"template_quota_relaxed_after_seed": part["relaxed_after_seed"]}
+                if part.get("relaxed_after_seed") is not None
+                else {}
+            ),
             "templates": list(SPLIT_TEMPLATES[split]),
             "seeds": list(seeds),
             "achievable": part["achievable"],
@@ -127,11 +151,22 @@ def write_split_file(parts: Sequence[dict[str, Any]]) -> None:
     _seed_table.cache_clear()
 
 
+def _log_entry(line: str) -> tuple[int, str, bool, int]:
+    """(seed, template, achievable, plan length) of a line `select_seeds` logged."""
+    words = line.split()
+    return (int(words[2]), words[3], "achievable=True" in line,
+            int(line.split("plan_length=")[1].split(",")[0]))  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
-    if len(args) in (3, 4) and args[0] == "select" and args[1] in SPLITS:
-        n = int(args[3]) if len(args) == 4 else SIZES[args[1]]
-        chosen = select_seeds(args[1], n, log=sys.stderr)
+    if len(args) in (3, 4, 6) and args[0] == "select" and args[1] in SPLITS:
+        n = int(args[3]) if len(args) >= 4 else SIZES[args[1]]
+        relax, resume = None, []
+        if len(args) == 6:  # ... N RELAX_AFTER LOG: continue the run that LOG records
+            relax = int(args[4])
+            resume = [_log_entry(line) for line in Path(args[5]).read_text().splitlines()]
+        chosen = select_seeds(args[1], n, log=sys.stderr, relax_after=relax, resume=resume)
         with open(args[2], "w") as f:
             json.dump({"split": args[1], **chosen}, f)
         return 0
