@@ -29,6 +29,8 @@ from utamp_gym.suites.procedural_v2.spec import (
     SPLIT_TEMPLATES,
     TRAIN_TEMPLATES,
 )
+from utamp_gym.symbolic.problem import scene_facts
+from utamp_gym.tasks.goal import goal_holds
 from utamp_gym.tasks.templates import TEMPLATES, parts
 
 SPLITS = available_splits()
@@ -42,6 +44,18 @@ def test_a_scene_is_a_pure_function_of_split_and_seed() -> None:
         assert scene_to_toml(a.scene) == scene_to_toml(b.scene)
         assert a.scene.goal is not None and a.template in SPLIT_TEMPLATES[split]
         assert a.scene.name == f"procedural-v2/{split}/0003"
+
+
+def test_no_goal_holds_before_anything_moves() -> None:
+    """A goal already met in the scene is never kept (the sampler draws again)."""
+    for split in ("train", "test-tasks"):
+        for seed in range(60):
+            try:
+                g = generate_scene(split, seed)
+            except NoLayout:
+                continue
+            assert g.scene.goal is not None
+            assert not goal_holds(g.scene.goal, scene_facts(g.scene, (), "utamp2"))
 
 
 def _has_layout(split: str, seed: int) -> bool:
@@ -69,6 +83,7 @@ def test_split_file_keeps_sizes_shares_and_the_labels_domain(split: str) -> None
     assert entry["labels_checked_with_fd_translator"] is True
     n = len(split_seeds(split))
     assert n == SIZES[split] and len(entry["achievable"]) == len(entry["plan_length"]) == n
+    assert all(p > 0 for a, p in zip(entry["achievable"], entry["plan_length"], strict=True) if a)
     bad = n - sum(entry["achievable"])
     if split == "hard":
         assert bad == 0 and min(entry["plan_length"]) >= HARD_MIN_ACTIONS

@@ -7,7 +7,7 @@ template's sampler (`tasks.sampling.sample_goal`), from a generator seeded by th
 quick checks on the affordance facts is kept (what it moves can be picked up; a stack's
 objects can stand on one another in some order; an object can stand on its target), else
 the first drawn: such goals are often unachievable, and the planner labels every goal
-(`labels`).
+(`labels`). A goal that already holds in the scene is never kept.
 """
 
 from __future__ import annotations
@@ -30,7 +30,8 @@ from utamp_gym.suites.procedural_v2.spec import (
     VERSION,
     check_split,
 )
-from utamp_gym.tasks.goal import Goal
+from utamp_gym.symbolic.problem import scene_facts
+from utamp_gym.tasks.goal import Goal, goal_holds
 from utamp_gym.tasks.sampling import sample_goal
 from utamp_gym.tasks.templates import part_params, parts, sort_groups
 
@@ -55,10 +56,13 @@ def generate_scene(split: str, seed: int, index: int = 0) -> GoalScene:
     options = SPLIT_TEMPLATES[split]
     template_id = options[int(rng.integers(len(options)))]
     facts = _facts(list(scene.custom_types.values()))
+    initial = scene_facts(scene, (), "utamp2")
     first: Goal | None = None
     for _ in range(GOAL_DRAWS):
         goal = sample_goal(scene, template_id, rng)
         if goal is None or goal_height(scene, goal) > MAX_GOAL_STACK:
+            continue
+        if goal_holds(goal, initial):  # nothing to do: draw again
             continue
         first = first or goal
         if plausible(scene, goal, facts):
