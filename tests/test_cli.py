@@ -23,7 +23,8 @@ from utamp_gym.errors import PlanningTimeout
 from utamp_gym.planning import fast_downward
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene import scene_from_dict
-from utamp_gym.suites import ALL_SUITES, packaged_scene_names, suite_scenes
+from utamp_gym.suites import ALL_SUITES, GOAL_SUITES, packaged_scene_names, suite_scenes
+from utamp_gym.suites.procedural_v2 import available_splits
 
 
 def test_scenes_list_and_show(capsys) -> None:
@@ -38,7 +39,9 @@ def test_scenes_list_and_show(capsys) -> None:
 def test_scenes_list_names_every_packaged_scene_and_every_suite_scene(capsys) -> None:
     assert main(["scenes", "list"]) == 0
     names = capsys.readouterr().out.split()
-    expected = [*packaged_scene_names(), *(s.name for x in ALL_SUITES for s in suite_scenes(x))]
+    generated = [s for s in GOAL_SUITES if s.rpartition("/")[2] in available_splits()]
+    suites = (*ALL_SUITES, *generated)  # procedural-v2: the splits its file holds
+    expected = [*packaged_scene_names(), *(s.name for x in suites for s in suite_scenes(x))]
     assert names == expected and "kitchen-demo" in names
     for name in names[:2]:  # each listed name is one `utamp scenes show` accepts
         assert main(["scenes", "show", name]) == 0

@@ -132,7 +132,8 @@ def test_scenes_list_json(capsys: pytest.CaptureFixture[str]) -> None:
     records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert len(records) == len(pv.split_seeds("test-families"))
     for r in records:
-        assert set(r) == {"name", "n_objects", "families", "achievable"}
+        assert set(r) == {"name", "n_objects", "families", "template", "instruction", "achievable"}
+        assert r["template"] == "tower" and r["instruction"]
         assert len(r["families"]) == r["n_objects"] and isinstance(r["achievable"], bool)
         assert set(r["families"]) & set(pv.HELD_OUT)  # a family never seen in train
     assert (
@@ -147,7 +148,7 @@ def test_scenes_list_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert [r["name"] for r in records] == all_scene_names("procedural-v1/train")
     for i, r in enumerate(records):
         g = pv.split_scene("train", i)
-        assert set(r) == {"name", "n_objects", "families", "achievable"}
+        assert set(r) == {"name", "n_objects", "families", "template", "instruction", "achievable"}
         assert r["n_objects"] == g.scene.n_objects == len(r["families"])
         assert r["families"] == list(g.families) and r["achievable"] is g.achievable
         assert not set(r["families"]) & set(pv.HELD_OUT)

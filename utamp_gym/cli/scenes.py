@@ -15,6 +15,7 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
     from utamp_gym.suites import (
         ALL_SUITES,
+        GOAL_SUITES,
         all_scene_names,
         packaged_scene_names,
         resolve_scene,
@@ -25,7 +26,10 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
         if not args.suite and not args.json:  # packaged scenes (kitchen-demo), then suites
             for name in packaged_scene_names():
                 print(name)
-        for suite in (args.suite,) if args.suite else ALL_SUITES:
+        from utamp_gym.suites.procedural_v2 import available_splits
+
+        generated = [s for s in GOAL_SUITES if s.rpartition("/")[2] in available_splits()]
+        for suite in (args.suite,) if args.suite else (*ALL_SUITES, *generated):
             if args.json:  # one JSON object per line and scene
                 for record in scene_summary(suite):
                     print(json.dumps(record))
@@ -39,7 +43,7 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 def add_parser(sub: Any) -> None:
     """``utamp scenes list`` and ``utamp scenes show NAME``."""
-    from utamp_gym.suites import ALL_SUITES as SUITES
+    from utamp_gym.suites import LISTED_SUITES as SUITES
 
     scenes = sub.add_parser("scenes", help=help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
@@ -50,7 +54,8 @@ def add_parser(sub: Any) -> None:
     lst.add_argument(
         "--json",
         action="store_true",
-        help="one JSON object per scene and line: name, n_objects, families, achievable",
+        help="one JSON object per scene and line: name, n_objects, families, template, "
+        "instruction, achievable",
     )
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name", help=SCENE_HELP)

@@ -25,6 +25,7 @@ from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
 from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.problem import build_problem, domain_text
+from utamp_gym.tasks.goal import Goal
 
 if TYPE_CHECKING:  # numpy, the rule parser and the noisy detector load only when used
     import numpy as np
@@ -125,6 +126,7 @@ def plan_scene(
     planner: StatePlanner | None = None,
     deadline: Deadline | None = None,
     affordances: tuple[frozenset[Fact], Scores] | None = None,
+    goal: Goal | None = None,
 ) -> PlanOutcome:
     """Abstract the scene, plan with Fast Downward, and report.
 
@@ -137,6 +139,7 @@ def plan_scene(
     a reason (a time-out also with the phase that ran out of time). `affordances` (facts and
     their scores) replaces the method's own source: ``utamp2-perceived`` plans the declared
     scene with the facts perceived in it (`utamp_gym.methods.perceived.plan_perceived`).
+    `goal` replaces the scene's goal (its own, else the paper's tower: `build_problem`).
     """
     spec = method_spec(method)
     start = time.perf_counter()
@@ -158,7 +161,7 @@ def plan_scene(
     else:
         facts, scores = affordances
     domain = domain_text(spec.domain)
-    problem = build_problem(scene, facts, spec.domain)
+    problem = build_problem(scene, facts, spec.domain, goal)
     fluent = planner.domain.fluent_predicates()
     static, state = [], []
     for text in problem.init:

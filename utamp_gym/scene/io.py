@@ -23,6 +23,8 @@ from utamp_gym.scene.catalogue import (
 )
 from utamp_gym.scene.geometry import PARTS, Box
 from utamp_gym.scene.model import ORIENTATIONS, Scene, SceneObject, Slot, Space
+from utamp_gym.tasks.goal import CUSTOM, Goal, split_literal
+from utamp_gym.tasks.templates import TEMPLATES, make_goal
 
 #: the PDDL domains' constants (hand, air, workspace and the parts) and the table
 RESERVED = frozenset({"hand", "air", "workspace", "table", *PARTS})
@@ -37,7 +39,9 @@ SCENE_FIELDS = (
     "objects",
     "types",
     "goal_base",
+    "goal",
 )
+GOAL_FIELDS = ("template", "params", "atoms")
 SLOT_FIELDS = ("name", "position", "size", "min", "max")
 SPACE_FIELDS = ("name", "slot", "position", "size")
 OBJECT_FIELDS = ("name", "type", "on", "orientation", "position")
@@ -116,7 +120,67 @@ def scene_from_dict(
         goal_base=goal_base,
     )
     _check_footprints(scene, file)
+    if "goal" in data:
+        scene = scene._replace(goal=_goal(data["goal"], scene, file))
     return scene
+
+
+def _goal(value: Any, scene: Scene, file: str) -> Goal:
+    """A scene file's ``[goal]``: a template (or composition ``a+b``) with its params, or
+    ``atoms`` alone (a custom goal); atoms given with a template must be the template's."""
+    g = f.table(value, file, "goal")
+    f.known_keys(g, GOAL_FIELDS, file, "goal")
+    atoms = g.get("atoms")
+    if atoms is not None:
+        if not isinstance(atoms, list) or not atoms:
+            raise SceneError("want a non-empty list of literals", file=file, field="goal.atoms")
+        symbols = _symbols(scene)
+        for i, a in enumerate(atoms):
+            try:
+                if not isinstance(a, str):
+                    raise ValueError(f"want a string such as '(oc on slot2 air)', got {a!r}")
+                body = split_literal(a.lower())[1]
+            except ValueError as exc:
+                raise SceneError(str(exc), file=file, field=f"goal.atoms[{i}]") from None
+            unknown = [x for x in body[1:-1].split()[1:] if x not in symbols]
+            if unknown:
+                raise SceneError(
+                    f"unknown name '{unknown[0]}' in {a}", file=file, field=f"goal.atoms[{i}]"
+                )
+    name = g.get("template", CUSTOM if atoms is not None else None)
+    if name is None:
+        raise SceneError("give a template (with params) or atoms", file=file, field="goal")
+    if name == CUSTOM:
+        if atoms is None:
+            raise SceneError("a custom goal needs atoms", file=file, field="goal.atoms")
+        return Goal.make(CUSTOM, f.table(g.get("params", {}), file, "goal.params"), atoms)
+    if not isinstance(name, str) or any(p not in TEMPLATES for p in name.split("+")):
+        raise SceneError(
+            f"unknown goal template {f.show(name)}; valid: {', '.join(TEMPLATES)} "
+            "(or several joined by '+')",
+            file=file,
+            field="goal.template",
+        )
+    try:
+        goal = make_goal(scene, name, f.table(g.get("params", {}), file, "goal.params"))
+    except (ValueError, KeyError) as exc:
+        raise SceneError(str(exc).strip("'\""), file=file, field="goal.params") from None
+    if atoms is not None and tuple(a.lower() for a in atoms) != goal.literals:
+        raise SceneError(
+            f"differ from the literals of template '{name}' with these params",
+            file=file,
+            field="goal.atoms",
+        )
+    return goal
+
+
+def _symbols(scene: Scene) -> set[str]:
+    """Every name a goal literal may use: the scene's PDDL objects, the domains' constants."""
+    out = {*RESERVED, *(s.name for s in scene.slots), *(s.name for s in scene.spaces)}
+    for o in scene.objects:
+        out.add(o.name)
+        out |= {f"{o.name}-{m}" for m in scene.type_of(o.name).members}
+    return {x.lower() for x in out}
 
 
 def _custom_types(value: Any, base: Catalogue, file: str) -> dict[str, ObjectType]:
@@ -355,6 +419,8 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     out["objects"] = objs
     if scene.custom_types:
         out["types"] = {n: type_to_dict(t) for n, t in scene.custom_types.items()}
+    if scene.goal is not None:
+        out["goal"] = scene.goal.to_dict()
     return out
 
 

@@ -4,7 +4,8 @@ A scene names the objects present, what each initially stands on (a table slot o
 another object), the table's slots, free spaces for sliding and the robot's
 reachable workspace. Poses follow from the data: objects are axis-aligned with the
 table and stand at the centroid of their support; an `inverted` object is turned a
-half turn about its x axis.
+half turn about its x axis. A scene may carry its goal (`utamp_gym.tasks.goal.Goal`);
+without one the goal is the paper's tower on `Scene.tower_base`.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any, NamedTuple
 from utamp_gym.errors import SceneError, UnknownNameError
 from utamp_gym.scene.catalogue import Catalogue, ObjectType
 from utamp_gym.scene.geometry import Box
+from utamp_gym.tasks.goal import Goal
 
 ORIENTATIONS = ("upright", "inverted")
 #: quaternion (w, x, y, z) of each orientation
@@ -89,6 +91,7 @@ class Scene:
         "description",
         "source",
         "goal_base",
+        "goal",
     )
     name: str
     catalogue: Catalogue
@@ -101,6 +104,7 @@ class Scene:
     description: str
     source: str
     goal_base: str | None
+    goal: Goal | None
 
     def __init__(
         self,
@@ -115,6 +119,7 @@ class Scene:
         description: str = "",
         source: str = "<scene>",
         goal_base: str | None = None,
+        goal: Goal | None = None,
     ) -> None:
         # the instance dict holds the fields and what `cached_property` computes
         self.__dict__.update(
@@ -129,6 +134,7 @@ class Scene:
             description=description,
             source=source,
             goal_base=goal_base,
+            goal=goal,
         )
 
     def _fields(self) -> tuple[Any, ...]:

@@ -31,6 +31,15 @@ PROCEDURAL_SUITES = tuple(
 SUITES = _enumerated.SUITES
 #: every suite a sweep, an env or ``utamp scenes list`` accepts: the enumerated and the splits
 ALL_SUITES = (*SUITES, *PROCEDURAL_SUITES)
+PROCEDURAL_V2 = "procedural-v2"
+#: the splits of procedural-v2, whose scenes carry their goals (`utamp_gym.suites.procedural_v2`;
+#: ``utamp scenes``, ``utamp plan`` and these functions take them; the envs do not yet)
+GOAL_SUITES = tuple(
+    f"{PROCEDURAL_V2}/{s}"
+    for s in ("train", "test-instances", "test-families", "test-count", "test-tasks", "hard")
+)
+#: what ``utamp scenes list`` lists
+LISTED_SUITES = (*ALL_SUITES, *GOAL_SUITES)
 
 
 def _split(suite: str) -> str:
@@ -95,8 +104,15 @@ def _ranges(names: Sequence[str]) -> list[str]:
 
 
 def _check_suite(suite: str) -> None:
-    if suite not in ALL_SUITES:
-        raise UnknownNameError("suite", suite, ALL_SUITES)
+    if suite not in LISTED_SUITES:
+        raise UnknownNameError("suite", suite, LISTED_SUITES)
+
+
+def _v2_split(suite: str) -> str | None:
+    """The procedural-v2 split a suite name is (None if another suite)."""
+    if suite not in GOAL_SUITES:
+        return None
+    return suite.removeprefix(f"{PROCEDURAL_V2}/")
 
 
 def suite_scenes(suite: str) -> tuple[Scene, ...]:
@@ -106,6 +122,10 @@ def suite_scenes(suite: str) -> tuple[Scene, ...]:
         from utamp_gym.suites import procedural
 
         return tuple(g.scene for g in procedural.split_scenes(_split(suite)))
+    if (split := _v2_split(suite)) is not None:
+        from utamp_gym.suites import procedural_v2
+
+        return tuple(g.scene for g in procedural_v2.split_scenes(split))
     return _enumerated.suite_scenes(suite)
 
 
@@ -128,6 +148,10 @@ def all_scene_names(suite: str | None = None) -> list[str]:
             from utamp_gym.suites import procedural
 
             out += procedural.split_names(_split(name))
+        elif (split := _v2_split(name)) is not None:
+            from utamp_gym.suites import procedural_v2
+
+            out += procedural_v2.split_names(split)
         else:
             out += _enumerated.all_scene_names(name)
     return out
@@ -142,6 +166,17 @@ def get_scene(name: str) -> Scene:
         if parsed is not None and parsed[1] < len(procedural.split_seeds(parsed[0])):
             return procedural.split_scene(*parsed).scene
         raise UnknownSceneError(name)
+    if name.startswith(f"{PROCEDURAL_V2}/"):
+        from utamp_gym.suites import procedural_v2
+
+        parsed = procedural_v2.parse_name(name)
+        if (
+            parsed is not None
+            and parsed[0] in procedural_v2.available_splits()
+            and parsed[1] < len(procedural_v2.split_seeds(parsed[0]))
+        ):
+            return procedural_v2.split_scene(*parsed).scene
+        raise UnknownSceneError(name, _v2_names())
     try:
         return _get_enumerated(name)
     except UnknownNameError:
@@ -150,33 +185,37 @@ def get_scene(name: str) -> Scene:
 
 def scene_summary(suite: str) -> list[dict[str, Any]]:
     """One record per scene of a suite: ``name``, ``n_objects``, ``families`` (the kitchenware
-    family of each object, the base first; for the enumerated suites the object types) and
-    ``achievable`` (the rules' verdict on the goal; the enumerated suites keep only
-    achievable scenes)."""
+    family of each object, the base first; for the enumerated suites the object types),
+    ``template`` and ``instruction`` of its goal (the suites before procedural-v2: the
+    paper's tower) and ``achievable`` (the rules' verdict on the goal; the enumerated suites
+    keep only achievable scenes; procedural-v2: the planner's label)."""
+    from utamp_gym.tasks.language import instruction
+    from utamp_gym.tasks.templates import tower_goal
+
     _check_suite(suite)
+
+    def record(scene: Scene, families: Sequence[str], achievable: bool) -> dict[str, Any]:
+        goal = scene.goal if scene.goal is not None else tower_goal(scene)
+        return {
+            "name": scene.name,
+            "n_objects": scene.n_objects,
+            "families": list(families),
+            "template": goal.template,
+            "instruction": instruction(scene, goal),
+            "achievable": achievable,
+        }
+
     if suite in PROCEDURAL_SUITES:
         from utamp_gym.suites import procedural
 
-        out = []
-        for g in procedural.split_scenes(_split(suite)):
-            out.append(
-                {
-                    "name": g.scene.name,
-                    "n_objects": g.scene.n_objects,
-                    "families": list(g.families),
-                    "achievable": g.achievable,
-                }
-            )
-        return out
-    return [
-        {
-            "name": s.name,
-            "n_objects": s.n_objects,
-            "families": [o.type for o in s.objects],
-            "achievable": True,
-        }
-        for s in _enumerated.suite_scenes(suite)
-    ]
+        return [record(g.scene, g.families, g.achievable)
+                for g in procedural.split_scenes(_split(suite))]  # fmt: skip
+    if (split := _v2_split(suite)) is not None:
+        from utamp_gym.suites import procedural_v2
+
+        return [record(g.scene, g.families, g.achievable)
+                for g in procedural_v2.split_scenes(split)]  # fmt: skip
+    return [record(s, [o.type for o in s.objects], True) for s in _enumerated.suite_scenes(suite)]
 
 
 def packaged_scene_names() -> list[str]:
@@ -191,7 +230,7 @@ def resolve_scene(ref: str) -> Scene:
     Only the scene asked for is built; the lists of valid names are made for errors only.
     """
     suite = ref.split("/", 1)[0]
-    if suite in (PROCEDURAL, *_enumerated.SUITES) and not Path(ref).exists():
+    if suite in (PROCEDURAL, PROCEDURAL_V2, *_enumerated.SUITES) and not Path(ref).exists():
         return get_scene(ref)  # its error suggests the nearest names (`UnknownSceneError`)
     packaged = assets_dir() / "scenes" / f"{ref}.toml"
     if "/" not in ref and ref != "layout" and packaged.is_file():
@@ -205,10 +244,19 @@ def resolve_scene(ref: str) -> Scene:
 def suite_of(ref: str) -> str:
     """The suite a suite scene's name belongs to (``procedural-v1/train/0042`` ->
     ``procedural-v1/train``), else ``""``."""
-    for s in ALL_SUITES:
+    for s in LISTED_SUITES:
         if ref.startswith(f"{s}/"):
             return s
     return ""
+
+
+def _v2_names() -> list[str]:
+    """The names of the procedural-v2 scenes generated so far."""
+    from utamp_gym.suites import procedural_v2
+
+    return [
+        n for split in procedural_v2.available_splits() for n in procedural_v2.split_names(split)
+    ]
 
 
 def _valid_names() -> list[str]:
@@ -218,6 +266,8 @@ def _valid_names() -> list[str]:
 
 __all__ = [
     "ALL_SUITES",
+    "GOAL_SUITES",
+    "LISTED_SUITES",
     "PROCEDURAL_SUITES",
     "SUITES",
     "UnknownSceneError",

@@ -2,9 +2,11 @@
 
 Objects: the scene's objects, their members (``<object>-<member>``), the table slots
 (each slot stands for the table top in its region), free spaces for sliding, and
-the domain constants hand, air and workspace. The goal is the paper's: the hand is
-empty and every slot except the tower base's is clear, so all objects form one
-tower on the base, each standing directly on the one below.
+the domain constants hand, air and workspace. The goal is the literals of a
+`utamp_gym.tasks.goal.Goal`: the one given, else the scene's own (a scene file's
+``[goal]``), else the paper's: the hand is empty and every slot except the tower base's
+is clear, so all objects form one tower on the base, each standing directly on the one
+below (`goal_atoms`; the problem text is then what it was before goals were data).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from utamp_gym.resources import asset_path
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, Box, is_adjacent
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
 from utamp_gym.symbolic.slots import Footprint, fits, usable_region
+from utamp_gym.tasks.goal import Goal
 
 DOMAINS = ("utamp2", "utamp1", "utamp2x")
 AFFORDANCE_PREDICATES = {"utamp2": True, "utamp1": False, "utamp2x": True}
@@ -212,10 +215,20 @@ def goal_atoms(scene: Scene) -> tuple[str, ...]:
     return (_atom("oc", "in", "hand", "air"), *clear)
 
 
-def build_problem(scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2") -> Problem:
-    """The PDDL problem for `scene` under `domain` with the given affordance facts."""
+def problem_goal(scene: Scene, goal: Goal | None = None) -> tuple[str, ...]:
+    """The goal literals a problem gets: `goal`'s, else the scene's, else the paper's."""
+    if goal is None:
+        goal = scene.goal
+    return goal_atoms(scene) if goal is None else goal.literals
+
+
+def build_problem(
+    scene: Scene, affordances: Iterable[Fact], domain: str = "utamp2", goal: Goal | None = None
+) -> Problem:
+    """The PDDL problem for `scene` under `domain` with the given affordance facts and goal
+    (`problem_goal`)."""
     init = frozenset(scene_facts(scene, affordances, domain))
-    goal = goal_atoms(scene)
+    goal_lits = problem_goal(scene, goal)
     objects = [s.name for s in scene.slots] + [s.name for s in scene.spaces]
     for o in scene.objects:
         objects.append(o.name)
@@ -227,7 +240,7 @@ def build_problem(scene: Scene, affordances: Iterable[Fact], domain: str = "utam
     lines.extend(f"    {a}" for a in sorted(init))
     lines.append("  )")
     lines.append("  (:goal (and")
-    lines.extend(f"    {g}" for g in goal)
+    lines.extend(f"    {g}" for g in goal_lits)
     lines.append("  ))")
     lines.append(")")
-    return Problem(pname, domain, "\n".join(lines) + "\n", tuple(objects), init, goal)
+    return Problem(pname, domain, "\n".join(lines) + "\n", tuple(objects), init, goal_lits)

@@ -27,7 +27,8 @@ from utamp_gym.suites.procedural.spec import (
     JITTER,
     REACH,
     STACK_GAP,
-    SUITE,
+    V1,
+    Config,
     Generated,
     NoLayout,
     _check_split,
@@ -104,8 +105,10 @@ def _place(
     return None
 
 
-def _scene_dict(split: str, index: int, seed: int) -> tuple[dict[str, Any], list[str], bool]:
-    rng, names, families, type_list, facts, orient = _draw_objects(split, seed)
+def _scene_dict(
+    split: str, index: int, seed: int, config: Config = V1
+) -> tuple[dict[str, Any], list[str], bool]:
+    rng, names, families, type_list, facts, orient = _draw_objects(split, seed, config)
     types = dict(zip(names, type_list, strict=True))
     stacks = _draw_stacks(rng, names, types, facts, orient)
     layout = _layout()
@@ -145,8 +148,8 @@ def _scene_dict(split: str, index: int, seed: int) -> tuple[dict[str, Any], list
     kinds = {o: (types[o].name, orient[o]) for o in names}
     achievable = goal_achievable(facts, kinds, stacks)
     data = {
-        "name": f"{SUITE}/{split}/{index:04d}",
-        "description": f"{SUITE} {split} seed {seed}: "
+        "name": f"{config.suite}/{split}/{index:04d}",
+        "description": f"{config.suite} {split} seed {seed}: "
         + " | ".join(
             "/".join(
                 f"{families[names.index(o)]}{'(inv)' if orient[o] == 'inverted' else ''}" for o in s
@@ -164,11 +167,13 @@ def _scene_dict(split: str, index: int, seed: int) -> tuple[dict[str, Any], list
     return data, [families[names.index(o)] for o in order], achievable
 
 
-def generate_scene(split: str, seed: int, index: int = 0) -> Generated:
+def generate_scene(split: str, seed: int, index: int = 0, config: Config = V1) -> Generated:
     """The scene of `seed` in `split`, named as the `index`-th of the split (`NoLayout` if the
-    seed has no valid layout)."""
-    data, families, achievable = _scene_dict(_check_split(split), index, seed)
-    file = f"<{SUITE} {split} seed {seed}>"
+    seed has no valid layout); `config` names another version's splits (procedural-v2)."""
+    if config is V1:
+        _check_split(split)
+    data, families, achievable = _scene_dict(split, index, seed, config)
+    file = f"<{config.suite} {split} seed {seed}>"
     try:
         scene = scene_from_dict(data, file=file, catalogue=_catalogue())
     except SceneError as exc:  # a drawn layout the scene checks reject: skip the seed

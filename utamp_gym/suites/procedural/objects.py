@@ -25,16 +25,14 @@ from utamp_gym.suites.generate import (
     tower_achievable,
 )
 from utamp_gym.suites.procedural.spec import (
-    FREE_SHARE,
     HELD_OUT_BASES,
     LEVEL_ATTEMPTS,
-    MAX_TOTAL_HEIGHT,
     MIN_CARRY,
-    OBJECT_NAMES,
     POOLS,
-    SPECS,
     TOWERS,
+    V1,
     VERSION,
+    Config,
     NoLayout,
 )
 
@@ -93,7 +91,7 @@ def goal_achievable(
 
 
 def _draw_objects(
-    split: str, seed: int
+    split: str, seed: int, config: Config = V1
 ) -> tuple[Any, list[str], list[str], list[ObjectType], frozenset[Fact], dict[str, str]]:
     """(rng, names, families, types, facts, orientation per name) of a seed's objects.
 
@@ -105,10 +103,10 @@ def _draw_objects(
     achievable. The other seeds
     draw every object freely (these goals are often unachievable: a bowl too heavy to
     pinch, two bottles)."""
-    spec = SPECS[split]
-    rng = rng_for("utamp-procedural", VERSION, split, seed)
+    spec = config.specs[split]
+    rng = rng_for("utamp-procedural", config.version, split, seed)
     n = int(spec.sizes[int(rng.integers(len(spec.sizes)))])
-    free = bool(rng.random() < FREE_SHARE)
+    free = bool(rng.random() < config.free_share)
     held_out_at = int(rng.integers(n)) if spec.new else -1
     lo, hi = POOLS[spec.pool]
 
@@ -124,16 +122,16 @@ def _draw_objects(
         types = [generate(f, VERSION, int(rng.integers(lo, hi)), validate=False) for f in families]
         orient = ["upright"] * n
     else:
-        families, types, orient = _goal_tower(rng, n, family_for, (lo, hi))
+        families, types, orient = _goal_tower(rng, n, family_for, (lo, hi), config.max_height)
     facts = _facts(types)
-    names = list(OBJECT_NAMES[:n])
+    names = list(config.names[:n])
     if free:  # orientations it can rest in (picked up in, where possible)
         for k in range(1, n):
             options, _ = _orientations(facts, types[k].name)
             if not options:
                 raise NoLayout(f"{types[k].name} cannot rest on the table")
             orient[k] = str(options[int(rng.integers(len(options)))])
-    if sum(_height(t) for t in types) > MAX_TOTAL_HEIGHT:
+    if sum(_height(t) for t in types) > config.max_height:
         raise NoLayout("too tall")
     return rng, names, families, types, facts, dict(zip(names, orient, strict=True))
 
@@ -149,7 +147,7 @@ def _carries_more(t: ObjectType, orientation: str) -> bool:
 
 
 def _goal_tower(
-    rng: Any, n: int, family_for: Any, pool: tuple[int, int]
+    rng: Any, n: int, family_for: Any, pool: tuple[int, int], max_height: float
 ) -> tuple[list[str], list[ObjectType], list[str]]:
     """A goal tower bottom-up (see `_draw_objects`): `TOWERS` tries of `LEVEL_ATTEMPTS` draws
     a level."""
@@ -157,7 +155,7 @@ def _goal_tower(
         families: list[str] = []
         types: list[ObjectType] = []
         orient: list[str] = []
-        budget = MAX_TOTAL_HEIGHT
+        budget = max_height
         for k in range(n):
             for _ in range(LEVEL_ATTEMPTS):
                 fam = family_for(k)

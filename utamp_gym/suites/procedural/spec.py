@@ -63,6 +63,22 @@ SPECS = {
 }
 
 
+class Config(NamedTuple):
+    """What a procedural suite version draws from: its name (scene names), the version in
+    its generator's seed (`kitchenware.params.rng_for`), its splits and object names. The
+    kitchenware instances are always the families' `VERSION` ones."""
+
+    suite: str
+    version: str
+    specs: dict[str, SplitSpec]
+    names: tuple[str, ...]
+    free_share: float = FREE_SHARE
+    max_height: float = MAX_TOTAL_HEIGHT  # m, all objects of a scene stacked
+
+
+V1 = Config(SUITE, VERSION, SPECS, OBJECT_NAMES)
+
+
 class Generated(NamedTuple):
     """One generated scene and what it was made of."""
 

@@ -1,0 +1,148 @@
+"""procedural-v2: pure generation, byte-identical regeneration, the split file's labels
+(checked against the planner and Fast Downward's translator), held-out templates."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+
+import pytest
+
+from utamp_gym.cli import main
+from utamp_gym.scene.io import scene_to_toml
+from utamp_gym.suites import get_scene
+from utamp_gym.suites.procedural.spec import NoLayout
+from utamp_gym.suites.procedural_v2 import (
+    available_splits,
+    generate_scene,
+    split_digest,
+    split_scene,
+    split_seeds,
+)
+from utamp_gym.suites.procedural_v2.labels import fd_agrees, label
+from utamp_gym.suites.procedural_v2.seeds import SAMPLE_STEP, _seed_table, sample_hash
+from utamp_gym.suites.procedural_v2.spec import (
+    HARD_MIN_ACTIONS,
+    HELD_OUT_COMPOSITIONS,
+    HELD_OUT_TEMPLATES,
+    SIZES,
+    SPLIT_TEMPLATES,
+    TRAIN_TEMPLATES,
+)
+from utamp_gym.symbolic.problem import scene_facts
+from utamp_gym.tasks.goal import goal_holds
+from utamp_gym.tasks.templates import TEMPLATES, parts
+
+SPLITS = available_splits()
+needs_file = pytest.mark.skipif(not SPLITS, reason="procedural-v2 split file not written yet")
+
+
+def test_a_scene_is_a_pure_function_of_split_and_seed() -> None:
+    for split in ("train", "test-tasks"):
+        seed = next(s for s in range(50) if _has_layout(split, s))
+        a, b = generate_scene(split, seed, 3), generate_scene(split, seed, 3)
+        assert scene_to_toml(a.scene) == scene_to_toml(b.scene)
+        assert a.scene.goal is not None and a.template in SPLIT_TEMPLATES[split]
+        assert a.scene.name == f"procedural-v2/{split}/0003"
+
+
+def test_no_goal_holds_before_anything_moves() -> None:
+    """A goal already met in the scene is never kept (the sampler draws again)."""
+    for split in ("train", "test-tasks"):
+        for seed in range(60):
+            try:
+                g = generate_scene(split, seed)
+            except NoLayout:
+                continue
+            assert g.scene.goal is not None
+            assert not goal_holds(g.scene.goal, scene_facts(g.scene, (), "utamp2"))
+
+
+def _has_layout(split: str, seed: int) -> bool:
+    try:
+        generate_scene(split, seed)
+    except NoLayout:
+        return False
+    return True
+
+
+def test_held_out_tasks_are_absent_from_train() -> None:
+    train = {p for t in TRAIN_TEMPLATES for p in parts(t)}
+    assert set(HELD_OUT_TEMPLATES).isdisjoint(train) and len(HELD_OUT_TEMPLATES) >= 2
+    for c in HELD_OUT_COMPOSITIONS:  # compositions of seen templates, never seen together
+        assert set(parts(c)) <= train and c not in TRAIN_TEMPLATES
+    assert set(SPLIT_TEMPLATES["test-tasks"]) == {*HELD_OUT_TEMPLATES, *HELD_OUT_COMPOSITIONS}
+    assert {p for ts in SPLIT_TEMPLATES.values() for t in ts for p in parts(t)} == set(TEMPLATES)
+
+
+@needs_file
+@pytest.mark.parametrize("split", SPLITS)
+def test_split_file_keeps_sizes_shares_and_the_labels_domain(split: str) -> None:
+    entry = _seed_table()[split]
+    assert entry["domain"] == "utamp2" and entry["labeller"] == "utamp2-rules"
+    assert entry["labels_checked_with_fd_translator"] is True
+    n = len(split_seeds(split))
+    assert n == SIZES[split] and len(entry["achievable"]) == len(entry["plan_length"]) == n
+    assert all(p > 0 for a, p in zip(entry["achievable"], entry["plan_length"], strict=True) if a)
+    bad = n - sum(entry["achievable"])
+    if split == "hard":
+        assert bad == 0 and min(entry["plan_length"]) >= HARD_MIN_ACTIONS
+    else:
+        assert 0.05 <= bad / n <= 0.15
+
+
+@needs_file
+@pytest.mark.parametrize("split", SPLITS)
+def test_sampled_scenes_regenerate_byte_identically(split: str) -> None:
+    assert split_digest(split, SAMPLE_STEP) == sample_hash(split)
+
+
+@needs_file
+@pytest.mark.parametrize("split", SPLITS)
+def test_labels_agree_with_the_planner_and_fast_downwards_translator(split: str) -> None:
+    entry = _seed_table()[split]
+    n = len(split_seeds(split))
+    for i in range(0, n, max(1, n // 3)):
+        g = split_scene(split, i)
+        lab = label(g.scene)
+        assert (lab.achievable, lab.plan_length) == (g.achievable, g.plan_length), g.scene.name
+    for i in [i for i, a in enumerate(entry["achievable"]) if not a][:1]:
+        assert fd_agrees(split_scene(split, i).scene, False) is True
+
+
+@needs_file
+def test_utamp_plan_and_scenes_list_take_v2_scenes(capsys: pytest.CaptureFixture[str]) -> None:
+    split = "test-tasks" if "test-tasks" in SPLITS else SPLITS[0]
+    i = next(i for i in range(20) if split_scene(split, i).achievable)
+    name = f"procedural-v2/{split}/{i:04d}"
+    assert main(["plan", name, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["solved"] and out["plan_length"] == split_scene(split, i).plan_length
+    goal = get_scene(name).goal
+    assert goal is not None and goal.template == split_scene(split, i).template
+    assert main(["scenes", "list", "--suite", f"procedural-v2/{split}", "--json"]) == 0
+    records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(records) == len(split_seeds(split))
+    assert {"template", "instruction", "achievable"} <= set(records[0])
+    assert all(r["template"] in SPLIT_TEMPLATES[split] for r in records)
+
+
+@needs_file
+def test_every_template_has_twenty_achievable_test_scenes() -> None:
+    tests = [s for s in SPLITS if s.startswith("test-")]
+    if len(tests) < 5 - 1:
+        pytest.skip("not every test split generated yet")
+    count: Counter[str] = Counter()
+    for split in tests:
+        for i in range(len(split_seeds(split))):
+            g = split_scene(split, i)
+            if g.achievable:
+                count.update(set(parts(g.template)))
+    assert all(count[t] >= 20 for t in TEMPLATES), count
+
+
+@pytest.mark.slow
+@needs_file
+@pytest.mark.parametrize("split", SPLITS)
+def test_whole_splits_regenerate_byte_identically(split: str) -> None:
+    assert split_digest(split) == _seed_table()[split]["sha256"]
