@@ -143,7 +143,8 @@ def table(summary: dict[str, Any], base: str, this: str) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
+    """The options (`tests/test_results_provenance.py` checks recorded commands against it)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", default="2c0b0d1")
     ap.add_argument("--rounds", type=int, default=3)
@@ -151,7 +152,11 @@ def main() -> None:
     ap.add_argument("--scenes", default="pick-place/003,sliding/003")
     ap.add_argument("--out", default=str(ROOT / "docs/results/loop_speed"))
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     scenes = args.scenes.split(",")
     if args.worker:
         worker(args.steps, scenes)

@@ -17,9 +17,10 @@ headless video of the execution (MP4 via imageio-ffmpeg, or GIF).
 
 from __future__ import annotations
 
+import tempfile
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,9 +29,10 @@ from utamp_gym.agents import OpenLoopPolicy, run_policy
 from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE, PhysicsBackend
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
+from utamp_gym.scene.io import scene_to_toml
 from utamp_gym.scene.model import Scene
 from utamp_gym.seeding import run_seed
-from utamp_gym.suites import SUITES, resolve_scene
+from utamp_gym.suites import SUITES, UnknownSceneError, resolve_scene
 
 VIDEO_SIZE = (480, 360)  # width, height
 VIDEO_PERIOD = 0.1  # s of simulated time per frame
@@ -130,6 +132,27 @@ def open_loop_env(
     )  # fmt: skip
 
 
+@contextmanager
+def scene_ref(scene: Scene | str) -> Iterator[str]:
+    """A name the env resolves to `scene`: its own name when that names this very scene
+    (a suite or packaged scene), else a scene file written for the duration (a `Scene`
+    built in code, e.g. a test's single object)."""
+    if isinstance(scene, str):
+        yield scene
+        return
+    try:
+        known = resolve_scene(scene.name) == scene
+    except UnknownSceneError:
+        known = False
+    if known:
+        yield scene.name
+        return
+    with tempfile.TemporaryDirectory(prefix="utamp-scene-") as tmp:
+        path = Path(tmp) / f"{scene.name.replace('/', '-')}.toml"
+        path.write_text(scene_to_toml(scene))
+        yield str(path)
+
+
 def execute_plan(
     scene: Scene | str,
     plan: Sequence[str],
@@ -154,12 +177,12 @@ def execute_plan(
     (e.g. one whose simulator was looked at first), left open; the other physics arguments
     are then its own.
     """
-    ref = scene if isinstance(scene, str) else scene.name
     own = env is None and backend is None
+    stack = ExitStack()  # a scene built in code lives in a file for the call
     if env is None:
         env = open_loop_env(
-            ref, backend=backend, pose_noise=pose_noise, disturbance=disturbance,
-            perception=perception,
+            stack.enter_context(scene_ref(scene)), backend=backend, pose_noise=pose_noise,
+            disturbance=disturbance, perception=perception,
         )  # fmt: skip
     sim: Any = env.backend
     try:
@@ -184,6 +207,7 @@ def execute_plan(
         sim.frame_sink = None
         if own:
             env.close()
+        stack.close()
     failed = next((s for s in steps if not s.success), None)
     failure = None
     if failed is not None:

@@ -26,7 +26,6 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 #: the goal of no template: literals given directly (a scene file's ``[goal] atoms``)
@@ -66,19 +65,48 @@ def _param(value: Any, name: str) -> ParamValue:
     raise ValueError(f"goal parameter {name!r}: want a name or a list of names, got {value!r}")
 
 
-@dataclass(frozen=True)
 class Goal:
     """A set of ground literals (`literals`), the template that made them and its parameters.
 
     `params` are (name, value) pairs sorted by name; a value is an object, slot or attribute
     name, or a tuple of them. Two goals are equal when template, parameters and literals are.
+    Immutable and hashable (a plain class: `utamp plan` imports it, and `dataclasses` costs
+    its start-up a few milliseconds).
     """
 
+    __slots__ = ("literals", "params", "template")
     template: str
     params: tuple[tuple[str, ParamValue], ...]
     literals: tuple[str, ...]
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self, template: str, params: tuple[tuple[str, ParamValue], ...], literals: tuple[str, ...]
+    ) -> None:
+        object.__setattr__(self, "template", template)
+        object.__setattr__(self, "params", tuple(params))
+        object.__setattr__(self, "literals", tuple(literals))
+        self._check()
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"Goal is immutable (cannot set {name!r})")
+
+    def _key(self) -> tuple[Any, ...]:
+        return (self.template, self.params, self.literals)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Goal) and self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+    def __repr__(self) -> str:
+        t, p, lits = self._key()
+        return f"Goal(template={t!r}, params={p!r}, literals={lits!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (Goal, self._key())
+
+    def _check(self) -> None:
         for lit in self.literals:
             split_literal(lit)
         if len(set(self.literals)) != len(self.literals):

@@ -21,8 +21,7 @@ parameters prefixed ``1.``, ``2.``.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from utamp_gym.errors import SceneError, UnknownNameError
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene
@@ -212,8 +211,7 @@ def _s_sort(scene: Scene, rng: Any) -> Params | None:
     return p if all(objs for _, objs in groups) else None
 
 
-@dataclass(frozen=True)
-class Template:
+class Template(NamedTuple):
     """A goal template: `build` makes its literals (the hand empty is added), `sample` draws
     parameters (None: the scene has none), `phrasings` are its instructions."""
 
