@@ -194,7 +194,7 @@ CONSTANTS = {
     "stop_tolerance_mm": ("utamp_gym.affordances.hand", "STOP_TOLERANCE", 1000),
     "torque_limit_nm": ("utamp_gym.affordances.hand", "TORQUE_LIMIT", 1),
     "torque_limit_above_nm": ("utamp_gym.affordances.hand", "TORQUE_LIMIT_ABOVE", 1),
-    "stand_margin_cm": ("utamp_gym.affordances.hand", "STAND_MARGIN", 100),
+    "stand_margin_cm": ("utamp_gym.affordances.solids", "STAND_MARGIN", 100),
     "place_margin_mm": ("utamp_gym.affordances.rules", "PLACE_MARGIN", 1000),
     "span_margin_mm": ("utamp_gym.affordances.rules", "SPAN_MARGIN", 1000),
     "procedural_reach_cm": ("utamp_gym.suites.procedural", "REACH", 100),

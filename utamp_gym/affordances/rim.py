@@ -35,12 +35,10 @@ from utamp_gym.affordances.hand import (
     TORQUE_LIMIT,
     TOUCH,
     G,
-    centre_of_mass,
     finger_room,
     hand_blocker,
-    realised_by_body,
-    stand_refusal,
 )
+from utamp_gym.affordances.solids import centre_of_mass, realised_by_body, stand_refusal
 from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import Member, ObjectType
 from utamp_gym.scene.geometry import axis_of

@@ -49,10 +49,10 @@ from utamp_gym.affordances.hand import (
     grip_limit,
     hold_refusal,
     holds,
-    stand_refusal,
     width_fits,
 )
 from utamp_gym.affordances.rim import rim_pinches
+from utamp_gym.affordances.solids import stand_refusal
 from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import NORMALS, OPPOSITE, SIDES, axis_of
