@@ -170,3 +170,17 @@ def test_every_template_has_twenty_achievable_test_scenes() -> None:
 @pytest.mark.parametrize("split", SPLITS)
 def test_whole_splits_regenerate_byte_identically(split: str) -> None:
     assert split_digest(split) == _seed_table()[split]["sha256"]
+
+
+@pytest.mark.slow
+@needs_file
+@pytest.mark.parametrize("split", SPLITS)
+def test_every_label_is_the_planners_in_a_fresh_process(split: str) -> None:
+    """Every kept scene's label and plan length, not only a sample (about 20 s in all)."""
+    wrong = []
+    for i in range(len(split_seeds(split))):
+        g = split_scene(split, i)
+        lab = label(g.scene)
+        if (lab.achievable, lab.plan_length) != (g.achievable, g.plan_length):
+            wrong.append((i, g.template, g.achievable, g.plan_length, lab.achievable))
+    assert not wrong, wrong
