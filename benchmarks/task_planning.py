@@ -84,7 +84,7 @@ def _table(title: str, rows: dict[tuple[str, str], list[dict[str, Any]]]) -> lis
     return lines
 
 
-def main() -> int:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--splits", nargs="+", choices=SPLITS, default=list(SPLITS))
     ap.add_argument("--step", type=int, default=10, help="every STEP-th scene (hard: all)")
@@ -94,7 +94,11 @@ def main() -> int:
                     default=["astar-blind", "lama-first"])  # fmt: skip
     ap.add_argument("--timeout", type=float, default=60.0)
     ap.add_argument("--out", default="docs/results/task_planning")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> int:
+    args = build_parser().parse_args()
     domain = method_spec(args.method).domain
     rows: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
     hard: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)

@@ -29,11 +29,15 @@ def _picked(plan: tuple[str, ...]) -> list[str]:
     return [a[1:-1].split()[1] for a in plan if a.startswith("(pick")]
 
 
-def main() -> int:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--timeout", type=float, default=60.0)
     ap.add_argument("--out", default="docs/results/v2_extended_grasps")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> int:
+    args = build_parser().parse_args()
     per: dict[str, Counter[str]] = defaultdict(Counter)
     families: Counter[str] = Counter()
     scenes: list[dict[str, Any]] = []
