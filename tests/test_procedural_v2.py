@@ -22,15 +22,19 @@ from utamp_gym.suites.procedural_v2 import (
 from utamp_gym.suites.procedural_v2.labels import fd_agrees, label
 from utamp_gym.suites.procedural_v2.seeds import SAMPLE_STEP, _seed_table, sample_hash
 from utamp_gym.suites.procedural_v2.spec import (
+    DOMAIN,
     HARD_MIN_ACTIONS,
+    HARD_TEMPLATES,
     HELD_OUT_COMPOSITIONS,
     HELD_OUT_TEMPLATES,
+    LABEL_METHOD,
     SIZES,
     SPLIT_TEMPLATES,
     TRAIN_TEMPLATES,
 )
 from utamp_gym.symbolic.problem import scene_facts
 from utamp_gym.tasks.goal import goal_holds
+from utamp_gym.tasks.sampling import contradiction
 from utamp_gym.tasks.templates import TEMPLATES, parts
 
 SPLITS = available_splits()
@@ -55,7 +59,23 @@ def test_no_goal_holds_before_anything_moves() -> None:
             except NoLayout:
                 continue
             assert g.scene.goal is not None
-            assert not goal_holds(g.scene.goal, scene_facts(g.scene, (), "utamp2"))
+            assert not goal_holds(g.scene.goal, scene_facts(g.scene, (), DOMAIN))
+
+
+def test_no_sampled_goal_contradicts_itself() -> None:
+    """Compositions never ask for two objects in one region, one object on two supports, a
+    cleared surface that carries something, ... (`tasks.sampling.contradiction`)."""
+    seen = 0
+    for split in ("train", "test-tasks"):
+        for seed in range(120):
+            try:
+                g = generate_scene(split, seed)
+            except NoLayout:
+                continue
+            assert g.scene.goal is not None
+            seen += "+" in g.template
+            assert contradiction(g.scene, g.scene.goal.literals) is None, (split, seed)
+    assert seen >= 20
 
 
 def _has_layout(split: str, seed: int) -> bool:
@@ -79,7 +99,8 @@ def test_held_out_tasks_are_absent_from_train() -> None:
 @pytest.mark.parametrize("split", SPLITS)
 def test_split_file_keeps_sizes_shares_and_the_labels_domain(split: str) -> None:
     entry = _seed_table()[split]
-    assert entry["domain"] == "utamp2" and entry["labeller"] == "utamp2-rules"
+    assert (entry["domain"], entry["labeller"]) == (DOMAIN, LABEL_METHOD)
+    assert DOMAIN == "utamp2x" and LABEL_METHOD == "utamp2x-rules"
     assert entry["labels_checked_with_fd_translator"] is True
     n = len(split_seeds(split))
     assert n == SIZES[split] and len(entry["achievable"]) == len(entry["plan_length"]) == n
@@ -138,7 +159,10 @@ def test_every_template_has_twenty_achievable_test_scenes() -> None:
             g = split_scene(split, i)
             if g.achievable:
                 count.update(set(parts(g.template)))
-    assert all(count[t] >= 20 for t in TEMPLATES), count
+    in_tests = {p for s in tests for t in SPLIT_TEMPLATES[s] for p in parts(t)}
+    assert in_tests == set(TEMPLATES) - {"restack"}  # restack: the hard suite's own
+    assert all(count[t] >= 20 for t in in_tests), count
+    assert set(HARD_TEMPLATES) - in_tests == {"restack"}
 
 
 @pytest.mark.slow
@@ -146,3 +170,17 @@ def test_every_template_has_twenty_achievable_test_scenes() -> None:
 @pytest.mark.parametrize("split", SPLITS)
 def test_whole_splits_regenerate_byte_identically(split: str) -> None:
     assert split_digest(split) == _seed_table()[split]["sha256"]
+
+
+@pytest.mark.slow
+@needs_file
+@pytest.mark.parametrize("split", SPLITS)
+def test_every_label_is_the_planners_in_a_fresh_process(split: str) -> None:
+    """Every kept scene's label and plan length, not only a sample (about 20 s in all)."""
+    wrong = []
+    for i in range(len(split_seeds(split))):
+        g = split_scene(split, i)
+        lab = label(g.scene)
+        if (lab.achievable, lab.plan_length) != (g.achievable, g.plan_length):
+            wrong.append((i, g.template, g.achievable, g.plan_length, lab.achievable))
+    assert not wrong, wrong

@@ -43,7 +43,7 @@ def _v2_sample(split: str, n: int) -> list[Scene]:
     return out
 
 
-@pytest.mark.parametrize("split", [s for s in SPLITS if s != "hard"])  # hard: not yet kept
+@pytest.mark.parametrize("split", SPLITS)
 def test_generated_goals_read_back_as_their_template_and_params(split: str) -> None:
     for scene in _v2_sample(split, 2 if split in ("test-count", "hard") else 12):
         assert scene.goal is not None

@@ -13,6 +13,9 @@ literals say only what every such arrangement shares, so a planner or policy may
   (stacks have no cycles), so all of S stands above B, one on another;
 * "X stands on the table": X stands on no object.
 
+``restack`` alone fixes an order: each of its objects on the one before, the first on the
+base.
+
 STAND is the part X stands on in its (fixed) orientation (`scene.model.STANDING_PART`).
 A composition of templates (`compose`) is the conjunction of its parts' literals, its
 parameters prefixed ``1.``, ``2.``.
@@ -91,6 +94,12 @@ def _clear(scene: Scene, p: Params) -> list[str]:
 
 def _in_region(scene: Scene, p: Params) -> list[str]:
     return [atom("oc", "on", p["region"], p["object"])]
+
+
+def _restack(scene: Scene, p: Params) -> list[str]:
+    """`objects` in one stack on `base` in the given order, bottom first."""
+    below = [p["base"], *p["objects"][:-1]]
+    return [on(scene, x, b) for x, b in zip(p["objects"], below, strict=True)]
 
 
 def _unstack(scene: Scene, p: Params) -> list[str]:
@@ -196,6 +205,27 @@ def _s_unstack(scene: Scene, rng: Any) -> Params | None:
     return {"base": base, "objects": _above(scene, base)}
 
 
+def _s_restack(scene: Scene, rng: Any) -> Params | None:
+    """Every object but the tower's base (at least three) in one stack on it in a drawn
+    order that turns over a pair standing one on another now, when the scene has one (so
+    the pair is taken apart first, with temporary placements)."""
+    tower = _s_tower(scene, rng)
+    if tower is None:
+        return None
+    base = tower["base"]
+    rest = _movable(scene, [base])
+    if len(rest) < 3:
+        return None
+    pairs = [(x, scene.support_of(x)) for x in rest if scene.support_of(x) in (*rest, base)]
+    order = rest
+    for _ in range(6):
+        order = [rest[int(i)] for i in rng.permutation(len(rest))]
+        chain = [base, *order]
+        if not pairs or any(chain.index(x) < chain.index(y) for x, y in pairs):
+            break
+    return {"base": base, "objects": order}
+
+
 def _s_sort(scene: Scene, rng: Any) -> Params | None:
     bottoms = _bottoms(scene)
     b = [str(bottoms[int(i)]) for i in rng.permutation(len(bottoms))[:2]]
@@ -268,6 +298,12 @@ TEMPLATES: dict[str, Template] = {
             ("unstack the tower on {base} onto the table",
              "take the tower on {base} apart and put each piece on the table"),
             "every object above a base standing on the table",
+        ),
+        Template(
+            "restack", ("base", "objects"), ("objects",), _restack, _s_restack,
+            ("restack {objects} on {base}, bottom to top in this order",
+             "build one stack on {base} of {objects}, in this order from the bottom up"),
+            "every object but a base in one stack on it, in a given order",
         ),
         Template(
             "sort", ("base", "category", "base2", "category2"), (), _sort, _s_sort,

@@ -36,7 +36,7 @@ def label(scene: Scene, timeout: float = LABEL_TIMEOUT) -> Label:
 def fd_agrees(scene: Scene, achievable: bool, timeout: float = LABEL_TIMEOUT) -> bool | None:
     """Whether Fast Downward's translator reaches the same verdict (None: it timed out)."""
     spec = method_spec(LABEL_METHOD)
-    facts, _ = affordances_for(scene, spec.affordances, None, 0.0)
+    facts, _ = affordances_for(scene, spec.affordances, None, 0.0, spec.domain)
     problem = build_problem(scene, facts, spec.domain)
     try:
         result = solve(domain_text(spec.domain), problem.text, translator="fd", timeout=timeout)

@@ -4,7 +4,8 @@ one of the split's templates. A pure function of (split, seed), like v1's.
 The goal's template is drawn uniformly from `SPLIT_TEMPLATES` and its parameters by the
 template's sampler (`tasks.sampling.sample_goal`), from a generator seeded by the SHA-256 of
 ("utamp-procedural-goal", v2, split, seed). Of `GOAL_DRAWS` draws the first that passes
-quick checks on the affordance facts is kept (what it moves can be picked up; a stack's
+quick checks on the rules' affordance facts under the split file's domain
+(`spec.DOMAIN`) is kept (what it moves can be picked up; a stack's
 objects can stand on one another in some order; an object can stand on its target), else
 the first drawn: such goals are often unachievable, and the planner labels every goal
 (`labels`). A goal that already holds in the scene is never kept.
@@ -13,18 +14,23 @@ the first drawn: such goals are often unachievable, and the planner labels every
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import pairwise
 from typing import NamedTuple
 
 from utamp_gym.affordances.facts import Fact
+from utamp_gym.affordances.rules import derive_affordances
+from utamp_gym.affordances.sources import EXTENDED_DOMAINS
 from utamp_gym.kitchenware.params import rng_for
 from utamp_gym.scene.model import UP_PART, Scene
 from utamp_gym.suites.generate import _liftable_from_above, _supports, tower_achievable
 from utamp_gym.suites.procedural.layout import generate_scene as _v1_style_scene
-from utamp_gym.suites.procedural.objects import _facts, goal_achievable
+from utamp_gym.suites.procedural.objects import TABLE_TYPE, _catalogue, goal_achievable
 from utamp_gym.suites.procedural.spec import NoLayout
 from utamp_gym.suites.procedural_v2.spec import (
+    DOMAIN,
     GOAL_DRAWS,
     MAX_GOAL_STACK,
+    RESTACK_DRAWS,
     SPLIT_TEMPLATES,
     V2,
     VERSION,
@@ -55,10 +61,12 @@ def generate_scene(split: str, seed: int, index: int = 0) -> GoalScene:
     rng = rng_for("utamp-procedural-goal", VERSION, split, seed)
     options = SPLIT_TEMPLATES[split]
     template_id = options[int(rng.integers(len(options)))]
-    facts = _facts(list(scene.custom_types.values()))
-    initial = scene_facts(scene, (), "utamp2")
+    facts = derive_affordances(
+        [_catalogue()[TABLE_TYPE], *scene.custom_types.values()], DOMAIN in EXTENDED_DOMAINS
+    )
+    initial = scene_facts(scene, (), DOMAIN)
     first: Goal | None = None
-    for _ in range(GOAL_DRAWS):
+    for _ in range(RESTACK_DRAWS if template_id == "restack" else GOAL_DRAWS):
         goal = sample_goal(scene, template_id, rng)
         if goal is None or goal_height(scene, goal) > MAX_GOAL_STACK:
             continue
@@ -93,6 +101,11 @@ def plausible(scene: Scene, goal: Goal, facts: frozenset[Fact]) -> bool:
         if name == "tower":
             order = sorted(scene.stacks.values(), key=lambda c: p["base"] not in c)
             ok = goal_achievable(facts, kinds, order)
+        elif name == "restack":  # each object can stand on the one below it
+            chain = [p["base"], *p["objects"]]
+            ok = free([*p["objects"], *_above(scene, p["base"])]) and all(
+                _supports(facts, kinds[b], kinds[x]) for b, x in pairwise(chain)
+            )
         elif name in ("subset-on", "two-stacks"):
             ok = stack(p["base"], p["objects"]) and (
                 "base2" not in p or stack(p["base2"], p["objects2"])
@@ -129,7 +142,7 @@ def goal_height(scene: Scene, goal: Goal) -> float:
                        strict=True):  # fmt: skip
         if name == "tower":
             tallest = max(tallest, h(scene.object_names))
-        elif name in ("subset-on", "two-stacks", "sort"):
+        elif name in ("subset-on", "two-stacks", "sort", "restack"):
             groups = (
                 sort_groups(scene, p)
                 if name == "sort"
