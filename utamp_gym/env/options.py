@@ -20,6 +20,7 @@ from utamp_gym.backend import (
     MAX_POSE_NOISE,
     PERCEPTION_MODES,
 )
+from utamp_gym.env.goals import Task, check_task
 from utamp_gym.env.object_space import INTERFACES
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene.model import Scene
@@ -101,6 +102,7 @@ class EnvOptions:
     split: str | None = None
     perception: str = DEFAULT_PERCEPTION
     interface: str = "grounded"
+    task: Task = None
 
     def __post_init__(self) -> None:
         if self.split is not None:  # a procedural split: "train" or "procedural-v1/train"
@@ -133,6 +135,7 @@ class EnvOptions:
         _unit("noise", self.noise)
         _choice("masks", self.masks, MASKS)
         _choice("interface", self.interface, INTERFACES)
+        check_task(self.task)
         if self.masks != "affordances" and self.domain != "utamp2":
             raise ValueError(
                 f"masks={self.masks!r} needs domain='utamp2' (it drops U-TAMP-2's affordance "

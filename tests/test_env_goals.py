@@ -1,0 +1,134 @@
+"""The env reads goals: the scene's (default: the paper's tower), the ``task`` option, negated
+literals in symbolic success, ``info["goal"]`` / ``info["instruction"]`` and the planner
+policy's problem."""
+
+from __future__ import annotations
+
+import pickle
+
+import gymnasium as gym
+import pytest
+from gymnasium.utils.env_checker import data_equivalence
+
+from utamp_gym.agents import PlannerPolicy, state_problem
+from utamp_gym.env.goals import resolve_goal
+from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.env.registry import register_envs
+from utamp_gym.errors import UnknownNameError
+from utamp_gym.suites import resolve_scene
+from utamp_gym.symbolic.problem import goal_atoms
+from utamp_gym.tasks.goal import CUSTOM, Goal, goal_holds
+from utamp_gym.tasks.language import instruction
+from utamp_gym.tasks.templates import tower_goal
+
+SCENE = "pick-place/105"  # the mug stands on the board at the start
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _registered() -> None:
+    register_envs()
+
+
+def symbolic(**kwargs: object) -> UTampKitchenEnv:
+    return UTampKitchenEnv(suite="pick-place", grounding="symbolic", **kwargs)  # type: ignore[arg-type]
+
+
+def solve(env: gym.Env, seed: int, steps: int = 40) -> dict:
+    obs, info = env.reset(seed=seed)
+    policy = PlannerPolicy(env)
+    for _ in range(steps):
+        obs, _, terminated, truncated, info = env.step(policy(obs, info))
+        if terminated or truncated:
+            break
+    return info
+
+
+def test_default_goal_is_the_papers_tower_with_its_instruction() -> None:
+    env = symbolic()
+    for seed in range(3):
+        _, info = env.reset(seed=seed)
+        scene = env.scene
+        assert scene.goal is None and env.goal == tower_goal(scene)
+        assert info["goal"] == goal_atoms(scene)
+        assert info["instruction"] == instruction(scene, tower_goal(scene))
+        assert "tray" in info["instruction"]
+    info = solve(env, 0)
+    assert info["is_success"] and info["goal"] == goal_atoms(env.scene)
+
+
+def test_negated_goal_literals_must_hold_for_success() -> None:
+    holds = Goal.make(CUSTOM, {}, ["(oc in hand air)"])
+    env = symbolic(scene=SCENE, task=holds)
+    _, info = env.reset(seed=0)
+    assert info["is_success"]  # the hand is empty at the start
+    assert info["instruction"] == "make these hold: (oc in hand air)"
+    moved = Goal.make(CUSTOM, {}, ["(oc in hand air)", "(not (oc on board mug))"])
+    env = symbolic(scene=SCENE, task=moved)
+    _, info = env.reset(seed=0)
+    assert not info["is_success"] and env.goal == moved
+    assert info["goal"] == ("(oc in hand air)", "(not (oc on board mug))")
+    info = solve(env, 0)
+    assert info["is_success"] and "(oc on board mug)" not in env.true_atoms()
+
+
+def test_task_template_draws_one_goal_per_scene_and_the_planner_follows_it() -> None:
+    env = symbolic(task="clear")
+    assert 0 < len(env.scenes) <= len(symbolic().scenes)  # scenes without a surface to clear out
+    _, info = env.reset(seed=3)
+    assert env.goal.template == "clear" and info["goal"] == env.goal.literals
+    assert env.goal == resolve_goal(env.scene, "clear")  # a pure function of (scene, task)
+    assert info["instruction"] == instruction(env.scene, env.goal)
+    info = solve(env, 3)
+    assert info["is_success"] and goal_holds(env.goal, env.true_atoms())
+
+
+def test_templated_goal_is_rebuilt_in_each_scene() -> None:
+    scene = resolve_scene(SCENE)
+    goal = resolve_goal(scene, "clear")
+    assert goal is not None
+    env = symbolic(task=goal)
+    assert SCENE in {s.name for s in env.scenes}
+    assert all(resolve_goal(s, goal) is not None for s in env.scenes)
+    env.reset(seed=0, options={"scene": SCENE})
+    assert env.goal == goal
+
+
+def test_task_option_errors_name_the_valid_templates() -> None:
+    with pytest.raises(UnknownNameError, match=r"goal template.*put-on"):
+        symbolic(task="put-onn")
+    with pytest.raises(ValueError, match="task must be"):
+        symbolic(task=3)
+    nowhere = Goal.make("put-on", {"object": "kettle", "target": "tray"}, ["(oc in hand air)"])
+    with pytest.raises(ValueError, match="no goal in any of the env's"):
+        symbolic(task=nowhere)
+
+
+def test_planner_problem_and_pickled_env_carry_the_goal() -> None:
+    env = symbolic(task="put-on")
+    first = env.reset(seed=1)
+    problem = state_problem(env.scene, ["mug"], [], "utamp2", goal=env.goal.literals)
+    assert all(lit in problem for lit in env.goal.literals)
+    assert goal_atoms(env.scene)[1] in state_problem(env.scene, ["mug"], [], "utamp2")
+    again = pickle.loads(pickle.dumps(env))
+    assert data_equivalence(again.reset(seed=1), first) and again.goal == env.goal
+
+
+def test_gym_make_passes_task() -> None:
+    env = gym.make("UTampKitchen-v0", grounding="symbolic", task="tower")
+    _, info = env.reset(seed=0)
+    assert env.unwrapped.goal == tower_goal(env.unwrapped.scene)  # type: ignore[attr-defined]
+    assert info["goal"] == goal_atoms(env.unwrapped.scene)  # type: ignore[attr-defined]
+
+
+@pytest.mark.physics
+@pytest.mark.slow
+def test_physics_success_is_the_goal_on_the_measured_state() -> None:
+    moved = Goal.make(CUSTOM, {}, ["(oc in hand air)", "(not (oc on board mug))"])
+    env = UTampKitchenEnv(suite="pick-place", scene=SCENE, task=moved)
+    _, info = env.reset(seed=0)
+    assert not info["is_success"]
+    info = solve(env, 0, steps=6)
+    perception = env.perception
+    assert perception is not None and "(oc on board mug)" not in perception.atoms
+    assert info["is_success"] and info["goal"] == moved.literals
+    env.close()
