@@ -132,3 +132,36 @@ def test_physics_success_is_the_goal_on_the_measured_state() -> None:
     assert perception is not None and "(oc on board mug)" not in perception.atoms
     assert info["is_success"] and info["goal"] == moved.literals
     env.close()
+
+
+def test_procedural_v2_split_env_reads_each_scenes_goal() -> None:
+    env = gym.make(
+        "UTampKitchenProcedural-v0", split="procedural-v2/test-tasks", grounding="symbolic"
+    )
+    kitchen = env.unwrapped
+    assert kitchen.options.suite == "procedural-v2/test-tasks"  # type: ignore[attr-defined]
+    templates = set()
+    for seed in range(8):
+        _, info = env.reset(seed=seed)
+        scene = kitchen.scene  # type: ignore[attr-defined]
+        assert scene.goal is not None and kitchen.goal == scene.goal  # type: ignore[attr-defined]
+        assert info["goal"] == scene.goal.literals
+        assert info["instruction"] == instruction(scene, scene.goal)
+        templates.add(scene.goal.template)
+    assert len(templates) >= 2 and "tower" not in templates  # held-out templates only
+
+
+def test_test_count_needs_rows_for_eight_objects() -> None:
+    with pytest.raises(ValueError, match="outside the env's observation rows"):
+        gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count")
+    rows = ["base", *(f"obj{i}" for i in range(1, 8))]
+    with pytest.raises(ValueError, match="the objects interface has room for 6"):
+        env = gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count", objects=rows,
+                       grounding="symbolic")  # fmt: skip
+        env.reset(options={"scene": "procedural-v2/test-count/0072"})
+    env = gym.make(
+        "UTampKitchenProcedural-v0", split="procedural-v2/test-count", objects=rows,
+        grounding="symbolic", interface="grounded",
+    )  # fmt: skip
+    env.reset(options={"scene": "procedural-v2/test-count/0072"})
+    assert env.unwrapped.scene.n_objects == 7  # type: ignore[attr-defined]

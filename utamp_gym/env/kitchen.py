@@ -129,7 +129,10 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     * ``split``: a procedural split ("train", "test-instances", "test-families", "test-count";
       `utamp_gym.suites.procedural`): its scenes instead of a suite's. All splits share one
       action universe and the observation rows ``base, obj1 .. obj5``
-      (``UTampKitchenProcedural-v0``);
+      (``UTampKitchenProcedural-v0``). A procedural-v2 split ("procedural-v2/test-tasks",
+      `utamp_gym.suites.procedural_v2`; each scene with its goal) has an action universe of
+      its own; its test-count scenes have up to 8 objects (rows ``base, obj1 .. obj7``, and
+      the grounded interface: the objects interface holds 6);
     * ``task``: the episodes' goal (`utamp_gym.env.goals`): None (default: the scene's own,
       else the paper's tower), a template id or composition (``"clear"``,
       ``"put-on+in-region"``: the scene's goal of that template, else one drawn per scene

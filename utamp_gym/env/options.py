@@ -26,6 +26,7 @@ from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import (
     ALL_SUITES,
+    GOAL_SUITES,
     PROCEDURAL,
     PROCEDURAL_SUITES,
     resolve_scene,
@@ -105,11 +106,11 @@ class EnvOptions:
     task: Task = None
 
     def __post_init__(self) -> None:
-        if self.split is not None:  # a procedural split: "train" or "procedural-v1/train"
+        if self.split is not None:  # "train", "procedural-v1/train" or "procedural-v2/train"
             splits = [s.removeprefix(f"{PROCEDURAL}/") for s in PROCEDURAL_SUITES]
             short = str(self.split).removeprefix(f"{PROCEDURAL}/")
-            _choice("split", short, splits)
-            suite = f"{PROCEDURAL}/{short}"
+            _choice("split", short, [*splits, *GOAL_SUITES])
+            suite = short if short in GOAL_SUITES else f"{PROCEDURAL}/{short}"
             if self.suite is not None and self.suite != suite:
                 raise ValueError(
                     f"split={self.split!r} is the suite {suite!r}; drop suite={self.suite!r}"
