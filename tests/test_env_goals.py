@@ -7,17 +7,21 @@ from __future__ import annotations
 import pickle
 
 import gymnasium as gym
+import numpy as np
 import pytest
 from gymnasium.utils.env_checker import data_equivalence
 
 from utamp_gym.agents import PlannerPolicy, state_problem
 from utamp_gym.env.goals import resolve_goal
 from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.env.object_goal import GOAL_KEYS
+from utamp_gym.env.object_space import MAX_OBJECTS
 from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UnknownNameError
+from utamp_gym.scene.geometry import PARTS
 from utamp_gym.suites import resolve_scene
 from utamp_gym.symbolic.problem import goal_atoms
-from utamp_gym.tasks.goal import CUSTOM, Goal, goal_holds
+from utamp_gym.tasks.goal import CUSTOM, Goal, goal_holds, split_literal
 from utamp_gym.tasks.language import instruction
 from utamp_gym.tasks.templates import tower_goal
 
@@ -165,3 +169,51 @@ def test_test_count_needs_rows_for_eight_objects() -> None:
     )  # fmt: skip
     env.reset(options={"scene": "procedural-v2/test-count/0072"})
     assert env.unwrapped.scene.n_objects == 7  # type: ignore[attr-defined]
+
+
+def _entity(env: UTampKitchenEnv, name: str) -> int:
+    """The observation's entity index of an object (its slot) or a table region."""
+    slots = env._objects.slots  # type: ignore[union-attr]
+    if name in slots:
+        return slots[name]
+    regions = [s.name for s in env.scene.slots]
+    return MAX_OBJECTS + regions.index(name)
+
+
+def test_goal_observation_writes_every_literal_in_slot_order() -> None:
+    env = gym.make("UTampKitchenGoals-v0", grounding="symbolic")
+    kitchen = env.unwrapped
+    assert isinstance(kitchen, UTampKitchenEnv)
+    v0 = gym.make("UTampKitchenProcedural-v0", grounding="symbolic").observation_space
+    assert set(env.observation_space.spaces) == {*v0.spaces, *GOAL_KEYS}  # type: ignore[attr-defined]
+    for seed in range(6):
+        obs, _ = env.reset(seed=seed)
+        assert env.observation_space.contains(obs)
+        expected = {k: np.zeros_like(obs[k]) for k in GOAL_KEYS}
+        for lit in kitchen.goal.literals:
+            positive, body = split_literal(lit)
+            part, a, b = body[1:-1].split()[1:]
+            if a == "hand":
+                continue  # the hand-empty literal: `held` shows it
+            sign = "goal_" if positive else "goal_not_"
+            if b == "air":
+                expected[sign + "free"][_entity(kitchen, a), PARTS.index(part)] = 1
+            else:
+                at = (_entity(kitchen, a), _entity(kitchen, b), PARTS.index(part))
+                expected[sign + "contact"][at] = 1
+        for k in GOAL_KEYS:
+            assert np.array_equal(obs[k], expected[k]), (seed, k)
+        assert obs["goal_not_contact"].any() or obs["goal_contact"].any() or obs["goal_free"].any()
+        step = env.step(int(np.flatnonzero(kitchen.action_masks())[0]))
+        assert all(np.array_equal(step[0][k], obs[k]) for k in GOAL_KEYS)  # fixed per episode
+
+
+def test_grounded_goal_observation_is_the_goals_atoms() -> None:
+    env = symbolic(goal_observation=True, scene=SCENE, task=Goal.make(
+        CUSTOM, {}, ["(oc in hand air)", "(not (oc on board mug))"]))  # fmt: skip
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+    atoms = env.symbolic_atoms
+    assert [atoms[i] for i in np.flatnonzero(obs["goal"])] == ["(oc in hand air)"]
+    assert [atoms[i] for i in np.flatnonzero(obs["goal_not"])] == ["(oc on board mug)"]
+    assert "goal" not in symbolic().observation_space.spaces  # default: v0's spaces

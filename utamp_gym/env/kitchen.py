@@ -24,6 +24,12 @@ from utamp_gym.backend import (
 from utamp_gym.env.goals import EpisodeGoals
 from utamp_gym.env.grounding import ScenePresence, make_grounding
 from utamp_gym.env.info import step_info
+from utamp_gym.env.object_goal import (
+    goal_observation,
+    goal_spaces,
+    symbolic_goal_observation,
+    symbolic_goal_spaces,
+)
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.physics import NOT_RUN, Stepped
@@ -138,6 +144,10 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       ``"put-on+in-region"``: the scene's goal of that template, else one drawn per scene
       by a generator seeded from the scene's name; scenes with none are left out of
       `scenes`), or a `Goal` (a templated one rebuilt in each scene, a custom one as is);
+    * ``goal_observation`` (default False, True in ``UTampKitchenGoals-v0``): the goal in the
+      observation (`utamp_gym.env.object_goal`): in slot order with the objects interface
+      (``goal_contact``, ``goal_free``, ``goal_not_contact``, ``goal_not_free``), over
+      ``symbolic``'s atoms with the grounded one (``goal``, ``goal_not``);
     * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array" |
       "rgb_array_list" | "human"), ``camera`` (adds ``image``), ``image_size`` /
       ``render_size`` ((height, width));
@@ -220,6 +230,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         perception: str = DEFAULT_PERCEPTION,
         interface: str = "grounded",
         task: str | Goal | None = None,
+        goal_observation: bool = False,
     ) -> None:
         kwargs: dict[str, Any] = {
             "suite": suite, "objects": objects, "grounding": grounding, "domain": domain,
@@ -233,6 +244,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             "perception": perception,
             "interface": interface,
             "task": task,
+            "goal_observation": goal_observation,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option
         self.render_mode = render_mode
@@ -248,6 +260,15 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             self.observation_space = self._objects.observation_space
             if opts.camera:
                 self.observation_space["image"] = self._grounded_space()["image"]
+        if opts.goal_observation:  # a new env id's spaces (env.object_goal)
+            extra = (
+                goal_spaces()
+                if self._objects
+                else symbolic_goal_spaces(len(self.universe.fluent_atoms))
+            )
+            for key, space in extra.items():
+                self.observation_space[key] = space
+        self._goal_obs: dict[str, np.ndarray] = {}
         self._state = SymbolicState(self.universe, opts.masks)
         self._grounding = make_grounding(opts, self.universe, self._state)
         self._present = ScenePresence(opts.objects)
@@ -316,6 +337,14 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._rendering.reset()
         if self._objects is not None:  # drawn last: the other draws match the grounded env's
             self._objects.reset(scene, self.np_random)
+        if self.options.goal_observation:
+            self._goal_obs = (
+                goal_observation(self._objects, atoms.goal, atoms.goal_negative)
+                if self._objects
+                else symbolic_goal_observation(
+                    self.universe.fluent_index, atoms.goal, atoms.goal_negative
+                )
+            )
         return self._observation(), self._info(goal, None, None, NOT_RUN)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
@@ -385,6 +414,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
                 "present": self._present.rows(),
                 "robot": robot,
             }
+        obs.update({k: v.copy() for k, v in self._goal_obs.items()})
         if self.options.camera:
             obs["image"] = self._image(self.options.image_size)
         return obs

@@ -104,6 +104,7 @@ class EnvOptions:
     perception: str = DEFAULT_PERCEPTION
     interface: str = "grounded"
     task: Task = None
+    goal_observation: bool = False
 
     def __post_init__(self) -> None:
         if self.split is not None:  # "train", "procedural-v1/train" or "procedural-v2/train"
@@ -137,6 +138,7 @@ class EnvOptions:
         _choice("masks", self.masks, MASKS)
         _choice("interface", self.interface, INTERFACES)
         check_task(self.task)
+        _bool("goal_observation", self.goal_observation)
         if self.masks != "affordances" and self.domain != "utamp2":
             raise ValueError(
                 f"masks={self.masks!r} needs domain='utamp2' (it drops U-TAMP-2's affordance "
