@@ -12,12 +12,14 @@ import pytest
 from gymnasium.utils.env_checker import data_equivalence
 
 from utamp_gym.agents import PlannerPolicy, state_problem
+from utamp_gym.agents.runs import execute_plan
 from utamp_gym.env.goals import resolve_goal
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.object_goal import GOAL_KEYS
 from utamp_gym.env.object_space import MAX_OBJECTS
 from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UnknownNameError
+from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.suites import resolve_scene
 from utamp_gym.symbolic.problem import goal_atoms
@@ -217,3 +219,17 @@ def test_grounded_goal_observation_is_the_goals_atoms() -> None:
     assert [atoms[i] for i in np.flatnonzero(obs["goal"])] == ["(oc in hand air)"]
     assert [atoms[i] for i in np.flatnonzero(obs["goal_not"])] == ["(oc on board mug)"]
     assert "goal" not in symbolic().observation_space.spaces  # default: v0's spaces
+
+
+@pytest.mark.physics
+@pytest.mark.slow
+def test_open_loop_failure_names_the_unmet_goal_literals() -> None:
+    scene = resolve_scene("procedural-v2/test-tasks/0000")
+    assert scene.goal is not None and scene.goal.template != "tower"
+    outcome = plan_scene(scene, "utamp2-gt")
+    assert outcome.solved and outcome.plan_length > 2
+    run = execute_plan(scene, outcome.plan[:2])
+    assert not run.success and run.failure is not None
+    assert run.failure["reason"].startswith("goal not reached: (")
+    named = run.failure["reason"].removeprefix("goal not reached: ").split(", ")
+    assert named and set(named) <= set(scene.goal.literals)
