@@ -24,12 +24,7 @@ from utamp_gym.backend import (
 from utamp_gym.env.goals import EpisodeGoals
 from utamp_gym.env.grounding import ScenePresence, make_grounding
 from utamp_gym.env.info import step_info
-from utamp_gym.env.object_goal import (
-    goal_observation,
-    goal_spaces,
-    symbolic_goal_observation,
-    symbolic_goal_spaces,
-)
+from utamp_gym.env.object_goal import goal_entries, goal_entry_spaces
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.physics import NOT_RUN, Stepped
@@ -261,13 +256,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             if opts.camera:
                 self.observation_space["image"] = self._grounded_space()["image"]
         if opts.goal_observation:  # a new env id's spaces (env.object_goal)
-            extra = (
-                goal_spaces()
-                if self._objects
-                else symbolic_goal_spaces(len(self.universe.fluent_atoms))
-            )
-            for key, space in extra.items():
-                self.observation_space[key] = space
+            self.observation_space.spaces.update(goal_entry_spaces(self._objects, self.universe))
         self._goal_obs: dict[str, np.ndarray] = {}
         self._state = SymbolicState(self.universe, opts.masks)
         self._grounding = make_grounding(opts, self.universe, self._state)
@@ -338,13 +327,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         if self._objects is not None:  # drawn last: the other draws match the grounded env's
             self._objects.reset(scene, self.np_random)
         if self.options.goal_observation:
-            self._goal_obs = (
-                goal_observation(self._objects, atoms.goal, atoms.goal_negative)
-                if self._objects
-                else symbolic_goal_observation(
-                    self.universe.fluent_index, atoms.goal, atoms.goal_negative
-                )
-            )
+            self._goal_obs = goal_entries(self._objects, self.universe, atoms)
         return self._observation(), self._info(goal, None, None, NOT_RUN)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:

@@ -31,6 +31,8 @@ from gymnasium import spaces
 from utamp_gym.env.object_space import MAX_OBJECTS, MAX_REGIONS, MAX_SPACES
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.scene.geometry import PARTS
+from utamp_gym.symbolic.atoms import EpisodeAtoms
+from utamp_gym.symbolic.universe import Universe
 
 #: the goal's observation keys
 GOAL_KEYS = ("goal_contact", "goal_free", "goal_not_contact", "goal_not_free")
@@ -75,8 +77,29 @@ def symbolic_goal_observation(
     return out
 
 
+def goal_entry_spaces(
+    objects: ObjectInterface | None, universe: Universe
+) -> dict[str, spaces.Space]:
+    """The goal entries' spaces of an env with the objects interface `objects`, or (None)
+    the grounded one over `universe`."""
+    if objects is not None:
+        return goal_spaces()
+    return symbolic_goal_spaces(len(universe.fluent_atoms))
+
+
+def goal_entries(
+    objects: ObjectInterface | None, universe: Universe, atoms: EpisodeAtoms
+) -> dict[str, np.ndarray]:
+    """The episode's goal entries (`objects` placed its slots already)."""
+    if objects is not None:
+        return goal_observation(objects, atoms.goal, atoms.goal_negative)
+    return symbolic_goal_observation(universe.fluent_index, atoms.goal, atoms.goal_negative)
+
+
 __all__ = [
     "GOAL_KEYS",
+    "goal_entries",
+    "goal_entry_spaces",
     "goal_observation",
     "goal_spaces",
     "symbolic_goal_observation",
