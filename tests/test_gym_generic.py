@@ -9,6 +9,8 @@ kitchen envs promise on top: out-of-range and malformed actions raise `ValueErro
 or deep-copied physics env steps exactly as the original, and ``info["is_success"]``.
 
 Physics runs on a two-object scene of each id (``num_objects=2``) to keep the suite quick.
+`VARIANTS` adds registered ids with options of their own (the procedural env on a
+procedural-v2 split, whose scenes carry their goals; its smallest scenes have 3 objects).
 """
 
 from __future__ import annotations
@@ -33,21 +35,40 @@ from utamp_gym.rl.envs import make_env
 
 register_envs()
 GROUNDINGS = ("physics", "symbolic")
+#: test id -> (registered id, its options, num_objects of its physics runs)
+VARIANTS: dict[str, tuple[str, dict[str, Any], int]] = {
+    "UTampKitchenProcedural-v0[procedural-v2/test-tasks]": (
+        "UTampKitchenProcedural-v0",
+        {"split": "procedural-v2/test-tasks"},
+        3,
+    ),
+}
+#: registered ids whose smallest scenes have more than 2 objects (procedural-v2's have 3)
+SMALLEST = {"UTampKitchenGoals-v0": 3}
+IDS = (*env_ids(), *VARIANTS)
 CASES = [
     pytest.param(env_id, grounding, id=f"{env_id}-{grounding}")
-    for env_id in env_ids()
+    for env_id in IDS
     for grounding in GROUNDINGS
 ]
-PHYSICS = [pytest.param(env_id, id=env_id) for env_id in env_ids()]
+PHYSICS = [pytest.param(env_id, id=env_id) for env_id in IDS]
 #: Gymnasium's own list (tests/envs/test_envs.py): our Box spaces are bounded, so none is expected
 CHECK_ENV_IGNORE_WARNINGS: tuple[str, ...] = ()
 SEED = 0
 
 
+def variant(env_id: str, grounding: str | None = None) -> tuple[str, dict[str, Any]]:
+    """(registered id, options) of a test id; physics (`grounding`) on its smallest scenes."""
+    real, options, small = VARIANTS.get(env_id, (env_id, {}, SMALLEST.get(env_id, 2)))
+    if grounding == "physics":
+        options = {**options, "num_objects": small}
+    return real, options
+
+
 def make(env_id: str, grounding: str, **kwargs: Any) -> gym.Env:
-    """The id in `grounding`; physics on its two-object scenes."""
-    small = {"num_objects": 2} if grounding == "physics" else {}
-    return gym.make(env_id, grounding=grounding, **small, **kwargs)
+    """The id in `grounding`; physics on its two-object scenes (`VARIANTS`: their own)."""
+    real, options = variant(env_id, grounding)
+    return gym.make(real, grounding=grounding, **options, **kwargs)
 
 
 def masked(env: gym.Env, info: dict[str, Any]) -> np.int64:
@@ -174,8 +195,8 @@ def test_out_of_range_and_malformed_actions_raise_value_error(env_id: str, groun
 def test_vector_envs_async_and_sync_agree(env_id: str, grounding: str) -> None:
     """`test_vector_env_equal`: an async (worker processes) and a sync vector env of the id,
     seeded alike, give equal observations, rewards, flags and info."""
-    small = {"num_objects": 2} if grounding == "physics" else {}
-    fns = [lambda: make_env(env_id, grounding=grounding, obs_keys=None, **small)] * 2
+    real, options = variant(env_id, grounding)
+    fns = [lambda: make_env(real, grounding=grounding, obs_keys=None, **options)] * 2
     async_env = AsyncVectorEnv(fns, context="spawn")
     sync_env = SyncVectorEnv(fns)
     try:
@@ -198,7 +219,7 @@ def test_vector_envs_async_and_sync_agree(env_id: str, grounding: str) -> None:
 def long_scene(env_id: str, steps: int = 5) -> str:
     """The first scene of the id whose plan has at least `steps` macro actions (so two
     steps in, three more follow)."""
-    env = gym.make(env_id, grounding="symbolic").unwrapped
+    env = make(env_id, "symbolic").unwrapped
     for scene in env.scenes:
         outcome = plan_scene(scene, "utamp2-gt")
         if outcome.solved and outcome.plan_length >= steps:
@@ -210,7 +231,9 @@ def long_scene(env_id: str, steps: int = 5) -> str:
 def test_pickled_and_deep_copied_physics_envs_step_as_the_original(env_id: str) -> None:
     """After two executed macro actions, a pickled and a deep-copied env give the original's
     next three observations, rewards, failure reasons (and whole info), exactly."""
-    env = gym.make(env_id, scene=long_scene(env_id), disturbance=0.3, pose_noise=0.004)
+    real, options = variant(env_id)
+    scene = long_scene(env_id)
+    env = gym.make(real, scene=scene, disturbance=0.3, pose_noise=0.004, **options)
     obs, info = env.reset(seed=SEED)
     policy = PlannerPolicy(env.unwrapped)
     for _ in range(2):

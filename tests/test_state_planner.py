@@ -9,6 +9,7 @@ import wide
 
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PddlError, PlanningTimeout
+from utamp_gym.planning import fast_downward
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.planning.sas import build_sas
 from utamp_gym.planning.state_planner import StatePlanner, action_name, problem_atoms
@@ -148,3 +149,40 @@ def test_sas_task_is_immutable_and_copies() -> None:
     assert again != task and task == task  # compared by identity
     with pytest.raises(AttributeError, match="immutable"):
         task.solvable = False  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [
+        ("(oc on slot2 pan)",),  # slot2 holds air (the goal) and the pan: one SAS variable
+        ("(not (oc in hand air))",),  # an atom and its negation
+        ("(oc on slot2 pan)", "(oc on slot2 mug)"),
+    ],
+)
+def test_contradictory_goal_is_unsolvable_like_fast_downwards_translator(
+    gt: PlanOutcome, extra: tuple[str, ...]
+) -> None:
+    objects, static, state, goal = task_args(gt)
+    assert StatePlanner("utamp2").plan(objects, static, state, goal).solved
+    bad = [*goal, *extra]
+    result = StatePlanner("utamp2").plan(objects, static, state, bad)
+    assert not result.solved and "unsolvable" in (result.reason or "")
+    text = gt.problem[: gt.problem.index("(:goal")] + "(:goal (and " + " ".join(bad) + ")))\n"
+    for translator in fast_downward.TRANSLATORS:  # Fast Downward's own translator agrees
+        res = fast_downward.solve(gt.domain, text, translator=translator)
+        assert not res.solved and "unsolvable" in (res.reason or ""), translator
+
+
+def test_contradictory_goal_literals_are_never_dropped() -> None:
+    a, b, c = Atom("at", ("x", "a")), Atom("at", ("x", "b")), Atom("at", ("x", "c"))
+    ops = [
+        GroundOp(f"go-{p.args[1]}-{q.args[1]}", (p,), (), (q,), (p,))
+        for p in (a, b, c)
+        for q in (a, b, c)
+        if p != q
+    ]
+    task = build_sas(ops, [a], [Literal(b)])
+    assert task.solvable and task.n_groups == 1  # at x ?: one multi-valued variable
+    assert not build_sas(ops, [a], [Literal(b), Literal(c)]).solvable
+    assert not build_sas(ops, [a], [Literal(b), Literal(b, positive=False)]).solvable
+    assert build_sas(ops, [a], [Literal(b), Literal(b)]).solvable  # a repeat is no conflict

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -36,21 +36,27 @@ from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.atoms import scene_atoms
 from utamp_gym.symbolic.pddl import parse_domain
-from utamp_gym.symbolic.problem import domain_text, goal_atoms
+from utamp_gym.symbolic.problem import domain_text, problem_goal
 from utamp_gym.symbolic.scene_cache import SceneCache
 
 
 def state_problem(
-    scene: Scene, objects: Iterable[str], atoms: Iterable[str], domain: str, name: str = "now"
+    scene: Scene,
+    objects: Iterable[str],
+    atoms: Iterable[str],
+    domain: str,
+    name: str = "now",
+    goal: Sequence[str] | None = None,
 ) -> str:
-    """PDDL problem text: the scene's objects, the given init atoms and the scene's goal."""
+    """PDDL problem text: the scene's objects, the given init atoms and the goal literals
+    `goal` (default: the scene's goal, else the paper's tower: `problem_goal`)."""
     pname = "utamp-" + scene.name.replace("/", "-") + f"-{name}"
     lines = [f"(define (problem {pname})", f"  (:domain {domain})", "  (:objects"]
     lines.append("    " + " ".join(objects) + " - obj)")
     lines.append("  (:init")
     lines.extend(f"    {a}" for a in sorted(atoms))
     lines += ["  )", "  (:goal (and"]
-    lines.extend(f"    {g}" for g in goal_atoms(scene))
+    lines.extend(f"    {g}" for g in (problem_goal(scene) if goal is None else goal))
     lines += ["  ))", ")"]
     return "\n".join(lines) + "\n"
 
@@ -204,7 +210,7 @@ class PlannerPolicy:
             objects,
             self._static_atoms(scene),
             universe.atoms_of(bits),
-            goal_atoms(scene),
+            env.goal.literals,  # the episode's goal (the env option ``task``)
             exclude=exclude,
         )
         self.planning_times.append(time.perf_counter() - start)

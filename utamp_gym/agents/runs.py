@@ -33,6 +33,7 @@ from utamp_gym.scene.io import scene_to_toml
 from utamp_gym.scene.model import Scene
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, UnknownSceneError, resolve_scene
+from utamp_gym.tasks.goal import unmet
 
 VIDEO_SIZE = (480, 360)  # width, height
 VIDEO_PERIOD = 0.1  # s of simulated time per frame
@@ -213,12 +214,13 @@ def execute_plan(
     if failed is not None:
         failure = {"step": failed.step, "action": failed.action, "reason": failed.reason}
     elif not ep.success:
-        base = env.scene.tower_base
-        failure = {
-            "step": len(steps),
-            "action": None,
-            "reason": f"goal not reached: {base} holds {final_stack or 'nothing'}",
-        }
+        base, goal = env.scene.tower_base, env.goal
+        reason = f"goal not reached: {base} holds {final_stack or 'nothing'}"
+        if goal.template != "tower":  # name what the scene's own goal still lacks
+            perception = env.perception
+            missing = unmet(goal, perception.atoms) if perception is not None else goal.literals
+            reason = f"goal not reached: {', '.join(missing) or 'an object it names is lost'}"
+        failure = {"step": len(steps), "action": None, "reason": reason}
     n_faults = sum(bool(r[1].get("fault")) for r in ep.records if not r[1]["failure_reason"])
     return Execution(ep.success, failure, final_stack, poses, elapsed, steps, n_faults)
 

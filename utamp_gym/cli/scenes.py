@@ -15,7 +15,6 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
     from utamp_gym.scene.io import scene_to_toml
     from utamp_gym.suites import (
         ALL_SUITES,
-        GOAL_SUITES,
         all_scene_names,
         packaged_scene_names,
         resolve_scene,
@@ -26,10 +25,7 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
         if not args.suite and not args.json:  # packaged scenes (kitchen-demo), then suites
             for name in packaged_scene_names():
                 print(name)
-        from utamp_gym.suites.procedural_v2 import available_splits
-
-        generated = [s for s in GOAL_SUITES if s.rpartition("/")[2] in available_splits()]
-        for suite in (args.suite,) if args.suite else (*ALL_SUITES, *generated):
+        for suite in (args.suite,) if args.suite else ALL_SUITES:  # v2: the generated splits
             if args.json:  # one JSON object per line and scene
                 for record in scene_summary(suite):
                     print(json.dumps(record))

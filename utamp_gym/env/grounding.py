@@ -7,9 +7,10 @@ MuJoCo simulator with perception and faults: `utamp_gym.env.physics.PhysicalGrou
 
 * `reset` / `step`: start an episode, run an action the mask allows (`Stepped`: its failure,
   what was executed, unexpected atoms, timings), keeping the env's symbolic state current;
-* `progress`: goal reached and tower height; `pose_rows` / `robot`: the observation's poses and
-  joints; `image` (the camera observation), `frame` (what ``render()`` shows), `draw` (the
-  labelled schematic for the symbolic human window);
+* `progress`: goal reached (symbolic: its literals hold in the state; physics: in the
+  measured state, `utamp_gym.tasks.success`) and tower height; `pose_rows` / `robot`: the
+  observation's poses and joints; `image` (the camera observation), `frame` (what
+  ``render()`` shows), `draw` (the labelled schematic for the symbolic human window);
 * `backend`, `simulator` (the backend, if it simulates: what the viewers watch),
   `perception` (None when nothing is perceived), `recorded` (whether
   ``info["timings"]`` holds wall-clock times).
@@ -29,6 +30,7 @@ from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.scene_cache import SceneCache
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe
+from utamp_gym.tasks.goal import Goal
 
 if TYPE_CHECKING:
     from utamp_gym.env.options import EnvOptions
@@ -74,7 +76,7 @@ class Grounding(Protocol):
 
     def step(self, a: int, np_random: np.random.Generator) -> Stepped: ...
 
-    def progress(self, base: str, need_height: bool) -> tuple[bool, int]: ...
+    def progress(self, goal: Goal, base: str, need_height: bool) -> tuple[bool, int]: ...
 
     def pose_rows(self) -> np.ndarray: ...
 
@@ -120,7 +122,9 @@ class SymbolicGrounding:
         failure = self._execute(a)
         return NOT_RUN if failure is None else Stepped(failure)
 
-    def progress(self, base: str, need_height: bool) -> tuple[bool, int]:
+    def progress(self, goal: Goal, base: str, need_height: bool) -> tuple[bool, int]:
+        """(every goal literal holds in the symbolic state, which the state was given at
+        reset; tower height)."""
         height = len(self.backend.poses.tower(base)) if need_height else 0
         return self.state.goal_reached(), height
 

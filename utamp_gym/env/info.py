@@ -25,14 +25,17 @@ key                     value (after ``reset`` / when there is nothing to report
 ``scene``               the scene's name
 ``is_success``          whether the goal holds now (as for the reward): True on the last
                         step of a solved episode, where SB3 and the RL Zoo read it
+``goal``                the episode's goal literals, a tuple of PDDL strings (fixed for
+                        the episode; `UTampKitchenEnv.goal` is the `Goal` itself)
+``instruction``         the goal in words (`utamp_gym.env.goals`; fixed for the episode)
 ======================  =================================================================
 
 Version history of this structure (the env ids stay v0: observations, actions and rewards are
-unchanged): before, ``action``, ``failure_reason`` and ``fault`` were None when empty,
-``macro_result`` was the `MacroResult` (or None), ``unexpected_atoms`` a list and
-``anomalies`` held only the objects without a symbol. The objects themselves are still there:
-`UTampKitchenEnv.macro_result`, `UTampKitchenEnv.unexpected_atoms` and
-`UTampKitchenEnv.anomalies`.
+unchanged): ``goal`` and ``instruction`` were added with scene goals (issue 38). Before that,
+``action``, ``failure_reason`` and ``fault`` were None when empty, ``macro_result`` was the
+`MacroResult` (or None), ``unexpected_atoms`` a list and ``anomalies`` held only the objects
+without a symbol. The objects themselves are still there: `UTampKitchenEnv.macro_result`,
+`UTampKitchenEnv.unexpected_atoms` and `UTampKitchenEnv.anomalies`.
 """
 
 from __future__ import annotations
@@ -104,6 +107,8 @@ def step_info(
     fault: str | None,
     scene: str,
     success: bool,
+    goal: tuple[str, ...],
+    instruction: str,
 ) -> dict[str, Any]:
     """One step's (or reset's) info in the fixed structure of the module docstring;
     `timings` None leaves ``info["timings"]`` empty (not recorded)."""
@@ -118,4 +123,6 @@ def step_info(
         "fault": fault or "",
         "scene": scene,
         "is_success": bool(success),
+        "goal": goal,
+        "instruction": instruction,
     }

@@ -1,4 +1,4 @@
-"""`UTampKitchenEnv`: organise a kitchen table by stacking every object on the tray.
+"""`UTampKitchenEnv`: organise a kitchen table (default: stack every object on the tray).
 
 The dm_control split: `SymbolicState` (+ `SymbolicPoses`) or a `PhysicsBackend` is the
 physics, `KitchenTask` the reward and termination, this class the Gymnasium glue.
@@ -21,8 +21,10 @@ from utamp_gym.backend import (
     MacroResult,
     PhysicsBackend,
 )
+from utamp_gym.env.goals import EpisodeGoals
 from utamp_gym.env.grounding import ScenePresence, make_grounding
 from utamp_gym.env.info import step_info
+from utamp_gym.env.object_goal import goal_entries, goal_entry_spaces
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.physics import NOT_RUN, Stepped
@@ -34,6 +36,7 @@ from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.atoms import InitialAtoms
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe, ground_universe
+from utamp_gym.tasks.goal import Goal
 
 #: what ``reset(options=...)`` accepts: the episode's scene, and the seed of its simulated
 #: world (physics: the simulator's generator, and a second stream of it for injected
@@ -79,9 +82,15 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per object newly
     on the tower (over the episode's best) and −0.01 per failed action (`utamp_gym.env.task`).
 
-    **Termination** – ``terminated`` at the goal: the PDDL goal (hand empty, every slot but
-    the tray's clear, so everything is one tower on the tray) holds in the symbolic state (in
-    physics grounding: the perceived one, with every object perceived). It also terminates at
+    **Goal** – `goal` (a `utamp_gym.tasks.goal.Goal`): the option ``task``, by default the
+    scene's own goal (procedural-v2 scenes, scene files with ``[goal]``), else the paper's
+    tower (every other suite: hand empty, every slot but the base's clear, so everything is
+    one tower on the base); `instruction` is it in words (`utamp_gym.env.goals`).
+
+    **Termination** – ``terminated`` at the goal: every goal literal holds (negated ones: their
+    atom is false) in the symbolic state; in physics grounding in the measured state: the
+    perceived atoms, with every object the goal is about perceived
+    (`utamp_gym.tasks.success`). It also terminates at
     a dead end, when no action is applicable after a step (possible with noisy or rule-based
     affordances; an episode may even start at one, and then its first step terminates it),
     and in physics grounding when an object has no symbol (see below). With
@@ -100,7 +109,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     ``anomalies`` (every object -> its anomaly or ``""``), ``fault`` (``""``: none; see the
     closed loop below), ``scene`` (name), ``is_success`` (bool: the goal holds now, as for
     the reward; on every step and after reset, so it is there on the last step of every
-    episode, where stable-baselines3's evaluation and the RL Zoo read it).
+    episode, where stable-baselines3's evaluation and the RL Zoo read it), ``goal`` (the
+    goal's literals, a tuple of PDDL strings) and ``instruction`` (the goal in words; the
+    tower's for suites without goals).
 
     **Options** (keyword arguments of ``gym.make``; each is validated up front):
 
@@ -119,7 +130,19 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     * ``split``: a procedural split ("train", "test-instances", "test-families", "test-count";
       `utamp_gym.suites.procedural`): its scenes instead of a suite's. All splits share one
       action universe and the observation rows ``base, obj1 .. obj5``
-      (``UTampKitchenProcedural-v0``);
+      (``UTampKitchenProcedural-v0``). A procedural-v2 split ("procedural-v2/test-tasks",
+      `utamp_gym.suites.procedural_v2`; each scene with its goal) has an action universe of
+      its own; its test-count scenes have up to 8 objects (rows ``base, obj1 .. obj7``, and
+      the grounded interface: the objects interface holds 6);
+    * ``task``: the episodes' goal (`utamp_gym.env.goals`): None (default: the scene's own,
+      else the paper's tower), a template id or composition (``"clear"``,
+      ``"put-on+in-region"``: the scene's goal of that template, else one drawn per scene
+      by a generator seeded from the scene's name; scenes with none are left out of
+      `scenes`), or a `Goal` (a templated one rebuilt in each scene, a custom one as is);
+    * ``goal_observation`` (default False, True in ``UTampKitchenGoals-v0``): the goal in the
+      observation (`utamp_gym.env.object_goal`): in slot order with the objects interface
+      (``goal_contact``, ``goal_free``, ``goal_not_contact``, ``goal_not_free``), over
+      ``symbolic``'s atoms with the grounded one (``goal``, ``goal_not``);
     * ``terminate_on_failure``, ``reward_shaping``, ``render_mode`` (None | "rgb_array" |
       "rgb_array_list" | "human"), ``camera`` (adds ``image``), ``image_size`` /
       ``render_size`` ((height, width));
@@ -166,7 +189,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     so ``utamp_gym.env.video.RecordVideo`` records smooth videos. "human": a live MuJoCo
     viewer (physics) or a labelled matplotlib window (symbolic); it needs a display.
 
-    **Version history** – v0: initial release.
+    **Version history** – v0: initial release; the option ``task``, `goal`, `instruction` and
+    ``info["goal"]`` / ``info["instruction"]`` were added later without changing v0's spaces,
+    rewards or the episodes of its default goal.
     """
 
     metadata = {  # noqa: RUF012
@@ -199,6 +224,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         split: str | None = None,
         perception: str = DEFAULT_PERCEPTION,
         interface: str = "grounded",
+        task: str | Goal | None = None,
+        goal_observation: bool = False,
     ) -> None:
         kwargs: dict[str, Any] = {
             "suite": suite, "objects": objects, "grounding": grounding, "domain": domain,
@@ -211,10 +238,13 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             "split": split,
             "perception": perception,
             "interface": interface,
+            "task": task,
+            "goal_observation": goal_observation,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option
         self.render_mode = render_mode
-        self.scenes = opts.scenes()
+        self._goals = EpisodeGoals(opts.task)
+        self.scenes = self._goals.usable(opts.scenes())  # those the task has a goal in
         self.universe: Universe = ground_universe(opts.universe_key())
         self.action_space = spaces.Discrete(self.universe.n_actions)
         self.observation_space = self._grounded_space()
@@ -225,6 +255,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             self.observation_space = self._objects.observation_space
             if opts.camera:
                 self.observation_space["image"] = self._grounded_space()["image"]
+        if opts.goal_observation:  # a new env id's spaces (env.object_goal)
+            self.observation_space.spaces.update(goal_entry_spaces(self._objects, self.universe))
+        self._goal_obs: dict[str, np.ndarray] = {}
         self._state = SymbolicState(self.universe, opts.masks)
         self._grounding = make_grounding(opts, self.universe, self._state)
         self._present = ScenePresence(opts.objects)
@@ -235,6 +268,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             self.universe.domain, opts.domain, opts.affordances, opts.noise
         )
         self._scene: Scene | None = None
+        self._goal: Goal | None = None
         self._last: tuple[MacroResult | None, tuple[str, ...]] = (None, ())
         self._rendering = Rendering(
             render_mode,
@@ -246,6 +280,19 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self.metadata = {**type(self).metadata, "render_fps": self._rendering.fps}
 
     # ------------------------------------------------------------------ public helpers
+    @property
+    def goal(self) -> Goal:
+        """The episode's goal (`utamp_gym.env.goals`: the option ``task``, default the
+        scene's own goal, else the paper's tower)."""
+        if self._goal is None:
+            raise RuntimeError("call reset() before reading the goal")
+        return self._goal
+
+    @property
+    def instruction(self) -> str:
+        """The episode's goal in words (``info["instruction"]``)."""
+        return self._goals.instruction(self.scene)
+
     def action_masks(self) -> np.ndarray:
         """Bool mask of the applicable actions (the sb3-contrib `MaskablePPO` convention)."""
         if self._objects is not None:
@@ -269,8 +316,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             if name not in by_name:
                 raise UnknownNameError("scene of this env", str(name), by_name)
             scene = by_name[name]
-        self._scene = scene
-        atoms = self._initial_atoms(scene, self.np_random)
+        self._scene, self._goal = scene, self._goals.goal(scene)
+        atoms = self._initial_atoms(scene, self.np_random, self._goals.override(scene))
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
         self._present.reset(scene)
         self._grounding.reset(scene, atoms.static, self.np_random, world_seed)
@@ -279,6 +326,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._rendering.reset()
         if self._objects is not None:  # drawn last: the other draws match the grounded env's
             self._objects.reset(scene, self.np_random)
+        if self.options.goal_observation:
+            self._goal_obs = goal_entries(self._objects, self.universe, atoms)
         return self._observation(), self._info(goal, None, None, NOT_RUN)
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
@@ -334,7 +383,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
 
     def _progress(self, need_height: bool) -> tuple[bool, int]:
         """(goal reached, objects on the tower; 0 unless `need_height`), measured once."""
-        return self._grounding.progress(self.scene.tower_base, need_height)
+        return self._grounding.progress(self.goal, self.scene.tower_base, need_height)
 
     def _observation(self) -> Obs:
         poses, robot = self._grounding.pose_rows(), self._grounding.robot()
@@ -348,6 +397,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
                 "present": self._present.rows(),
                 "robot": robot,
             }
+        obs.update({k: v.copy() for k, v in self._goal_obs.items()})
         if self.options.camera:
             obs["image"] = self._image(self.options.image_size)
         return obs
@@ -382,6 +432,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             fault=fault,
             scene=self.scene.name,
             success=goal,
+            goal=self.goal.literals,
+            instruction=self.instruction,
         )
 
     # ------------------------------------------------------------------ pickling

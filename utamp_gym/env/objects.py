@@ -47,7 +47,7 @@ the state: ``env.action_pddl(a)`` gives it before the step and ``info["action"]`
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -402,6 +402,15 @@ class ObjectInterface:
                 name = scene.spaces[s].name if s < len(scene.spaces) else "none"
             out.append(word if name is None else f"{word} ({name})")
         return " ".join(out)
+
+    def fluent_layout(self, atoms: Iterable[str]) -> dict[str, np.ndarray]:
+        """The fluent entries (``held``, ``contact``, ...) of a set of universe fluent atoms
+        in this episode's slots, e.g. a goal's (atoms outside the universe are left out)."""
+        index = self.universe.fluent_index
+        flat = np.zeros(self._size, np.int8)
+        pos = self._atom_pos[[index[a] for a in atoms if a in index]]
+        flat[pos[pos >= 0]] = 1
+        return {k: flat[a:b].reshape(shape) for k, (a, b, shape) in self._fluent_slices.items()}
 
     def observation(
         self, fluent: np.ndarray, static_atoms: frozenset[str], poses: Mapping[str, np.ndarray]

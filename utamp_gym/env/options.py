@@ -20,11 +20,13 @@ from utamp_gym.backend import (
     MAX_POSE_NOISE,
     PERCEPTION_MODES,
 )
+from utamp_gym.env.goals import Task, check_task
 from utamp_gym.env.object_space import INTERFACES
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import (
     ALL_SUITES,
+    GOAL_SUITES,
     PROCEDURAL,
     PROCEDURAL_SUITES,
     resolve_scene,
@@ -101,13 +103,15 @@ class EnvOptions:
     split: str | None = None
     perception: str = DEFAULT_PERCEPTION
     interface: str = "grounded"
+    task: Task = None
+    goal_observation: bool = False
 
     def __post_init__(self) -> None:
-        if self.split is not None:  # a procedural split: "train" or "procedural-v1/train"
+        if self.split is not None:  # "train", "procedural-v1/train" or "procedural-v2/train"
             splits = [s.removeprefix(f"{PROCEDURAL}/") for s in PROCEDURAL_SUITES]
             short = str(self.split).removeprefix(f"{PROCEDURAL}/")
-            _choice("split", short, splits)
-            suite = f"{PROCEDURAL}/{short}"
+            _choice("split", short, [*splits, *GOAL_SUITES])
+            suite = short if short in GOAL_SUITES else f"{PROCEDURAL}/{short}"
             if self.suite is not None and self.suite != suite:
                 raise ValueError(
                     f"split={self.split!r} is the suite {suite!r}; drop suite={self.suite!r}"
@@ -133,6 +137,8 @@ class EnvOptions:
         _unit("noise", self.noise)
         _choice("masks", self.masks, MASKS)
         _choice("interface", self.interface, INTERFACES)
+        check_task(self.task)
+        _bool("goal_observation", self.goal_observation)
         if self.masks != "affordances" and self.domain != "utamp2":
             raise ValueError(
                 f"masks={self.masks!r} needs domain='utamp2' (it drops U-TAMP-2's affordance "

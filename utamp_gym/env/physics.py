@@ -22,6 +22,8 @@ from utamp_gym.perception.abstraction import Perception, perceive
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe, UniverseByKey
+from utamp_gym.tasks.goal import Goal
+from utamp_gym.tasks.success import check_perception
 
 #: the second stream of an episode's world seed: its injected faults
 FAULT_STREAM = 0xFA17
@@ -149,11 +151,12 @@ class PhysicalGrounding(UniverseByKey):
         perception, seconds = self._perceive()
         return Executed(macro, fault, perception, seconds)
 
-    def progress(self, base: str, need_height: bool) -> tuple[bool, int]:
-        """(goal reached, as perceived and with every object perceived; tower height)."""
-        assert self.perception is not None
-        goal = self.state.goal_reached() and not self.perception.anomalies
-        return goal, len(self.perception.tower(base))
+    def progress(self, goal: Goal, base: str, need_height: bool) -> tuple[bool, int]:
+        """(`goal` reached in the measured state: its literals hold in the perceived atoms and
+        every object it is about is perceived, `utamp_gym.tasks.success`; tower height)."""
+        assert self.perception is not None and self._scene is not None
+        reached = check_perception(self._scene, goal, self.perception).reached
+        return reached, len(self.perception.tower(base))
 
     def pose_rows(self) -> np.ndarray:
         poses = np.zeros((len(self._rows), 7), np.float32)

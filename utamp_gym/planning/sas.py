@@ -193,7 +193,9 @@ def build_sas(
     goal: Sequence[Literal],
     deadline: Deadline | None = None,
 ) -> SasTask:
-    """The SAS task of `ops` from `init` (`solvable` False if a goal literal can never hold).
+    """The SAS task of `ops` from `init` (`solvable` False if a goal literal can never hold,
+    or two goal literals contradict each other: an atom and its negation, or two values of
+    one multi-valued variable).
 
     Raises `PlanningTimeout` (phase ``sas``) once `deadline` passes.
     """
@@ -210,13 +212,15 @@ def build_sas(
         if all(a in changing or a in init_set for a in op.pre)
         and not any(a not in changing and a in init_set for a in op.pre_neg)
     ]
-    goal_lits: list[tuple[Atom, bool]] = []
+    empty = MappingProxyType({})
+    unsolvable = SasTask((), empty, (), 0, empty, frozenset(changing), fixed, "", "", (), False)
+    goal_lits: dict[Atom, bool] = {}
     for lit in goal:
         if lit.atom in changing:
-            goal_lits.append((lit.atom, lit.positive))
+            if goal_lits.setdefault(lit.atom, lit.positive) != lit.positive:
+                return unsolvable  # the goal asks for an atom and its negation
         elif (lit.atom in init_set) != lit.positive:
-            empty = MappingProxyType({})
-            return SasTask((), empty, (), 0, empty, frozenset(changing), fixed, "", "", (), False)
+            return unsolvable
     if deadline is not None:
         deadline.check("sas")
 
@@ -241,9 +245,14 @@ def build_sas(
             lines += ["begin_variable", f"var{v}", "-1", "2", f"Atom {_name(a)}"]
             lines += [f"NegatedAtom {_name(a)}", "end_variable"]
     lines += ["0", "begin_state", ""]
-    goal_vals = {
-        where[a][0]: (where[a][1] if positive else where[a][2]) for a, positive in goal_lits
-    }
+    goal_vals: dict[int, int] = {}
+    for a, positive in goal_lits.items():
+        v, true_value, false_value = where[a]
+        value = true_value if positive else false_value
+        assert value is not None  # negated goal atoms are never in a multi-valued variable
+        if goal_vals.setdefault(v, value) != value:
+            # two values of one variable (e.g. two things on one slot): never both true
+            return unsolvable
     goal_text = ["end_state", "begin_goal", str(len(goal_vals))]
     goal_text += [f"{v} {val}" for v, val in sorted(goal_vals.items())] + ["end_goal", ""]
     blocks = []

@@ -14,6 +14,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import tomli  # see utamp_gym.scene.fields
+
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import assets_dir
 from utamp_gym.scene.io import load_scene
@@ -29,17 +31,28 @@ PROCEDURAL_SUITES = tuple(
 )
 #: the enumerated suites (`suite_stats` describes them)
 SUITES = _enumerated.SUITES
-#: every suite a sweep, an env or ``utamp scenes list`` accepts: the enumerated and the splits
-ALL_SUITES = (*SUITES, *PROCEDURAL_SUITES)
 PROCEDURAL_V2 = "procedural-v2"
 #: the splits of procedural-v2, whose scenes carry their goals (`utamp_gym.suites.procedural_v2`;
-#: ``utamp scenes``, ``utamp plan`` and these functions take them; the envs do not yet)
+#: the envs read them: `utamp_gym.env.goals`)
 GOAL_SUITES = tuple(
     f"{PROCEDURAL_V2}/{s}"
     for s in ("train", "test-instances", "test-families", "test-count", "test-tasks", "hard")
 )
+
+
+def _generated(suites: Sequence[str]) -> tuple[str, ...]:
+    """The procedural-v2 splits its split file holds (``procedural_v2.available_splits``,
+    read here without importing the generator: it imports this module)."""
+    path = assets_dir() / "procedural" / f"{PROCEDURAL_V2}.toml"
+    table = tomli.loads(path.read_text()) if path.is_file() else {}
+    return tuple(s for s in suites if s.rpartition("/")[2] in table)
+
+
+#: every suite a sweep, an env or ``utamp run`` / ``utamp eval`` accepts: the enumerated
+#: suites, the procedural-v1 splits and the procedural-v2 splits generated so far
+ALL_SUITES = (*SUITES, *PROCEDURAL_SUITES, *_generated(GOAL_SUITES))
 #: what ``utamp scenes list`` lists
-LISTED_SUITES = (*ALL_SUITES, *GOAL_SUITES)
+LISTED_SUITES = (*ALL_SUITES, *(s for s in GOAL_SUITES if s not in ALL_SUITES))
 
 
 def _split(suite: str) -> str:

@@ -18,8 +18,9 @@ from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.pddl import Atom, Domain
-from utamp_gym.symbolic.problem import build_problem, goal_atoms, instantiate_affordances
+from utamp_gym.symbolic.problem import build_problem, instantiate_affordances, problem_goal
 from utamp_gym.symbolic.scene_cache import SceneCache
+from utamp_gym.tasks.goal import Goal, split_literal
 
 
 def parse_atom(text: str) -> Atom:
@@ -86,13 +87,26 @@ def universe_facts(scene: Scene, affordances: str, domain: str = "utamp2") -> fr
     return affordances_for(scene, affordances, rng, domain=domain)[0]
 
 
+def goal_sides(literals: Iterable[str]) -> tuple[frozenset[str], frozenset[str]]:
+    """(atoms that must hold, atoms that must not) of goal literals, normalised like
+    `parse_atom` (``"(not (oc under mug pan))"`` -> the second set)."""
+    yes: set[str] = set()
+    no: set[str] = set()
+    for lit in literals:
+        positive, body = split_literal(lit.lower())
+        (yes if positive else no).add(str(parse_atom(body)))
+    return frozenset(yes), frozenset(no)
+
+
 @dataclass(frozen=True)
 class EpisodeAtoms:
-    """A scene's initial state for one episode: static, fluent and goal atoms (lower-case)."""
+    """A scene's initial state for one episode: static, fluent and goal atoms (lower-case);
+    `goal` must hold, `goal_negative` must not (the goal's negated literals)."""
 
     static: frozenset[str]
     fluent: frozenset[str]
     goal: frozenset[str]
+    goal_negative: frozenset[str] = frozenset()
 
 
 class InitialAtoms:
@@ -110,7 +124,13 @@ class InitialAtoms:
         self.noise = noise
         self._cache: SceneCache[EpisodeAtoms] = SceneCache()
 
-    def __call__(self, scene: Scene, rng: np.random.Generator) -> EpisodeAtoms:
+    def __call__(
+        self, scene: Scene, rng: np.random.Generator, goal: Goal | None = None
+    ) -> EpisodeAtoms:
+        """The episode's atoms; the goal is `goal`'s literals, else the scene's goal, else the
+        paper's tower (`problem_goal`). Cached per scene name: a caller passes the same
+        `goal` for a scene every time."""
+
         def derive() -> EpisodeAtoms:
             facts = (  # no draws
                 ()
@@ -118,12 +138,14 @@ class InitialAtoms:
                 else affordances_for(scene, self.source, rng, domain=self.domain_name)[0]
             )
             static, fluent, _ = scene_atoms(scene, facts, self.domain_name, self.fluent)
-            goal = frozenset(str(parse_atom(g)) for g in goal_atoms(scene))
-            return EpisodeAtoms(static, fluent, goal)
+            yes, no = goal_sides(problem_goal(scene, goal))
+            return EpisodeAtoms(static, fluent, yes, no)
 
         cached = self._cache.get(scene.name, derive)
         if not self.noisy:
             return cached
         facts = affordances_for(scene, "noisy", rng, self.noise)[0]
         detected = {str(parse_atom(a)) for a in instantiate_affordances(scene, facts)}
-        return EpisodeAtoms(cached.static | detected, cached.fluent, cached.goal)
+        return EpisodeAtoms(
+            cached.static | detected, cached.fluent, cached.goal, cached.goal_negative
+        )

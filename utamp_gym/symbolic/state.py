@@ -59,7 +59,11 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
         self._fluent_preds = universe.domain.fluent_predicates()
         half = universe.half
         self.bits = 0
-        self._goal = 0
+        self._goal = 0  # bits that must be set
+        self._goal_not = 0  # bits that must be clear (negated goal literals)
+        #: goal literals on atoms outside the universe: (atom, must hold); they can only be
+        #: perceived (`unrepresented`), never reached by an action of the universe
+        self._goal_outside: tuple[tuple[str, bool], ...] = ()
         self._invert = (1 << half) - 1
         self._nbytes = 8 * -(-2 * half // 64)  # [s, 1 - s] in whole 64-bit words
         self._static: frozenset[str] = frozenset()
@@ -92,7 +96,7 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
                 self._present = self._presence.get(cache_key, lambda: self._objects_present(static))
         self.unrepresented = ()
         self.bits = self.universe.state_bits(atoms.fluent)
-        self._goal = self.universe.state_bits(atoms.goal)
+        self.set_goal(atoms.goal, atoms.goal_negative)
         self._refresh()
 
     def observe(self, fluent: Iterable[str], static: frozenset[str]) -> None:
@@ -182,8 +186,23 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
         m = self._mask
         return not (m.size and m[m.argmax()])  # argmax (the first True): 4x faster than any()
 
+    def set_goal(self, positive: Iterable[str], negative: Iterable[str] = ()) -> None:
+        """The atoms that must hold (`positive`) and must not (`negative`) at the goal."""
+        index = self.universe.fluent_index
+        yes, no = frozenset(positive), frozenset(negative)
+        self._goal = self.universe.state_bits(a for a in yes if a in index)
+        self._goal_not = self.universe.state_bits(a for a in no if a in index)
+        self._goal_outside = tuple(sorted((a, a in yes) for a in yes | no if a not in index))
+
     def goal_reached(self) -> bool:
-        return self._goal & ~self.bits == 0
+        """Every goal literal holds: its atom is true (negated literals: false)."""
+        bits = self.bits
+        if self._goal & ~bits or self._goal_not & bits:
+            return False
+        if self._goal_outside:
+            seen = set(self.unrepresented)
+            return all((a in seen) == positive for a, positive in self._goal_outside)
+        return True
 
     def vector(self) -> np.ndarray:
         """A fresh int8 0/1 vector over `universe.fluent_atoms`."""

@@ -47,10 +47,10 @@ from utamp_gym.scene.geometry import PARTS
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene, universe_scenes
 from utamp_gym.symbolic import universe_store
-from utamp_gym.symbolic.atoms import parse_atom, scene_atoms, universe_facts
+from utamp_gym.symbolic.atoms import goal_sides, parse_atom, scene_atoms, universe_facts
 from utamp_gym.symbolic.geometric import geometric_domain, prune
 from utamp_gym.symbolic.pddl import Domain, Literal, Problem, parse_domain
-from utamp_gym.symbolic.problem import domain_text, goal_atoms
+from utamp_gym.symbolic.problem import domain_text, problem_goal
 from utamp_gym.symbolic.reach import reachable_ops
 
 #: the macro actions whose pose effects the envs model: name -> (moved object, target) params
@@ -310,7 +310,7 @@ def _ground(key: UniverseKey) -> Universe:
         inits.append((fluent, frozenset(objs) | set(domain.constants) | set(PARTS)))
         union_static |= static
         union_fluent |= fluent
-        goals |= {str(parse_atom(g)) for g in goal_atoms(scene)}
+        goals |= set().union(*goal_sides(problem_goal(scene)))  # its goal, else the tower
         objects.update(dict.fromkeys(objs, "obj"))
     uniform = _uniform_predicates(
         per_scene, union_static, varying, frozenset(domain.constants) | set(PARTS)
