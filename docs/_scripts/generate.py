@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -66,6 +67,9 @@ def main(argv: list[str] | None = None) -> int:
         if stale.name not in known:
             stale.unlink()
     _write(ENVS / "index.md", env_pages.index(measured))
+    # autosummary writes one page per module under _generated/api and never removes one: a
+    # module that moved or went away would leave a page that fails to import
+    shutil.rmtree(GENERATED / "api", ignore_errors=True)
     _write(GENERATED / "cli.md", cli_reference.reference())
     _write(GENERATED / "cameras.md", cameras.cameras_table())
     _write(GENERATED / "explain.md", explain_example.example())
