@@ -21,7 +21,7 @@ from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.geometry import PARTS
-from utamp_gym.suites import resolve_scene
+from utamp_gym.suites import resolve_scene, suite_scenes
 from utamp_gym.symbolic.problem import goal_atoms
 from utamp_gym.tasks.goal import CUSTOM, Goal, goal_holds, split_literal
 from utamp_gym.tasks.language import instruction
@@ -161,15 +161,16 @@ def test_test_count_needs_rows_for_eight_objects() -> None:
     with pytest.raises(ValueError, match="outside the env's observation rows"):
         gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count")
     rows = ["base", *(f"obj{i}" for i in range(1, 8))]
+    big = next(s.name for s in suite_scenes("procedural-v2/test-count") if s.n_objects == 7)
     with pytest.raises(ValueError, match="the objects interface has room for 6"):
         env = gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count", objects=rows,
                        grounding="symbolic")  # fmt: skip
-        env.reset(options={"scene": "procedural-v2/test-count/0072"})
+        env.reset(options={"scene": big})
     env = gym.make(
         "UTampKitchenProcedural-v0", split="procedural-v2/test-count", objects=rows,
         grounding="symbolic", interface="grounded",
     )  # fmt: skip
-    env.reset(options={"scene": "procedural-v2/test-count/0072"})
+    env.reset(options={"scene": big})
     assert env.unwrapped.scene.n_objects == 7  # type: ignore[attr-defined]
 
 

@@ -42,12 +42,16 @@ class Episode:
 
 def stack(items: Sequence[Any]) -> Any:
     """Stack a sequence of equal trees (dicts of arrays, numbers, strings) into one tree of
-    arrays (strings: a list of strings, which Minari stores as HDF5 strings)."""
+    arrays (strings: a list of strings, which Minari stores as HDF5 strings; a tuple of
+    strings, such as ``info["goal"]``'s atoms: each as one JSON list, HDF5 having no ragged
+    string arrays)."""
     first = items[0]
     if isinstance(first, Mapping):
         return {k: stack([item[k] for item in items]) for k in first}
     if isinstance(first, str):
         return [str(item) for item in items]
+    if isinstance(first, tuple | list) and all(isinstance(x, str) for x in first):
+        return [json.dumps(list(item)) for item in items]
     return np.stack([np.asarray(item) for item in items])
 
 
