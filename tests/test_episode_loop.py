@@ -1,9 +1,8 @@
 """The one episode loop (`utamp_gym.agents.run_policy`): policies acting through ``env.step``.
 
-Every `utamp eval` run in physics (each planning method and VLM method open loop, each
-planning method closed loop, a saved ``rl:PATH`` agent) must call ``env.step`` once per macro
-action in its row, and its row's success must be the env's last ``info["is_success"]``.
-(Symbolic open-loop rows are still decided by validating the plan: not an env episode.)
+Every `utamp eval` run in either grounding (each planning method and VLM method open loop,
+each planning method closed loop, a saved ``rl:PATH`` agent) must call ``env.step`` once per
+macro action in its row, and its row's success must be the env's last ``info["is_success"]``.
 """
 
 from __future__ import annotations
@@ -16,9 +15,11 @@ import pytest
 from test_eval_vlm import Server, attributes, completion, fenced, vlm  # noqa: F401 (fixture)
 
 from utamp_gym.agents import OpenLoopPolicy, PlannerPolicy, PlanStopped, run_policy
+from utamp_gym.agents.runs import execute_plan
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.eval.records import PLAN_SEPARATOR
 from utamp_gym.eval.runner import EVAL_METHODS, EvalTask, run_task
+from utamp_gym.eval.summary import failure_category
 from utamp_gym.planning.methods import METHODS, plan_scene
 from utamp_gym.suites import resolve_scene
 
@@ -85,15 +86,17 @@ def test_every_closed_loop_method_steps_the_env_once_per_action(
 VLM_SCENE = "pick-place/013"  # tray/pan | board (the VLM tests' scene)
 
 
+@pytest.mark.parametrize("grounding", ["physics", "symbolic"])
 @pytest.mark.parametrize("method", EVAL_METHODS)
-def test_every_open_loop_method_steps_the_physics_env_once_per_action(
-    method: str, monkeypatch: pytest.MonkeyPatch, vlm: Server  # noqa: F811
+def test_every_open_loop_method_steps_the_env_once_per_action(
+    method: str, grounding: str, monkeypatch: pytest.MonkeyPatch, vlm: Server  # noqa: F811
 ) -> None:
     vlm.reply(completion(fenced(attributes(VLM_SCENE))))
     plan = ["pick cutting-board table", "place cutting-board frying-pan"]
     vlm.reply(completion(fenced({"plan": plan})))
     spy = StepSpy(monkeypatch)
-    task = EvalTask(VLM_SCENE, method, seed=0, grounding="physics", pose_noise=0.0)
+    noise = 0.0 if grounding == "physics" else None
+    task = EvalTask(VLM_SCENE, method, seed=0, grounding=grounding, pose_noise=noise)
     row = run_task(task)
     assert not row.crashed and row.solved, row.failure_reason
     assert spy.last_info is not None and row.success == spy.last_info["is_success"]
@@ -102,6 +105,30 @@ def test_every_open_loop_method_steps_the_physics_env_once_per_action(
         assert row.failure_reason.endswith(spy.last_info["failure_reason"])
     else:
         assert spy.calls == row.plan_length > 0
+
+
+def test_symbolic_open_loop_row_names_the_failed_step_and_its_false_literal(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """utamp1 ignores the affordances: its plan is played until the outcome model refuses a
+    step, and the row says which step and which ground-truth literal."""
+    spy = StepSpy(monkeypatch)
+    row = run_task(EvalTask(SCENE, "utamp1", seed=0, grounding="symbolic"))
+    assert row.solved and not row.success and row.valid_gt is False
+    assert spy.last_info is not None and 0 < spy.calls <= row.plan_length
+    step = spy.calls - 1
+    action = row.plan.split(PLAN_SEPARATOR)[step]
+    assert row.failure_reason == f"step {step} {action}: {spy.last_info['failure_reason']}"
+    assert "(ground truth)" in row.failure_reason
+    assert failure_category(row.failure_reason) == "invalid plan: violates canGraspFrom"
+
+
+def test_a_plan_step_outside_the_env_domain_fails_there() -> None:
+    scene = resolve_scene(SCENE)
+    plan = [plan_scene(scene, "utamp2-gt").plan[0], "(slide-edge cutting-board table)"]
+    ex = execute_plan(SCENE, plan, grounding="symbolic")
+    assert not ex.success and [s.success for s in ex.steps] == [True]
+    assert ex.failure_reason == f"step 1 {plan[1]}: not an action of the env's domain (utamp2)"
 
 
 def test_planner_policy_old_path_warns() -> None:

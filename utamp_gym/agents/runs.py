@@ -28,6 +28,7 @@ from typing import Any
 from utamp_gym.agents import OpenLoopPolicy, run_policy
 from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE, PhysicsBackend
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
+from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.io import scene_to_toml
 from utamp_gym.scene.model import Scene
@@ -123,9 +124,15 @@ def open_loop_env(
     pose_noise: float = DEFAULT_POSE_NOISE,
     disturbance: float = 0.0,
     perception: str = DEFAULT_PERCEPTION,
+    grounding: str = "physics",
 ) -> UTampKitchenEnv:
-    """The physics env an open-loop plan of `scene` is played in (module docstring); with
-    `backend`, acting in that simulator (`pose_noise` and `perception` are then its own)."""
+    """The env an open-loop plan of `scene` is played in (module docstring); with `backend`,
+    acting in that simulator (`pose_noise` and `perception` are then its own). In
+    ``symbolic`` grounding the ground-truth outcome model decides each step (``masks="none"``:
+    the U-TAMP-2 precondition under the scene's ground truth); the physics arguments are
+    unused."""
+    if grounding == "symbolic":
+        return scene_env(scene, grounding="symbolic", masks="none")
     physics = {"pose_noise": pose_noise, "perception": perception} if backend is None else {}
     return scene_env(
         scene, backend=backend, masks="none", disturbance=disturbance, record_timings=True,
@@ -165,9 +172,11 @@ def execute_plan(
     disturbance: float = 0.0,
     perception: str = DEFAULT_PERCEPTION,
     env: UTampKitchenEnv | None = None,
+    grounding: str = "physics",
 ) -> Execution:
-    """Play `plan` on `scene` in the physics env, stopping at the first failed step (open loop;
-    module docstring). `scene`: a name or file path (a `Scene` is referred to by its name).
+    """Play `plan` on `scene` in the env of `grounding` (`open_loop_env`), stopping at the
+    first failed step (open loop; module docstring). `scene`: a name, a file path or a `Scene`.
+    A step the env's domain does not have fails there (``not an action of ...``).
 
     `seed`, mixed with the scene's name (`utamp_gym.seeding.run_seed`), seeds the episode's
     world: initial pose noise, pose estimates, IK restarts and OMPL, and (second stream)
@@ -183,14 +192,15 @@ def execute_plan(
     if env is None:
         env = open_loop_env(
             stack.enter_context(scene_ref(scene)), backend=backend, pose_noise=pose_noise,
-            disturbance=disturbance, perception=perception,
+            disturbance=disturbance, perception=perception, grounding=grounding,
         )  # fmt: skip
     sim: Any = env.backend
+    unknown = _first_unknown(env, plan)  # played up to it, and failed there
     try:
         world = run_seed(env.scenes[0].name, seed)  # independent per (scene, seed)
         with _video(video) as sink:
             sim.frame_sink = sink
-            policy: Any = OpenLoopPolicy(env, plan)
+            policy: Any = OpenLoopPolicy(env, plan[: len(plan) if unknown is None else unknown])
             if sink is not None:
                 policy = _Filmed(policy, sim, sink)
             start = time.perf_counter()
@@ -213,6 +223,9 @@ def execute_plan(
     failure = None
     if failed is not None:
         failure = {"step": failed.step, "action": failed.action, "reason": failed.reason}
+    elif unknown is not None:
+        reason = f"not an action of the env's domain ({env.options.domain})"
+        failure = {"step": unknown, "action": plan[unknown], "reason": reason}
     elif not ep.success:
         base, goal = env.scene.tower_base, env.goal
         reason = f"goal not reached: {base} holds {final_stack or 'nothing'}"
@@ -222,7 +235,8 @@ def execute_plan(
             reason = f"goal not reached: {', '.join(missing) or 'an object it names is lost'}"
         failure = {"step": len(steps), "action": None, "reason": reason}
     n_faults = sum(bool(r[1].get("fault")) for r in ep.records if not r[1]["failure_reason"])
-    return Execution(ep.success, failure, final_stack, poses, elapsed, steps, n_faults)
+    success = ep.success and failure is None  # a plan cut at an unknown step did not succeed
+    return Execution(success, failure, final_stack, poses, elapsed, steps, n_faults)
 
 
 def run_episode(
@@ -297,6 +311,16 @@ def episode_result(
         n_faults=ex.n_faults,
         steps=ex.steps,
     )
+
+
+def _first_unknown(env: UTampKitchenEnv, plan: Sequence[str]) -> int | None:
+    """The index of the first step of `plan` not in `env`'s action universe (None: none)."""
+    for i, step in enumerate(plan):
+        try:
+            env.universe.index(step)
+        except UnknownNameError:
+            return i
+    return None
 
 
 def _steps(

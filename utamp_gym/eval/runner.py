@@ -1,11 +1,12 @@
 """One evaluation run: plan a scene with a method, ground the plan, return one result row.
 
-Grounding ``symbolic``: success = a plan was found and it is valid under the
-ground-truth U-TAMP-2 model (`check_against_ground_truth`); the failure reason is the
-first violated precondition or the planner's reason. Grounding ``physics``: the plan is
-played open loop in the physics env by `execute_plan` (`utamp_gym.agents.runs`, behind
-`run_episode`: same seed, same rollout), and the env decides. An unsolved U-TAMP-2 run is explained
-(`explain`). `run_task` never raises: a crash becomes a failure row.
+In either grounding the plan is played open loop in the env by `execute_plan`
+(`utamp_gym.agents.runs`, behind `run_episode`: same seed, same rollout), and the env decides:
+in ``symbolic`` grounding its outcome model (a step succeeds iff its U-TAMP-2 precondition
+holds under the scene's ground truth; the failure reason names the step and the first false
+literal), in ``physics`` MuJoCo. The ``valid_gt`` column says whether the whole plan is valid
+under the ground-truth U-TAMP-2 model (`check_against_ground_truth`). An unsolved U-TAMP-2
+run is explained (`explain`). `run_task` never raises: a crash becomes a failure row.
 
 A method ``rl:PATH`` is a saved RL agent acting in the env of either grounding
 (`utamp_gym.rl.harness`: the env options come from the model, episodes have a step budget).
@@ -229,31 +230,21 @@ def _open_loop_env(task: EvalTask) -> Any:
 
 
 def _run_open_loop(task: EvalTask, scene: Scene, start: float, env: Any) -> ResultRow:
-    """The open-loop protocol: plan once, then validate (symbolic) or play (physics)."""
+    """The open-loop protocol: plan once, then play the plan in the env of the grounding."""
     exec_time, n_faults = 0.0, 0
     planned = _plan(scene, task, None if env is None else env.backend)
     success, failure = False, ""
     valid_gt = None
     plan = planned.plan
-    if planned.solved:
-        check = check_against_ground_truth(scene, plan)
-        valid_gt = check.valid
-        if task.grounding == "symbolic":
-            success = check.valid
-            failure = "" if check.valid else f"invalid under ground truth: {check.message}"
-        else:  # the plan played open loop in the physics env (`OpenLoopPolicy`)
-            assert task.pose_noise is not None
-            ex = execute_plan(
-                task.scene,
-                plan,
-                task.seed,
-                pose_noise=task.pose_noise,
-                disturbance=task.disturbance,
-                perception=task.perception,
-                env=env,
-            )
-            success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
-            n_faults = ex.n_faults
+    if planned.solved:  # the plan played open loop in the env (`OpenLoopPolicy`)
+        valid_gt = check_against_ground_truth(scene, plan).valid
+        physics = {} if task.grounding == "symbolic" else {
+            "pose_noise": task.pose_noise, "disturbance": task.disturbance,
+            "perception": task.perception,
+        }  # fmt: skip
+        ex = execute_plan(task.scene, plan, task.seed, env=env, grounding=task.grounding, **physics)
+        success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
+        n_faults = ex.n_faults
     else:
         failure = f"not solved: {planned.reason}"
         if task.explain and planned.facts is not None:

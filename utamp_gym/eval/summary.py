@@ -32,6 +32,9 @@ from utamp_gym.provenance import provenance, with_footer
 from utamp_gym.suites import SUITES
 
 _PRECONDITION = re.compile(r"precondition \((\S+)")
+#: a symbolic step the outcome model refused:
+#: "step I (ACTION): [not ]PRED(ARGS) is false (ground truth)"
+_GROUND_TRUTH = re.compile(r"^step \d+ .*?: (?:not )?(\w+)\(.*\) is false \(ground truth\)$")
 
 
 def group_label(row: ResultRow) -> str:
@@ -50,8 +53,13 @@ def failure_category(reason: str) -> str:
     if reason.startswith("crashed"):
         return "crashed"
     m = _PRECONDITION.search(reason)
-    if reason.startswith("invalid under ground truth") and m:
+    if reason.startswith("invalid under ground truth") and m:  # rows written before 2026-11
         return f"invalid plan: violates {m.group(1)}"
+    truth = _GROUND_TRUTH.match(reason)
+    if truth:
+        return f"invalid plan: violates {truth.group(1)}"
+    if reason.startswith("step") and m and reason.endswith(("(static)", "(fluent)")):
+        return f"invalid plan: violates {m.group(1)}"  # symbolic: a false precondition
     if reason.startswith("not solved: VLM"):
         return "unusable VLM answer"
     if reason.startswith("not solved"):
@@ -201,7 +209,8 @@ def _header(summary: dict[str, Any]) -> list[str]:
     out.append(
         f"{summary['runs']} runs ({summary.get('scenes', '?')} scenes, {seeds}); success = "
         + (
-            "plan valid under the ground-truth U-TAMP-2 model."
+            "the plan played in the symbolic env, every step's U-TAMP-2 precondition true "
+            "under the ground truth, and the goal reached."
             if grounding == "symbolic"
             else "every step executed in MuJoCo and the tower stands on "
             + ("the tray." if suite in SUITES else "each scene's base object (`goal_base`).")
