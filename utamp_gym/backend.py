@@ -9,7 +9,8 @@ calls `reset` with the sampled scene and a generator derived from the env's RNG 
 episode start. After `reset` and after every `execute` it reads `physical_state()` and
 perceives the symbolic state from it (`utamp_gym.perception`); ``utamp2-perceived`` surveys
 the table (`survey`) and scores what it perceived by the cameras' instance ids (`cameras`):
-that capability is `Surveying`, which a backend without cameras (symbolic grounding) lacks.
+that capability is `Surveying` (the symbolic backend has it too: it renders the episode's
+initial world through the MuJoCo backend).
 The data types exchanged live in `utamp_gym.contract` (below both the simulator and
 perception); `MacroResult` and `Fault` here.
 """
@@ -91,7 +92,8 @@ class Cameras(Protocol):
 @runtime_checkable
 class PhysicsBackend(Protocol):
     """What the env needs from a simulator (see the module docstring). Backends with cameras
-    also implement `Surveying` (the MuJoCo one does; the symbolic one has no cameras)."""
+    also implement `Surveying` (the MuJoCo one does; the symbolic one renders its look through
+    it)."""
 
     def reset(self, scene: Scene, rng: np.random.Generator) -> None: ...
 

@@ -115,8 +115,9 @@ class SymbolicGrounding:
         np_random: np.random.Generator,
         world_seed: int | None = None,
     ) -> None:
-        """Start an episode (nothing is random: no generator is drawn from)."""
-        self.backend.reset(scene)
+        """Start an episode (nothing is random: no generator is drawn from; `world_seed`
+        seeds the world a look renders, `SymbolicBackend.survey`)."""
+        self.backend.reset(scene, None if world_seed is None else np.random.default_rng(world_seed))
 
     def step(self, a: int, np_random: np.random.Generator) -> Stepped:
         failure = self._execute(a)

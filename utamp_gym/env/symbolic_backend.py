@@ -9,24 +9,34 @@ action's effect is applied to the episode's symbolic state (`utamp_gym.env.state
 follow the documented rules of `utamp_gym.env.poses`, the robot stays at home, and pictures
 are the top-down schematic (`utamp_gym.env.render`). It implements the `PhysicsBackend`
 calls (`utamp_gym.backend`) except `physical_state` (nothing is simulated, nothing is
-perceived: the symbolic state is the truth).
+perceived: the symbolic state is the truth), and `Surveying`: the cameras' look
+(``utamp2-perceived``) renders the episode's initial world through the MuJoCo backend, reset
+with the episode's world seed (``reset(options={"world_seed": s})``), so it sees the poses and
+colours the physics env of that seed starts from; MuJoCo is loaded only for a look.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from utamp_gym.backend import MacroResult
+from utamp_gym.backend import DEFAULT_BACKEND, MacroResult, PhysicsBackend, backend_factory
+from utamp_gym.contract.views import ViewBundle
 from utamp_gym.env.render import LabelledSchematic, SchematicRenderer
 from utamp_gym.env.task import home_joints
+from utamp_gym.errors import UtampError
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.outcome import OutcomeModel
 from utamp_gym.symbolic.poses import SymbolicPoses
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe, UniverseByKey
+
+
+class NoWorldToLook(UtampError, RuntimeError):
+    """A look in symbolic grounding without the episode's world seed, or after it acted."""
 
 
 class SymbolicBackend(UniverseByKey):
@@ -47,11 +57,17 @@ class SymbolicBackend(UniverseByKey):
         self.held: str | None = None
         self._home = home_joints()
         self._scene: Scene | None = None
+        self._world: np.random.Generator | None = None  # the world's generator, undrawn
+        self._acted = False
+        self._simulator: PhysicsBackend | None = None  # made for the first look
+        self._shown: tuple[str, Any] | None = None  # the world it is reset to
 
     # ------------------------------------------------------------------ PhysicsBackend
     def reset(self, scene: Scene, rng: np.random.Generator | None = None) -> None:
-        """Start an episode in `scene` (nothing is random: `rng` is not drawn from)."""
-        self._scene, self.held = scene, None
+        """Start an episode in `scene` (nothing is random: `rng` is not drawn from; a copy
+        of it seeds the world a look renders, `survey`)."""
+        self._scene, self.held, self._acted = scene, None, False
+        self._world = None if rng is None else copy.deepcopy(rng)
         self.poses.reset(scene)
         if self.outcome is not None:
             self.outcome.reset(scene)
@@ -67,6 +83,7 @@ class SymbolicBackend(UniverseByKey):
         """Run universe action `a`; why it failed (None: applied)."""
         failure = None if self.outcome is None else self.outcome.failure(self.state, a)
         if failure is None:
+            self._acted = True
             self.state.apply(a)
             kind, obj, target = self.universe.roles[a]
             self.poses.apply(kind, obj, target)
@@ -99,7 +116,40 @@ class SymbolicBackend(UniverseByKey):
         return self.renderer.render(poses, present, self.held, (height, width))
 
     def close(self) -> None:
-        """Nothing to release."""
+        """Release the simulator a look was rendered with, if any."""
+        if self._simulator is not None:
+            self._simulator.close()
+            self._simulator = self._shown = None
+
+    # ------------------------------------------------------------------ Surveying
+    def survey(self) -> ViewBundle:
+        """The cameras' first look at the episode's world (module docstring)."""
+        return self._looking().survey()  # type: ignore[attr-defined, no-any-return]
+
+    @property
+    def cameras(self) -> Any:
+        """The cameras of the world a look renders (`survey`)."""
+        return self._looking().cameras  # type: ignore[attr-defined]
+
+    def _looking(self) -> PhysicsBackend:
+        """The MuJoCo backend reset to the episode's initial world."""
+        if self._scene is None or self._world is None:
+            raise NoWorldToLook(
+                "a look in symbolic grounding renders the episode's world: reset the env "
+                "with options={'world_seed': SEED} first"
+            )
+        if self._acted:
+            raise NoWorldToLook(
+                "a look in symbolic grounding shows the episode's initial world: take it "
+                "before the first action"
+            )
+        shown = (self._scene.name, self._world.bit_generator.state)
+        if self._simulator is None:
+            self._simulator = backend_factory(DEFAULT_BACKEND)()
+        if self._shown != shown:
+            self._simulator.reset(self._scene, copy.deepcopy(self._world))
+            self._shown = shown
+        return self._simulator
 
     # ------------------------------------------------------------------ schematic views
     def labelled(self, size: tuple[int, int]) -> np.ndarray:

@@ -19,9 +19,9 @@ from typing import Any
 from utamp_gym.affordances.sources import DEFAULT_NOISE, plan_affordances
 from utamp_gym.agents import PlannerPolicy, run_policy
 from utamp_gym.agents.episode import Policy
-from utamp_gym.backend import DEFAULT_PERCEPTION, Surveying
+from utamp_gym.backend import DEFAULT_PERCEPTION
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
-from utamp_gym.methods.perceived import perceive_live, perceive_world
+from utamp_gym.methods.perceived import perceive_live
 from utamp_gym.planning.methods import method_spec
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, resolve_scene
@@ -79,10 +79,13 @@ def run_closed_loop(
     world_seed = run_seed(resolve_scene(scene).name, seed)  # the one seed of the episode
     acting: Policy = policy
     if spec.affordances == "perceived":  # look at the episode's world before the first step
-        acting = _LookFirst(policy, env, world_seed)
+        acting = _LookFirst(policy, env)
+    # symbolic: the world a look renders is the one this seed makes in physics (the physics
+    # episode draws its world from the env's generator, seeded the same, as measured)
+    options = {"world_seed": world_seed} if grounding == "symbolic" else None
     try:
         # the env's reset counts as execution, as in `execute_plan`
-        ep = run_policy(env, acting, max_steps=max_steps, seed=world_seed)
+        ep = run_policy(env, acting, max_steps=max_steps, seed=world_seed, options=options)
     finally:
         env.close()
     failure = ""
@@ -107,25 +110,21 @@ class _LookFirst:
     """`utamp2-perceived`'s planner policy: before its first decision it looks at the
     episode's world and believes the affordances perceived there."""
 
-    def __init__(self, policy: PlannerPolicy, env: UTampKitchenEnv, world_seed: int) -> None:
-        self.policy, self.env, self.world_seed = policy, env, world_seed
+    def __init__(self, policy: PlannerPolicy, env: UTampKitchenEnv) -> None:
+        self.policy, self.env = policy, env
 
     def __call__(self, obs: Any, info: Mapping[str, Any]) -> int:
         if not info.get("action"):
-            facts = _perceived_facts(self.env, self.world_seed)
+            facts = _perceived_facts(self.env)
             self.policy.believe(self.env.scene.name, facts)
         return self.policy(obs, info)
 
 
-def _perceived_facts(env: UTampKitchenEnv, world_seed: int) -> frozenset:
-    """`utamp2-perceived`'s affordances of the env's scene, perceived in its world (a backend
-    with cameras: physics) or in the episode's world (`world_seed`) built for a look
-    (symbolic grounding has no cameras), in the env's names."""
-    backend = env.backend
-    if isinstance(backend, Surveying):
-        seen = perceive_live(env.scene, backend)
-    else:
-        seen = perceive_world(env.scene, world_seed)
+def _perceived_facts(env: UTampKitchenEnv) -> frozenset:
+    """`utamp2-perceived`'s affordances of the env's scene, perceived through its backend's
+    cameras (`Surveying`: MuJoCo's, or the symbolic backend's look at the episode's world),
+    in the env's names."""
+    seen = perceive_live(env.scene, env.backend)
     return seen.usable_facts(plan_affordances(seen.planning))
 
 

@@ -211,8 +211,8 @@ def _run(task: EvalTask, start: float) -> ResultRow:
     if task.closed_loop:
         return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)
-    env = None  # physics: the env the plan is played in, made before planning to look through
-    if task.grounding == "physics" and task.method == "utamp2-perceived":
+    env = None  # the env the plan is played in, made before planning to look through
+    if task.method == "utamp2-perceived":
         env = _open_loop_env(task)
     try:
         return _run_open_loop(task, scene, start, env)
@@ -222,6 +222,8 @@ def _run(task: EvalTask, start: float) -> ResultRow:
 
 
 def _open_loop_env(task: EvalTask) -> Any:
+    if task.grounding == "symbolic":
+        return open_loop_env(task.scene, grounding="symbolic")
     assert task.pose_noise is not None
     return open_loop_env(
         task.scene, pose_noise=task.pose_noise, disturbance=task.disturbance,
