@@ -109,7 +109,7 @@ def test_timeout_bounds_the_whole_plan_command(capsys, monkeypatch: pytest.Monke
     """The limit counts from the command's start, parsing and imports included: the deadline
     the planner gets began before `main` parsed anything. (Checked on the deadline itself, not
     with a stopwatch: machines are shared and noisy.)"""
-    from utamp_gym.planning import methods
+    from utamp_gym.cli import plan as plan_cli
 
     calls: list[tuple[Deadline, float]] = []
 
@@ -117,7 +117,7 @@ def test_timeout_bounds_the_whole_plan_command(capsys, monkeypatch: pytest.Monke
         calls.append((kwargs["deadline"], time.perf_counter()))  # type: ignore[arg-type]
         return plan_scene(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(methods, "plan_scene", spy)
+    monkeypatch.setattr(plan_cli, "plan_scene", spy)  # the planner the command calls
     before = time.perf_counter()
     assert main(["plan", "kitchen-demo", "--timeout", "7", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["solved"]

@@ -75,6 +75,7 @@ def ground_truth_for(scene: Scene, domain: str = "utamp2") -> frozenset[Fact]:
 def _rules(types: list[ObjectType], extended: bool = False) -> frozenset[Fact]:
     """The rules' facts on `types`. The rule parser loads only when used (`utamp plan` on
     types the ground truth covers never needs it: 9 ms of its start-up)."""
+    # lazy: keeps `utamp plan` from loading utamp_gym.affordances.rules
     from utamp_gym.affordances.rules import derive_affordances
 
     return derive_affordances(types, extended)
@@ -88,6 +89,7 @@ def detection_rng(seed: int, scene_name: str) -> np.random.Generator:
     """
     import numpy as np
 
+    # lazy: keeps `utamp --help` from loading utamp_gym.seeding
     from utamp_gym.seeding import scene_seed_sequence  # numpy: not on `utamp plan`'s path
 
     return np.random.default_rng(scene_seed_sequence(scene_name, seed))
@@ -126,6 +128,7 @@ def affordances_for(
         return facts, score(facts, gt)
     if rng is None:
         raise ValueError("noisy affordance detection needs a random generator (rng)")
+    # lazy: keeps `utamp --help` from loading utamp_gym.affordances.noisy
     from utamp_gym.affordances.noisy import detect_affordances
 
     det = detect_affordances(scene_types(scene), noise, rng, gt)

@@ -31,6 +31,7 @@ from utamp_gym.cli.common import (
     Parser,
     timeout_seconds,
 )
+from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UtampError
 
 if TYPE_CHECKING:
@@ -145,8 +146,6 @@ def _run(argv: Sequence[str], started: float) -> int:
         args = build_parser(command).parse_args(argv)
         args.started = started
         if args.cmd not in LIGHT_COMMANDS:
-            from utamp_gym.env.registry import register_envs
-
             register_envs()
         return int(args.func(args))
     except UtampError as exc:

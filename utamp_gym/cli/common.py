@@ -82,6 +82,7 @@ def _probability(text: str) -> float:
 
 
 def _pose_noise(text: str) -> float:
+    # lazy: keeps `utamp plan` from loading utamp_gym.backend
     from utamp_gym.backend import MAX_POSE_NOISE
 
     value = _finite(text)
@@ -102,6 +103,7 @@ def _finite(text: str) -> float:
 
 def add_physics_options(parser: argparse.ArgumentParser) -> None:
     """--pose-noise and --disturbance (physics execution)."""
+    # lazy: keeps `utamp plan` from loading utamp_gym.backend
     from utamp_gym.backend import DEFAULT_POSE_NOISE
 
     parser.add_argument(

@@ -9,11 +9,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.cli import help_line
 from utamp_gym.cli.common import add_physics_options, timeout_seconds
+from utamp_gym.distributed import EXECUTORS, make_executor
 from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
+from utamp_gym.suites import ALL_SUITES as SUITES
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
@@ -22,8 +25,10 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     missing = [flag for flag, value in (("--suite", args.suite), ("--out", args.out)) if not value]
     if missing:
         args.eval_parser.error(f"the following arguments are required: {', '.join(missing)}")
-    from utamp_gym.distributed import make_executor
+    # lazy: keeps `utamp --help` from loading utamp_gym.eval.summary
     from utamp_gym.eval.summary import to_markdown
+
+    # lazy: keeps `utamp --help` from loading utamp_gym.eval.sweep
     from utamp_gym.eval.sweep import SweepConfig, parse_shard, run_sweep, write_outputs
 
     noise = (args.noise,)
@@ -98,7 +103,10 @@ def _report_crashes(crashed: Sequence[Any], total: int) -> int:
 
 
 def _cmd_eval_merge(args: argparse.Namespace) -> int:
+    # lazy: keeps `utamp --help` from loading utamp_gym.eval.merge
     from utamp_gym.eval.merge import merge_outputs
+
+    # lazy: keeps `utamp --help` from loading utamp_gym.eval.summary
     from utamp_gym.eval.summary import to_markdown
 
     output_dir(args.merge_out, "OUT")
@@ -119,9 +127,6 @@ def add_parser(sub: Any) -> None:
     argparse has no optional sub-command next to required options, so ``merge`` is an
     optional sub-command and the sweep's required options are checked in `_cmd_eval`.
     """
-    from utamp_gym.affordances.sources import DEFAULT_NOISE
-    from utamp_gym.distributed import EXECUTORS
-    from utamp_gym.suites import ALL_SUITES as SUITES
 
     ev = sub.add_parser(
         "eval",

@@ -7,9 +7,14 @@ import argparse
 import json
 from typing import TYPE_CHECKING, Any
 
+from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.cli import help_line
 from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, timeout_seconds
+from utamp_gym.deadline import Deadline
 from utamp_gym.outputs import output_dir
+from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
+from utamp_gym.planning.methods import METHODS, method_spec, plan_scene
+from utamp_gym.suites import resolve_scene
 
 if TYPE_CHECKING:
     from utamp_gym.planning.methods import PlanOutcome
@@ -17,16 +22,13 @@ if TYPE_CHECKING:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
-    from utamp_gym.deadline import Deadline
-    from utamp_gym.planning.methods import plan_scene
-    from utamp_gym.suites import resolve_scene
-
     # Bounds the whole command: counted from `main`'s start (argument parsing and the
     # planner's imports included), not from when planning begins.
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
     out = None if args.out is None else output_dir(args.out, "--out")
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
+        # lazy: keeps `utamp --help` from loading utamp_gym.methods.perceived
         from utamp_gym.methods.perceived import plan_perceived
 
         outcome = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)[0]
@@ -40,6 +42,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             deadline=deadline,
         )
     if out is not None:  # names other planners accept (`utamp_gym.symbolic.export`)
+        # lazy: keeps `utamp --help` from loading utamp_gym.symbolic.export
         from utamp_gym.symbolic.export import export_task
 
         task = export_task(outcome.domain, outcome.problem, outcome.plan, scene.name)
@@ -85,8 +88,8 @@ def _print_explanation(explanation: dict[str, Any]) -> None:
 
 def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
     """Why-not explanation of an unsolved outcome (U-TAMP-2 methods only)."""
+    # lazy: keeps `utamp --help` from loading utamp_gym.eval.explain
     from utamp_gym.eval.explain import explain_unsolvable
-    from utamp_gym.planning.methods import method_spec
 
     if method_spec(outcome.method).domain != "utamp2":
         return {"found": False, "message": "explanations need U-TAMP-2 affordances (not utamp1)"}
@@ -95,10 +98,6 @@ def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
 
 def add_parser(sub: Any) -> None:
     """``utamp plan SCENE``."""
-    from utamp_gym.affordances.sources import DEFAULT_NOISE
-    from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
-    from utamp_gym.planning.methods import METHODS
-
     plan = sub.add_parser("plan", help=help_line("plan"))
     plan.add_argument("scene", help=SCENE_HELP)
     plan.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)

@@ -10,11 +10,13 @@ from utamp_gym.cli import help_line
 from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, add_physics_options
 from utamp_gym.errors import UtampError
 from utamp_gym.outputs import output_file
+from utamp_gym.planning.methods import METHODS
+from utamp_gym.suites import resolve_scene
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    # lazy: keeps `utamp --help` from loading utamp_gym.agents.runs
     from utamp_gym.agents.runs import run_episode
-    from utamp_gym.suites import resolve_scene
 
     if args.closed_loop:
         return _run_closed_loop(args)
@@ -29,6 +31,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     }
     scene = resolve_scene(args.scene)
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
+        # lazy: keeps `utamp --help` from loading utamp_gym.methods.perceived
         from utamp_gym.methods.perceived import run_perceived_episode
 
         result = run_perceived_episode(scene, **physics)
@@ -56,8 +59,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _run_closed_loop(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
+    # lazy: keeps `utamp --help` from loading utamp_gym.eval.closed_loop
     from utamp_gym.eval.closed_loop import run_closed_loop
-    from utamp_gym.suites import resolve_scene
 
     if args.video:
         raise UtampError("--video records open-loop runs only (drop --closed-loop)")
@@ -84,8 +87,6 @@ def _run_closed_loop(args: argparse.Namespace) -> int:
 
 def add_parser(sub: Any) -> None:
     """``utamp run SCENE``."""
-    from utamp_gym.planning.methods import METHODS
-
     run = sub.add_parser("run", help=help_line("run"))
     run.add_argument("scene", help=SCENE_HELP)
     run.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)

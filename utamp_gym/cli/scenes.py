@@ -9,18 +9,18 @@ from typing import Any
 
 from utamp_gym.cli import help_line
 from utamp_gym.cli.common import SCENE_HELP
+from utamp_gym.scene.io import scene_to_toml
+from utamp_gym.suites import (
+    ALL_SUITES,
+    all_scene_names,
+    packaged_scene_names,
+    resolve_scene,
+    scene_summary,
+)
+from utamp_gym.suites import LISTED_SUITES as SUITES
 
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
-    from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import (
-        ALL_SUITES,
-        all_scene_names,
-        packaged_scene_names,
-        resolve_scene,
-        scene_summary,
-    )
-
     if args.scenes_cmd == "list":
         if not args.suite and not args.json:  # packaged scenes (kitchen-demo), then suites
             for name in packaged_scene_names():
@@ -39,8 +39,6 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 def add_parser(sub: Any) -> None:
     """``utamp scenes list`` and ``utamp scenes show NAME``."""
-    from utamp_gym.suites import LISTED_SUITES as SUITES
-
     scenes = sub.add_parser("scenes", help=help_line("scenes"))
     ssub = scenes.add_subparsers(dest="scenes_cmd", required=True)
     lst = ssub.add_parser(

@@ -10,6 +10,7 @@ from utamp_gym.cli import help_line
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
+    # lazy: keeps `utamp --help` from loading utamp_gym.symbolic.validate
     from utamp_gym.symbolic.validate import validate_files
 
     result = validate_files(args.domain, args.problem, args.plan)

@@ -7,17 +7,19 @@ from typing import Any
 
 from utamp_gym.cli import help_line
 from utamp_gym.cli.common import SCENE_HELP
+from utamp_gym.suites import resolve_scene
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
     """Open a scene in a window until it is closed (MuJoCo's viewer, or the schematic)."""
+    # lazy: keeps `utamp --help` from loading utamp_gym.env.viewer
     from utamp_gym.env.viewer import require_display
-    from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(args.scene)
     video = "out/" + scene.name.replace("/", "-") + ".mp4"
     require_display("utamp view", f"utamp run {args.scene} --video {video} (a video, no display)")
     if args.symbolic:
+        # lazy: keeps `utamp --help` from loading utamp_gym.env.viewer
         from utamp_gym.env.viewer import show_schematic
 
         show_schematic(scene)
@@ -25,6 +27,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
     import mujoco.viewer
     import numpy as np
 
+    # lazy: utamp_gym.sim.backend imports mujoco, ompl, pinocchio
     from utamp_gym.sim.backend import MujocoBackend
 
     backend = MujocoBackend()

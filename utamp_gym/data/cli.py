@@ -22,15 +22,18 @@ import argparse
 import sys
 from typing import Any
 
+from utamp_gym.distributed import EXECUTORS, make_executor
 from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
+from utamp_gym.outputs import new_output_dir, output_dir
+from utamp_gym.planning.methods import METHODS
+from utamp_gym.suites import ALL_SUITES  # the paper's suites and the procedural splits
 
 
 def _cmd_demos(args: argparse.Namespace) -> int:
-    from utamp_gym.outputs import new_output_dir, output_dir
-
     if args.demos_cmd == "export-lerobot":
         require("utamp demos export-lerobot", "data")  # it reads the Minari dataset
+        # lazy: keeps `utamp --help` from loading utamp_gym.data.lerobot
         from utamp_gym.data.lerobot import export_lerobot
 
         new_output_dir(args.out, "--out")  # before the conversion starts
@@ -47,8 +50,8 @@ def _cmd_demos(args: argparse.Namespace) -> int:
     if args.executor == "ray":
         require("utamp demos --executor ray", "ray")
     output_dir(args.out, "--out")  # before any episode is recorded
+    # lazy: keeps `utamp --help` from loading utamp_gym.data.record
     from utamp_gym.data.record import record_demos
-    from utamp_gym.distributed import make_executor
 
     workers = args.workers
     if args.executor == "local" and workers is None:
@@ -82,10 +85,6 @@ def _cmd_demos(args: argparse.Namespace) -> int:
 
 
 def add_demos_parser(sub: Any) -> None:
-    from utamp_gym.distributed import EXECUTORS
-    from utamp_gym.planning.methods import METHODS
-    from utamp_gym.suites import ALL_SUITES  # the paper's suites and the procedural splits
-
     p = sub.add_parser(
         "demos",
         help="record planner demonstrations as Minari datasets (macro or low-level track)",

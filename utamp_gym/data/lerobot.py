@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.data.minari_io import episode_metadata, load_dataset
 from utamp_gym.errors import UtampError
 
 LEROBOT_HINT = (
@@ -52,8 +53,6 @@ def export_lerobot(
 ) -> int:  # fmt: skip
     """Write the Minari dataset `dataset_id` (under `root`) as a LeRobot dataset in `out`;
     returns the number of frames written."""
-    from utamp_gym.data.minari_io import episode_metadata, load_dataset
-
     LeRobotDataset = _dataset_class()
     data = load_dataset(root, dataset_id)
     episodes = list(data.iterate_episodes())

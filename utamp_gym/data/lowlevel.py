@@ -19,7 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.data.macro import make_env
 from utamp_gym.data.minari_io import Episode
+from utamp_gym.errors import PlanningError
+from utamp_gym.planning.methods import plan_scene
+from utamp_gym.scene.io import scene_to_toml
+from utamp_gym.suites import resolve_scene
 
 MAX_OBJECTS = 6  # object_poses rows (scene order), as the objects interface's slots
 DEFAULT_IMAGE_SIZE = (96, 96)  # (height, width) of the scene camera
@@ -53,8 +58,8 @@ def action_space() -> Any:
     """7 joint-position targets (rad) and the gripper gap (m), as `StackTask.action_spec`."""
     from gymnasium import spaces
 
+    # lazy: utamp_gym.dm.physics imports dm_control, dm_env, mujoco, ompl, pinocchio
     from utamp_gym.dm.physics import KitchenPhysics
-    from utamp_gym.suites import resolve_scene
 
     physics = KitchenPhysics.build(resolve_scene("kitchen-demo"))
     low, high = physics.model.actuator_ctrlrange.T
@@ -82,8 +87,6 @@ def _observation(time_step: Any, physics: Any, size: tuple[int, int]) -> dict[st
 def scene_of(env_id: str, seed: int, options: Mapping[str, Any] | None = None) -> str:
     """The scene the macro env's ``reset(seed=seed)`` picks (the two tracks share scenes);
     `options` select the scenes (a suite, a procedural ``split``)."""
-    from utamp_gym.data.macro import make_env
-
     env = make_env(env_id, {**(options or {}), "grounding": "symbolic"})
     try:
         env.reset(seed=seed)
@@ -94,6 +97,7 @@ def scene_of(env_id: str, seed: int, options: Mapping[str, Any] | None = None) -
 
 def load_env(scene: str, seed: int, duration_s: float) -> Any:
     """The dm_control environment an episode is recorded (and replayed) in: no initial noise."""
+    # lazy: utamp_gym.dm imports dm_control, dm_env, mujoco, ompl, pinocchio
     from utamp_gym import dm
 
     return dm.load(scene=scene, seed=seed, pos_noise=0.0, yaw_noise_deg=0.0,
@@ -102,11 +106,8 @@ def load_env(scene: str, seed: int, duration_s: float) -> Any:
 
 def record_episode(task: LowLevelTask) -> Episode:
     """Plan, record the joint commands and replay them at control rate, keeping every step."""
+    # lazy: utamp_gym.dm imports dm_control, dm_env, mujoco, ompl, pinocchio
     from utamp_gym.dm import CONTROL_TIMESTEP, ReplayPolicy, record_plan
-    from utamp_gym.errors import PlanningError
-    from utamp_gym.planning.methods import plan_scene
-    from utamp_gym.scene.io import scene_to_toml
-    from utamp_gym.suites import resolve_scene
 
     scene = resolve_scene(task.scene)
     outcome = plan_scene(scene, task.method, seed=task.seed)

@@ -21,6 +21,7 @@ import numpy as np
 
 from utamp_gym.agents import PlannerPolicy, run_policy
 from utamp_gym.data.minari_io import Episode
+from utamp_gym.env.registry import register_envs
 from utamp_gym.scene.io import scene_to_toml
 
 #: a bound on an episode's steps beyond the env's own time limit (which ends it first)
@@ -42,8 +43,6 @@ class MacroTask:
 
 def make_env(env_id: str, env_options: Mapping[str, Any]) -> Any:
     import gymnasium as gym
-
-    from utamp_gym.env.registry import register_envs
 
     register_envs()
     return gym.make(env_id, **{**env_options, **RECORDED})

@@ -14,7 +14,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from utamp_gym import suites
+from utamp_gym.data import lowlevel, macro
 from utamp_gym.data.minari_io import Episode, write_dataset
+from utamp_gym.distributed import LocalExecutor
+from utamp_gym.env.registry import env_definitions
+from utamp_gym.errors import UnknownNameError, UtampError
+from utamp_gym.rl.harness import suite_options
 
 if TYPE_CHECKING:
     from utamp_gym.distributed import Executor
@@ -46,14 +52,8 @@ def proved_unsolvable(reason: str) -> bool:
 def suite_env(suite: str) -> tuple[str, dict[str, Any]]:
     """The registered env id of a suite, and the options that select it (a suite without an
     id of its own runs in ``UTampKitchen-v0`` with its suite and object rows)."""
-    from utamp_gym import suites
-    from utamp_gym.env.registry import env_definitions
-    from utamp_gym.rl.harness import suite_options
-
     every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
     if suite not in every:
-        from utamp_gym.errors import UnknownNameError
-
         raise UnknownNameError("suite", suite, every)
     for d in env_definitions():
         if d.kwargs.get("suite") == suite:
@@ -87,13 +87,7 @@ def record_demos(
 ) -> DemoResult:
     """Record `episodes` planner episodes of `suite` (reset seeds ``seed ..``) on `executor`
     (default: in this process) and write them as one Minari dataset under `out`."""
-    from utamp_gym.data import lowlevel, macro
-    from utamp_gym.distributed import LocalExecutor
-    from utamp_gym.errors import UtampError
-
     if track not in TRACKS:
-        from utamp_gym.errors import UnknownNameError
-
         raise UnknownNameError("track", track, TRACKS)
     if episodes < 1:
         raise UtampError(f"--episodes must be at least 1, got {episodes}")

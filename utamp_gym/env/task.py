@@ -26,6 +26,7 @@ POSITION_LIMIT = 5.0  # m: |x|, |y|, |z| bound of object positions (the table is
 
 def home_joints() -> np.ndarray:
     """The Panda's ready pose with the fingers open: the robot obs in symbolic grounding."""
+    # lazy: utamp_gym.robot.kinematics imports pinocchio
     from utamp_gym.robot.kinematics import HOME_Q  # pinocchio: import only when needed
 
     return np.array([*HOME_Q, 0.04, 0.04], np.float32)

@@ -17,6 +17,7 @@ from typing import Any
 
 from utamp_gym.errors import UtampError
 from utamp_gym.eval.records import Key, ResultRow, key_text, read_rows, write_rows
+from utamp_gym.eval.summary import summarize, write_summary
 
 
 class MergeConflictError(UtampError):
@@ -119,8 +120,8 @@ def merge_outputs(out: str | Path, dirs: Sequence[str | Path]) -> dict[str, Any]
     `out` may be one of `dirs`; a results.csv already in `out` that is not listed is
     refused rather than silently overwritten or mixed in.
     """
+    # lazy: utamp_gym.eval.plots imports matplotlib
     from utamp_gym.eval.plots import write_plots
-    from utamp_gym.eval.summary import summarize, write_summary
 
     out = Path(out)
     if not dirs:

@@ -21,16 +21,22 @@ from dataclasses import dataclass
 from typing import Any
 
 from utamp_gym.affordances.facts import Fact, Scores
-from utamp_gym.affordances.sources import DEFAULT_NOISE
+from utamp_gym.affordances.noisy import corrupt_type
+from utamp_gym.affordances.sources import DEFAULT_NOISE, detection_rng, scene_types
 from utamp_gym.agents.runs import execute_plan, open_loop_env
 from utamp_gym.errors import EndpointError, UnknownNameError
+from utamp_gym.eval.closed_loop import run_closed_loop
 from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
+from utamp_gym.methods.perceived import attribute_accuracy, mean_accuracy, plan_perceived
 from utamp_gym.methods.vlm import RUNNERS, VLM_METHODS
+from utamp_gym.methods.vlm_client import VlmClient
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import METHODS, method_spec, plan_scene
+from utamp_gym.rl.harness import check_rl_method, run_rl_episode
 from utamp_gym.scene.model import Scene
+from utamp_gym.suites import resolve_scene, suite_of
 
 EVAL_METHODS = (*METHODS, *VLM_METHODS)
 DEFAULT_TIMEOUT = 30.0
@@ -41,8 +47,6 @@ def check_method(method: str, suite: str | None = None) -> None:
     """Raise if `method` is neither one of `EVAL_METHODS` nor a usable ``rl:PATH`` model
     (missing, without its env metadata, or trained on another suite)."""
     if method.startswith("rl:"):
-        from utamp_gym.rl.harness import check_rl_method
-
         check_rl_method(method, suite)
     elif method not in EVAL_METHODS:
         raise UnknownNameError("method", method, (*EVAL_METHODS, RL_METHOD))
@@ -88,8 +92,6 @@ class _Planned:
 def _suite_of(name: str) -> str:
     """The suite of a suite scene (``procedural-v1/train/0042`` -> ``procedural-v1/train``);
     ``custom`` for a packaged scene or a scene file."""
-    from utamp_gym.suites import suite_of
-
     return suite_of(name) or "custom"
 
 
@@ -97,8 +99,6 @@ def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
     """Plan `scene` with the task's method (`look`: the simulator `utamp2-perceived` looks
     through, the one its plan is then played in; None: a world built for the look)."""
     if task.method in VLM_METHODS:
-        from utamp_gym.methods.vlm_client import VlmClient
-
         start = time.perf_counter()
         try:
             out = RUNNERS[task.method](
@@ -110,8 +110,6 @@ def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
             out.solved, out.plan, out.planning_time_s, out.reason, out.scores, out.facts
         )
     if task.method == "utamp2-perceived":
-        from utamp_gym.methods.perceived import plan_perceived
-
         o, seen = plan_perceived(scene, task.seed, timeout=task.timeout, backend=look)
         accuracy = None if seen is None else seen.accuracy
         return _Planned(
@@ -128,10 +126,6 @@ def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
 def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
     """Per-attribute accuracy of the noisy detector's attributes (the same draws as the
     detection: `detection_rng`, types in `scene_types` order)."""
-    from utamp_gym.affordances.noisy import corrupt_type
-    from utamp_gym.affordances.sources import detection_rng, scene_types
-    from utamp_gym.methods.perceived import attribute_accuracy, mean_accuracy
-
     rng = detection_rng(seed, scene.name)
     noisy = {t.name: corrupt_type(t, noise, rng) for t in scene_types(scene)}
     rows = []
@@ -143,8 +137,6 @@ def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
 
 
 def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
-    from utamp_gym.rl.harness import run_rl_episode
-
     ep = run_rl_episode(
         task.method,
         scene.name,
@@ -170,9 +162,6 @@ def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
 
 
 def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
-    from utamp_gym.eval.closed_loop import run_closed_loop
-    from utamp_gym.suites import resolve_scene
-
     scene = resolve_scene(task.scene)
     noise = DEFAULT_NOISE if task.noise is None else task.noise
     out = run_closed_loop(
@@ -204,8 +193,6 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
 
 
 def _run(task: EvalTask, start: float) -> ResultRow:
-    from utamp_gym.suites import resolve_scene
-
     if task.method.startswith("rl:"):  # a saved agent acting in the env (always closed loop)
         return _run_rl(task, resolve_scene(task.scene), start)
     if task.closed_loop:
@@ -282,8 +269,6 @@ def _accuracy_columns(accuracy: Mapping[str, float] | None) -> dict[str, float |
 def failure_row(task: EvalTask, reason: str, wall_time_s: float = 0.0) -> ResultRow:
     """The row recorded for a run that crashed (an exception, or its worker process died)."""
     try:
-        from utamp_gym.suites import resolve_scene
-
         n_objects = resolve_scene(task.scene).n_objects
     except Exception:
         n_objects = 0

@@ -243,6 +243,7 @@ def run_sweep(
 
 def write_outputs(report: SweepReport) -> dict[str, Any]:
     """Write summary.md, summary.json and the figures of a sweep; returns the summary."""
+    # lazy: utamp_gym.eval.plots imports matplotlib
     from utamp_gym.eval.plots import write_plots  # matplotlib: only when figures are written
 
     cfg = report.config

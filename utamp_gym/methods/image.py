@@ -6,6 +6,7 @@ import numpy as np
 
 from utamp_gym.errors import SimulationError
 from utamp_gym.scene.model import Scene
+from utamp_gym.sim.gl import new_renderer
 
 IMAGE_SIZE = (640, 480)  # width, height
 CAMERA = "overview"
@@ -21,7 +22,7 @@ def render_scene_png(scene: Scene, seed: int = 0, size: tuple[int, int] = IMAGE_
         import imageio.v3 as iio
         import mujoco
 
-        from utamp_gym.sim.gl import new_renderer
+        # lazy: utamp_gym.sim.world imports mujoco
         from utamp_gym.sim.world import build_world
     except ImportError as exc:  # pragma: no cover - the physics extras are dependencies
         raise SimulationError(f"cannot render the scene image: {exc}") from exc

@@ -225,6 +225,7 @@ def perceive_world(scene: Scene, world_seed: int, *, backend: Any = None) -> Per
 def perceive_live(scene: Scene, backend: Any, start: float | None = None) -> PerceivedScene:
     """Perceive the world a backend simulates now (its survey look); `scene` is the
     declared scene (for the orientations and the alignment)."""
+    # lazy: utamp_gym.perception.objects imports scipy
     from utamp_gym.perception.objects import perceive_objects
 
     start = time.perf_counter() if start is None else start

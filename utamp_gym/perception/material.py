@@ -42,6 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
+from utamp_gym.errors import AssetError
+from utamp_gym.resources import asset_path
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.materials import MATERIALS, hex_rgba, material
 
@@ -243,9 +245,6 @@ def _nearest_colour(material_name: str, x: np.ndarray) -> int:
 @lru_cache(maxsize=1)
 def packaged_model() -> MaterialModel | None:
     """The trained model shipped with the package, or None if there is none."""
-    from utamp_gym.errors import AssetError
-    from utamp_gym.resources import asset_path
-
     try:
         path = Path(asset_path(*MODEL_FILE))
     except AssetError:

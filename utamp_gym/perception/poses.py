@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from utamp_gym.perception.cloud import voxel_keep
 from utamp_gym.perception.grid import estimate_yaw, rotate
 from utamp_gym.perception.shape import wall_fit
 from utamp_gym.scene.catalogue import ObjectType
@@ -177,8 +178,6 @@ def icp_pose(
 def _spread(points: np.ndarray, n: int) -> np.ndarray:
     """At most about `n` points spread evenly over the surface seen (one per voxel, the voxel
     grown until few enough are left), not where a close camera saw most of them."""
-    from utamp_gym.perception.cloud import voxel_keep
-
     if len(points) > 8 * n:  # a cheap thinning first: voxels of a huge cloud cost
         points = points[:: len(points) // (8 * n)]
     size = 0.004

@@ -18,6 +18,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from utamp_gym.distributed import make_executor
+from utamp_gym.env.registry import env_ids
 from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
@@ -40,7 +42,10 @@ def _cmd_train(args: argparse.Namespace) -> int:
     if args.algo == "bc":  # reads a Minari dataset
         require("utamp train --algo bc", "data")
     # the rl extra (torch, stable-baselines3) is checked above, before these load it
+    # lazy: utamp_gym.rl.seeds imports sb3_contrib, stable_baselines3, torch
     from utamp_gym.rl.seeds import train_seeds
+
+    # lazy: utamp_gym.rl.train imports sb3_contrib, stable_baselines3, torch
     from utamp_gym.rl.train import train
 
     kwargs: dict[str, Any] = {
@@ -70,8 +75,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
         require("utamp train --executor ray", "ray")
     output_dir(args.out, "--out")  # before training, not after
     if args.seeds > 1:
-        from utamp_gym.distributed import make_executor
-
         workers = args.workers
         if args.executor == "local" and workers is None:
             workers = 0  # one seed after another in this process
@@ -107,8 +110,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
 def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``train`` command to `subparsers` (from ``parser.add_subparsers()``)."""
-    from utamp_gym.env.registry import env_ids
-
     p = subparsers.add_parser(
         "train",
         help="train a baseline: MaskablePPO, PPO, DQN or behaviour cloning (bc)",

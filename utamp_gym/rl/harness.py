@@ -23,8 +23,12 @@ from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from utamp_gym import suites
 from utamp_gym.agents.episode import run_policy
+from utamp_gym.env.options import EnvOptions
+from utamp_gym.env.registry import register_envs
 from utamp_gym.rl.envs import n_fluents
+from utamp_gym.rl.policy import load_rl_policy
 from utamp_gym.rl.saved import ModelError, ModelMeta, check_model, check_spaces, read_meta
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import resolve_scene
@@ -58,8 +62,6 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
     if spaces:
         import gymnasium as gym
 
-        from utamp_gym.env.registry import register_envs
-
         register_envs()  # explicitly: a worker process may have skipped it on import
 
         try:
@@ -73,16 +75,12 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
 
 def _suite_of(scene: str) -> str | None:
     """The suite (or procedural split) a scene name belongs to, if any."""
-    from utamp_gym import suites
-
     every = getattr(suites, "ALL_SUITES", suites.SUITES)  # with the procedural splits
     return max((s for s in every if scene.startswith(f"{s}/")), key=len, default=None)
 
 
 def _suite_choice(suite: str) -> dict[str, Any]:
     """The env options that select `suite` (a procedural env takes its split, not a suite)."""
-    from utamp_gym import suites
-
     if suite in getattr(suites, "PROCEDURAL_SUITES", ()):
         return {"suite": None, "split": suite.rsplit("/", 1)[1]}
     return {"suite": suite, "split": None}
@@ -96,9 +94,6 @@ def shares_actions(meta: ModelMeta, suite: str | None) -> bool:
     if suite is None or suite == meta.suite or meta.env_options.get("interface") == "objects":
         return True
     import gymnasium as gym
-
-    from utamp_gym.env.options import EnvOptions
-    from utamp_gym.env.registry import register_envs
 
     register_envs()
     try:
@@ -120,8 +115,6 @@ def shares_actions(meta: ModelMeta, suite: str | None) -> bool:
 def suite_options(scene: str) -> dict[str, Any]:
     """Env options that put `scene`'s suite under an objects-interface agent (it acts on any
     suite): the suite and, as pose rows, every object name of the suite's scenes."""
-    from utamp_gym import suites
-
     suite = _suite_of(scene)
     if suite is None:
         return {}
@@ -150,8 +143,6 @@ class RLEpisode:
 @lru_cache(maxsize=2)
 def _load(path: str, mtime_ns: int) -> RLPolicy:
     """The policy of a model file (cached per process: a sweep runs it on many scenes)."""
-    from utamp_gym.rl.policy import load_rl_policy
-
     return load_rl_policy(path)
 
 
@@ -166,8 +157,6 @@ def run_rl_episode(
 ) -> RLEpisode:
     """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
     import gymnasium as gym
-
-    from utamp_gym.env.registry import register_envs
 
     register_envs()  # explicitly: a worker process may have skipped it on import
 

@@ -1,8 +1,27 @@
-"""Scene layer: object catalogue, scene model and scene files."""
+"""Scene layer: object catalogue, scene model and scene files.
+
+The scene-file functions (`load_scene`, `scene_from_dict`, `scene_to_dict`, `scene_to_toml`)
+are loaded on first use: `utamp_gym.scene.io` reads a scene's goal through `utamp_gym.tasks`,
+whose modules import the scene model (`utamp_gym.scene.model`), so importing them eagerly here
+would close the cycle scene -> scene.io -> tasks.templates -> tasks.attributes -> scene.
+"""
+
+from typing import Any
 
 from utamp_gym.scene.catalogue import Catalogue, ObjectType, load_catalogue
-from utamp_gym.scene.io import load_scene, scene_from_dict, scene_to_dict, scene_to_toml
 from utamp_gym.scene.model import Pose, Scene, SceneObject, Slot, Space
+
+_IO = ("load_scene", "scene_from_dict", "scene_to_dict", "scene_to_toml")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _IO:
+        # lazy: cycle scene -> scene.io -> tasks.templates -> tasks.attributes -> scene
+        from utamp_gym.scene import io
+
+        return getattr(io, name)
+    raise AttributeError(f"module 'utamp_gym.scene' has no attribute {name!r}")
+
 
 __all__ = [
     "Catalogue",

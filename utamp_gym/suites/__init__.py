@@ -23,6 +23,7 @@ from utamp_gym.scene.model import Scene
 from utamp_gym.suites import generate as _enumerated
 from utamp_gym.suites.generate import get_scene as _get_enumerated
 from utamp_gym.suites.generate import suite_stats
+from utamp_gym.tasks.templates import tower_goal
 
 PROCEDURAL = "procedural-v1"
 #: the procedural splits, each a suite of its own (`utamp_gym.suites.procedural`)
@@ -132,10 +133,12 @@ def suite_scenes(suite: str) -> tuple[Scene, ...]:
     """All scenes of a suite, in their stable order."""
     _check_suite(suite)
     if suite in PROCEDURAL_SUITES:
+        # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural
         from utamp_gym.suites import procedural
 
         return tuple(g.scene for g in procedural.split_scenes(_split(suite)))
     if (split := _v2_split(suite)) is not None:
+        # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural_v2
         from utamp_gym.suites import procedural_v2
 
         return tuple(g.scene for g in procedural_v2.split_scenes(split))
@@ -158,10 +161,12 @@ def all_scene_names(suite: str | None = None) -> list[str]:
     out: list[str] = []
     for name in suites:
         if name in PROCEDURAL_SUITES:
+            # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural
             from utamp_gym.suites import procedural
 
             out += procedural.split_names(_split(name))
         elif (split := _v2_split(name)) is not None:
+            # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural_v2
             from utamp_gym.suites import procedural_v2
 
             out += procedural_v2.split_names(split)
@@ -173,6 +178,7 @@ def all_scene_names(suite: str | None = None) -> list[str]:
 def get_scene(name: str) -> Scene:
     """A suite scene by its stable name (``pick-place/017``, ``procedural-v1/train/0042``)."""
     if name.startswith(f"{PROCEDURAL}/"):
+        # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural
         from utamp_gym.suites import procedural
 
         parsed = procedural.parse_name(name)
@@ -180,6 +186,7 @@ def get_scene(name: str) -> Scene:
             return procedural.split_scene(*parsed).scene
         raise UnknownSceneError(name)
     if name.startswith(f"{PROCEDURAL_V2}/"):
+        # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural_v2
         from utamp_gym.suites import procedural_v2
 
         parsed = procedural_v2.parse_name(name)
@@ -202,8 +209,8 @@ def scene_summary(suite: str) -> list[dict[str, Any]]:
     ``template`` and ``instruction`` of its goal (the suites before procedural-v2: the
     paper's tower) and ``achievable`` (the rules' verdict on the goal; the enumerated suites
     keep only achievable scenes; procedural-v2: the planner's label)."""
+    # lazy: keeps `utamp plan` from loading utamp_gym.tasks.language
     from utamp_gym.tasks.language import instruction
-    from utamp_gym.tasks.templates import tower_goal
 
     _check_suite(suite)
 
@@ -219,11 +226,13 @@ def scene_summary(suite: str) -> list[dict[str, Any]]:
         }
 
     if suite in PROCEDURAL_SUITES:
+        # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural
         from utamp_gym.suites import procedural
 
         return [record(g.scene, g.families, g.achievable)
                 for g in procedural.split_scenes(_split(suite))]  # fmt: skip
     if (split := _v2_split(suite)) is not None:
+        # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural_v2
         from utamp_gym.suites import procedural_v2
 
         return [record(g.scene, g.families, g.achievable)
@@ -265,6 +274,7 @@ def suite_of(ref: str) -> str:
 
 def _v2_names() -> list[str]:
     """The names of the procedural-v2 scenes generated so far."""
+    # lazy: keeps `utamp --help` from loading utamp_gym.suites.procedural_v2
     from utamp_gym.suites import procedural_v2
 
     return [

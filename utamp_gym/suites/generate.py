@@ -265,6 +265,7 @@ def suite_facts(suite: str) -> frozenset[Fact]:
     facts = packaged_ground_truth()
     if suite != "extra":
         return facts
+    # lazy: keeps `utamp plan` from loading utamp_gym.affordances.rules
     from utamp_gym.affordances.rules import derive_affordances  # numpy: off `utamp plan`'s path
 
     new = extra_catalogue()

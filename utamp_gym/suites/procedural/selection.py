@@ -7,6 +7,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
+from utamp_gym.planning.methods import plan_scene
 from utamp_gym.resources import asset_path
 from utamp_gym.suites.procedural.layout import (
     generate_scene,
@@ -30,8 +31,6 @@ from utamp_gym.suites.procedural.spec import (
 
 def _planner_agrees(g: Generated) -> bool:
     """Fast Downward with the rules' affordances solves the scene iff it is called achievable."""
-    from utamp_gym.planning.methods import plan_scene
-
     return plan_scene(g.scene, "utamp2-rules", timeout=60.0).solved == g.achievable
 
 

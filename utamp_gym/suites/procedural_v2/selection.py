@@ -22,7 +22,13 @@ from utamp_gym.resources import assets_dir
 from utamp_gym.suites.procedural.spec import NoLayout
 from utamp_gym.suites.procedural_v2.labels import fd_agrees, label
 from utamp_gym.suites.procedural_v2.scenes import generate_scene
-from utamp_gym.suites.procedural_v2.seeds import SAMPLE_STEP, _seed_table, split_digest
+from utamp_gym.suites.procedural_v2.seeds import (
+    SAMPLE_STEP,
+    _seed_table,
+    available_splits,
+    split_digest,
+    split_hash,
+)
 from utamp_gym.suites.procedural_v2.spec import (
     DOMAIN,
     HARD_MIN_ACTIONS,
@@ -174,8 +180,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         write_split_file([json.loads(Path(p).read_text()) for p in args[1:]])
         return 0
     if args == ["check"]:
-        from utamp_gym.suites.procedural_v2.seeds import available_splits, split_hash
-
         bad = [s for s in available_splits() if split_digest(s) != split_hash(s)]
         print("ok" if not bad else f"differ: {', '.join(bad)}")
         return 1 if bad else 0
