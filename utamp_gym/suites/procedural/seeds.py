@@ -12,7 +12,7 @@ import tomli
 
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
-from utamp_gym.scene.io import scene_from_dict, scene_to_toml
+from utamp_gym.scene.io import scene_from_dict, scene_to_dict, scene_to_toml
 from utamp_gym.suites.procedural.layout import (
     generate_scene,
 )
@@ -27,6 +27,8 @@ from utamp_gym.suites.procedural.spec import (
     Generated,
     _check_split,
 )
+from utamp_gym.suites.split_cache import cache_path, read_records, write_records
+from utamp_gym.suites.split_cache import split_names as names_of
 
 
 @lru_cache(maxsize=1)
@@ -76,22 +78,14 @@ def split_scenes(split: str) -> tuple[Generated, ...]:
 
 
 def _cache_path(split: str) -> Path:
-    import os
-
-    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(root) / "utamp_gym" / f"{SUITE}-{split}-{split_hash(split)[:16]}.json"
+    return cache_path(SUITE, split, split_hash(split))
 
 
 @lru_cache(maxsize=len(SPLITS))
 def _read_cache(split: str) -> tuple[Generated, ...] | None:
-    import json
-
     path = _cache_path(split)
-    try:
-        records = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    if len(records) != len(split_seeds(split)):
+    records = read_records(path, len(split_seeds(split)))
+    if records is None:
         return None
     file = f"<{SUITE} {split} cache {path.name}>"
     return tuple(
@@ -106,30 +100,17 @@ def _read_cache(split: str) -> tuple[Generated, ...] | None:
 
 
 def _write_cache(split: str, scenes: tuple[Generated, ...]) -> None:
-    import json
-    import os
-    import tempfile
-
-    from utamp_gym.scene.io import scene_to_dict
-
-    path = _cache_path(split)
     records = [
         {"seed": g.seed, "families": list(g.families), "achievable": g.achievable,
          "scene": scene_to_dict(g.scene)}
         for g in scenes
     ]  # fmt: skip
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False) as f:
-            json.dump(records, f)
-        os.replace(f.name, path)
-    except OSError:
-        return
-    _read_cache.cache_clear()
+    if write_records(_cache_path(split), records):
+        _read_cache.cache_clear()
 
 
 def split_names(split: str) -> list[str]:
-    return [f"{SUITE}/{split}/{i:04d}" for i in range(len(split_seeds(split)))]
+    return names_of(SUITE, split, len(split_seeds(split)))
 
 
 def split_digest(split: str, step: int = 1) -> str:

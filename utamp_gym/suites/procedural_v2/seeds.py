@@ -9,9 +9,6 @@ draws from), ``seeds``, and per seed ``achievable`` and ``plan_length`` (0 if un
 from __future__ import annotations
 
 import hashlib
-import json
-import os
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -25,6 +22,8 @@ from utamp_gym.scene.model import Scene
 from utamp_gym.suites.procedural.objects import _catalogue
 from utamp_gym.suites.procedural_v2.scenes import generate_scene
 from utamp_gym.suites.procedural_v2.spec import SEEDS_FILE, SPLITS, SUITE, check_split
+from utamp_gym.suites.split_cache import cache_path, read_records, write_records
+from utamp_gym.suites.split_cache import split_names as names_of
 
 SAMPLE_STEP = 20  # `sample_sha256` covers scenes 0, 20, 40, ...
 
@@ -109,18 +108,14 @@ def split_scenes(split: str) -> tuple[V2Scene, ...]:
 
 
 def _cache_path(split: str) -> Path:
-    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(root) / "utamp_gym" / f"{SUITE}-{split}-{split_hash(split)[:16]}.json"
+    return cache_path(SUITE, split, split_hash(split))
 
 
 @lru_cache(maxsize=len(SPLITS))
 def _read_cache(split: str) -> tuple[V2Scene, ...] | None:
     path = _cache_path(split)
-    try:
-        records = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    if len(records) != len(split_seeds(split)):
+    records = read_records(path, len(split_seeds(split)))
+    if records is None:
         return None
     file = f"<{SUITE} {split} cache {path.name}>"
     return tuple(
@@ -134,24 +129,17 @@ def _read_cache(split: str) -> tuple[V2Scene, ...] | None:
 
 
 def _write_cache(split: str, scenes: tuple[V2Scene, ...]) -> None:
-    path = _cache_path(split)
     records = [
         {**{k: v for k, v in g._asdict().items() if k != "scene"},
          "families": list(g.families), "scene": scene_to_dict(g.scene)}
         for g in scenes
     ]  # fmt: skip
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False) as f:
-            json.dump(records, f)
-        os.replace(f.name, path)
-    except OSError:
-        return
-    _read_cache.cache_clear()
+    if write_records(_cache_path(split), records):
+        _read_cache.cache_clear()
 
 
 def split_names(split: str) -> list[str]:
-    return [f"{SUITE}/{split}/{i:04d}" for i in range(len(split_seeds(split)))]
+    return names_of(SUITE, split, len(split_seeds(split)))
 
 
 def split_digest(split: str, step: int = 1, seeds: tuple[int, ...] | None = None) -> str:
