@@ -167,21 +167,12 @@ class SlotActionHead(nn.Module):
         return self.pick[-1], self.place[-1], self.slide[-1]
 
     def forward(self, features: th.Tensor) -> th.Tensor:
-        x, g = _split(features, self.d)
-        b = x.shape[0]
-        obj, supports, space = x[:, :_K], x[:, : _K + _R], x[:, _K + _R :]
-        ctx = g[:, None]  # (b, 1, d)
-        hidden = _first_layer(self.pick[0], obj, ctx).relu()
-        pick = self.pick[2](hidden).reshape(b, -1)  # (i, m, g)
+        obj, supports, space, ctx = _tokens(features, self.d)
+        pick = _picks(self.pick, obj, ctx)
         oi, sj = obj[:, :, None], supports[:, None]  # (b, K, 1, d), (b, 1, K + R, d)
         hidden = _first_layer(self.place[0], oi, sj, oi * sj, ctx[:, None]).relu()
-        place = self.place[2](hidden).reshape(b, -1)  # (i, j)
-        hidden = _first_layer(self.slide[0], oi, space[:, None], ctx[:, None]).relu()
-        slide = self.slide[2](hidden)  # (i, s, m*g) -> (i, m, g, s)
-        slide = slide.permute(0, 1, 3, 2).reshape(b, -1)
-        logits = th.cat([pick, place, slide], 1)
-        assert logits.shape[1] == N_ACTIONS
-        return logits
+        place = self.place[2](hidden).reshape(obj.shape[0], -1)  # (i, j)
+        return _logits(pick, place, _slides(self.slide, oi, space, ctx))
 
 
 class SlotPointerHead(nn.Module):
@@ -204,22 +195,37 @@ class SlotPointerHead(nn.Module):
         return self.pick[-1], self.query[-1], self.slide[-1]
 
     def forward(self, features: th.Tensor) -> th.Tensor:
-        x, g = _split(features, self.d)
-        b = x.shape[0]
-        obj, supports, space = x[:, :_K], x[:, : _K + _R], x[:, _K + _R :]
-        ctx = g[:, None]  # (b, 1, d)
-        hidden = _first_layer(self.pick[0], obj, ctx).relu()
-        pick = self.pick[2](hidden).reshape(b, -1)  # (i, m, g)
+        obj, supports, space, ctx = _tokens(features, self.d)
+        pick = _picks(self.pick, obj, ctx)
         query = self.query[2](_first_layer(self.query[0], obj, ctx).relu())  # (b, K, d)
         key = self.key(supports)  # (b, K + R, d)
-        place = (query @ key.transpose(1, 2)).reshape(b, -1) / math.sqrt(self.d)  # (i, j)
-        oi = obj[:, :, None]
-        hidden = _first_layer(self.slide[0], oi, space[:, None], ctx[:, None]).relu()
-        slide = self.slide[2](hidden)  # (i, s, m*g) -> (i, m, g, s)
-        slide = slide.permute(0, 1, 3, 2).reshape(b, -1)
-        logits = th.cat([pick, place, slide], 1)
-        assert logits.shape[1] == N_ACTIONS
-        return logits
+        place = (query @ key.transpose(1, 2)).reshape(obj.shape[0], -1) / math.sqrt(self.d)
+        return _logits(pick, place, _slides(self.slide, obj[:, :, None], space, ctx))
+
+
+def _tokens(features: th.Tensor, d: int) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor]:
+    """The object, support and free-space tokens and the pooled context (b, 1, d)."""
+    x, g = _split(features, d)
+    return x[:, :_K], x[:, : _K + _R], x[:, _K + _R :], g[:, None]
+
+
+def _picks(pick: nn.Sequential, obj: th.Tensor, ctx: th.Tensor) -> th.Tensor:
+    """The pick logits (i, m, g), flattened per sample."""
+    return pick[2](_first_layer(pick[0], obj, ctx).relu()).reshape(obj.shape[0], -1)
+
+
+def _slides(slide: nn.Sequential, oi: th.Tensor, space: th.Tensor, ctx: th.Tensor) -> th.Tensor:
+    """The slide logits (i, m, g, s), flattened per sample; `oi`: the object tokens
+    (b, K, 1, d)."""
+    hidden = _first_layer(slide[0], oi, space[:, None], ctx[:, None]).relu()
+    slides = slide[2](hidden)  # (i, s, m*g) -> (i, m, g, s)
+    return slides.permute(0, 1, 3, 2).reshape(oi.shape[0], -1)
+
+
+def _logits(pick: th.Tensor, place: th.Tensor, slide: th.Tensor) -> th.Tensor:
+    logits = th.cat([pick, place, slide], 1)
+    assert logits.shape[1] == N_ACTIONS
+    return logits
 
 
 #: the slot policy's action heads by the name of its ``head`` keyword ("pairs" for a model
