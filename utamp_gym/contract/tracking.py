@@ -12,6 +12,7 @@ the points on each object's surfaces it simulates, and each object's declared po
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from typing import Protocol, runtime_checkable
 
@@ -70,4 +71,21 @@ class PoseTracking(Protocol):
         ...
 
 
-__all__ = ["Look", "PoseTracker", "PoseTracking", "Surface"]
+def rot_z(yaw: float) -> np.ndarray:
+    """The 3x3 rotation by `yaw` (rad) about the vertical."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def shifted(pose: np.ndarray, shift: np.ndarray, yaw: float) -> np.ndarray:
+    """A copy of `pose` (4x4, world) turned by `yaw` (rad) about the vertical where it
+    stands and moved by `shift` (m, world): an estimate off by a belief offset or noise."""
+    out = pose.copy()
+    if yaw == 0.0 and not shift.any():
+        return out
+    out[:3, :3] = rot_z(yaw) @ pose[:3, :3]
+    out[:3, 3] = pose[:3, 3] + shift
+    return out
+
+
+__all__ = ["Look", "PoseTracker", "PoseTracking", "Surface", "rot_z", "shifted"]

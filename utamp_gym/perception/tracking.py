@@ -22,13 +22,12 @@ heading: the symbolic state the robot is given).
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping
 
 import numpy as np
 
-from utamp_gym.contract.tracking import Look, Surface
+from utamp_gym.contract.tracking import Look, Surface, shifted
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.poses import PoseModel, estimate_pose
 from utamp_gym.scene.model import Scene
@@ -39,11 +38,6 @@ RGBD_NOISE = 0.002
 WRIST_POINTS = 150  # an object this well seen by the wrist camera needs no scene look ...
 WHOLE_SPAN = 0.8  # ... if its points span this much of its longest extent
 STILL = 0.0005  # m: an object whose points' centre moved less than this was not refitted
-
-
-def _rot_z(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 class RgbdPoseEstimator:
@@ -187,12 +181,7 @@ class RgbdPoseEstimator:
 
     def _with_offset(self, name: str, pose: np.ndarray) -> np.ndarray:
         shift, yaw = self.offsets.get(name, (np.zeros(3), 0.0))
-        if yaw == 0.0 and not shift.any():
-            return pose.copy()
-        out = pose.copy()
-        out[:3, :3] = _rot_z(yaw) @ pose[:3, :3]
-        out[:3, 3] = pose[:3, 3] + shift
-        return out
+        return shifted(pose, shift, yaw)
 
 
 def rgbd_tracking(

@@ -23,14 +23,10 @@ import math
 import numpy as np
 
 from utamp_gym.backend import yaw_noise_deg
+from utamp_gym.contract.tracking import shifted
 
 #: a close look's noise, as a fraction of the scene cameras' (module docstring)
 CLOSE_FRACTION = 0.25
-
-
-def _rot_z(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 class PoseEstimator:
@@ -60,12 +56,7 @@ class PoseEstimator:
         if self.noise > 0:
             shift = shift + np.array([*self.rng.normal(0.0, self.noise, 2), 0.0])
             yaw = yaw + float(self.rng.normal(0.0, self.yaw_noise))
-        if yaw == 0.0 and not shift.any():
-            return true_pose.copy()
-        out = true_pose.copy()
-        out[:3, :3] = _rot_z(yaw) @ true_pose[:3, :3]
-        out[:3, 3] = true_pose[:3, 3] + shift
-        return out
+        return shifted(true_pose, shift, yaw)
 
     def close_look(self, name: str, true_pose: np.ndarray) -> np.ndarray:
         """A look at `name` with the wrist camera: a fresh, closer estimate (module
@@ -75,8 +66,7 @@ class PoseEstimator:
         if self.noise > 0:
             shift = np.array([*self.rng.normal(0.0, CLOSE_FRACTION * self.noise, 2), 0.0])
             yaw = float(self.rng.normal(0.0, CLOSE_FRACTION * self.yaw_noise))
-            out[:3, :3] = _rot_z(yaw) @ true_pose[:3, :3]
-            out[:3, 3] = true_pose[:3, 3] + shift
+            out = shifted(true_pose, shift, yaw)
         self._look[name] = out
         return out.copy()
 
