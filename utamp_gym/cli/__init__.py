@@ -31,7 +31,6 @@ from utamp_gym.cli.common import (
     Parser,
     timeout_seconds,
 )
-from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UtampError
 
 if TYPE_CHECKING:
@@ -146,6 +145,9 @@ def _run(argv: Sequence[str], started: float) -> int:
         args = build_parser(command).parse_args(argv)
         args.started = started
         if args.cmd not in LIGHT_COMMANDS:
+            # lazy: keeps the light commands (utamp plan, ...) from loading gymnasium
+            from utamp_gym.env.registry import register_envs
+
             register_envs()
         return int(args.func(args))
     except UtampError as exc:
