@@ -71,6 +71,25 @@ class PoseTracking(Protocol):
         ...
 
 
+class Beliefs:
+    """A tracker's injected wrong beliefs (`offsets`: name -> (shift (m), yaw (rad))) and its
+    current look's estimates (4x4), the part every `PoseTracker` keeps alike."""
+
+    def __init__(self) -> None:
+        self.offsets: dict[str, tuple[np.ndarray, float]] = {}
+        self._look: dict[str, np.ndarray] = {}
+
+    def offset(self, name: str, shift: np.ndarray, yaw: float = 0.0) -> None:
+        """Make the robot believe `name` is `shift` (m, world) and `yaw` (rad) off."""
+        self.offsets[name] = (np.asarray(shift, dtype=float).copy(), float(yaw))
+
+    def forget(self, *names: str) -> None:
+        """Drop the belief offsets and estimates of `names`: the robot looks at them again."""
+        for name in names:
+            self.offsets.pop(name, None)
+            self._look.pop(name, None)
+
+
 def rot_z(yaw: float) -> np.ndarray:
     """The 3x3 rotation by `yaw` (rad) about the vertical."""
     c, s = math.cos(yaw), math.sin(yaw)
@@ -88,4 +107,4 @@ def shifted(pose: np.ndarray, shift: np.ndarray, yaw: float) -> np.ndarray:
     return out
 
 
-__all__ = ["Look", "PoseTracker", "PoseTracking", "Surface", "rot_z", "shifted"]
+__all__ = ["Beliefs", "Look", "PoseTracker", "PoseTracking", "Surface", "rot_z", "shifted"]

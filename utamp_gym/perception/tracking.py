@@ -27,7 +27,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from utamp_gym.contract.tracking import Look, Surface, shifted
+from utamp_gym.contract.tracking import Beliefs, Look, Surface, shifted
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.poses import PoseModel, estimate_pose
 from utamp_gym.scene.model import Scene
@@ -40,7 +40,7 @@ WHOLE_SPAN = 0.8  # ... if its points span this much of its longest extent
 STILL = 0.0005  # m: an object whose points' centre moved less than this was not refitted
 
 
-class RgbdPoseEstimator:
+class RgbdPoseEstimator(Beliefs):
     """Object poses from the cameras (module docstring)."""
 
     def __init__(
@@ -50,11 +50,10 @@ class RgbdPoseEstimator:
         models: Mapping[str, PoseModel],
         initial: Mapping[str, np.ndarray],
     ) -> None:
+        super().__init__()
         self.noise = RGBD_NOISE
         self._render, self._ids, self._models = look, dict(instances), dict(models)
         self._belief = {n: np.asarray(p, dtype=float).copy() for n, p in initial.items()}
-        self.offsets: dict[str, tuple[np.ndarray, float]] = {}
-        self._look: dict[str, np.ndarray] = {}
         self._frames: Scene3D | None = None
         self._again: set[str] = set()  # looked at again: try the wrist camera first
         self._tcp: np.ndarray | None = None  # the hand's pose at the last rendering
@@ -104,14 +103,9 @@ class RgbdPoseEstimator:
         self._look[name] = self._fit(name, frames)
         return self._look[name].copy()
 
-    def offset(self, name: str, shift: np.ndarray, yaw: float = 0.0) -> None:
-        self.offsets[name] = (np.asarray(shift, dtype=float).copy(), float(yaw))
-
     def forget(self, *names: str) -> None:
-        for name in names:
-            self.offsets.pop(name, None)
-            self._look.pop(name, None)
-            self._again.add(name)
+        super().forget(*names)
+        self._again.update(names)
         self._frames = None
 
     # ------------------------------------------------------------ internals

@@ -23,22 +23,21 @@ import math
 import numpy as np
 
 from utamp_gym.backend import yaw_noise_deg
-from utamp_gym.contract.tracking import shifted
+from utamp_gym.contract.tracking import Beliefs, shifted
 
 #: a close look's noise, as a fraction of the scene cameras' (module docstring)
 CLOSE_FRACTION = 0.25
 
 
-class PoseEstimator:
+class PoseEstimator(Beliefs):
     """Noisy, possibly offset estimates of object poses (see the module docstring)."""
 
     def __init__(self, noise: float, rng: np.random.Generator) -> None:
         if not 0.0 <= noise < 1.0:
             raise ValueError(f"pose noise must be in [0, 1) m, got {noise!r}")
+        super().__init__()
         self.noise, self.rng = float(noise), rng
         self.yaw_noise = math.radians(yaw_noise_deg(noise))
-        self.offsets: dict[str, tuple[np.ndarray, float]] = {}  # name -> (dxyz, dyaw)
-        self._look: dict[str, np.ndarray] = {}  # this look's estimates
 
     def new_look(self) -> None:
         """Start a new look: the next estimate of every object is drawn afresh."""
@@ -69,13 +68,3 @@ class PoseEstimator:
             out = shifted(true_pose, shift, yaw)
         self._look[name] = out
         return out.copy()
-
-    def offset(self, name: str, shift: np.ndarray, yaw: float = 0.0) -> None:
-        """Make the robot believe `name` is `shift` (m, world) and `yaw` (rad) off."""
-        self.offsets[name] = (np.asarray(shift, dtype=float).copy(), float(yaw))
-
-    def forget(self, *names: str) -> None:
-        """Drop the belief offsets and estimates of `names`: the robot looks at them again."""
-        for name in names:
-            self.offsets.pop(name, None)
-            self._look.pop(name, None)
