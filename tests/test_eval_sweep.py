@@ -60,7 +60,8 @@ def test_cli_symbolic_eval_writes_all_files(tmp_path: Path, capsys) -> None:
     assert len(rows) == 10
     assert {(r["method"], r["seed"]) for r in rows} == {("utamp2-gt", "0"), ("utamp1", "0")}
     gt = [r for r in rows if r["method"] == "utamp2-gt"]
-    assert all(r["success"] == "true" and r["execution_time_s"] == "0" for r in gt)
+    # the plan is played in the symbolic env: a few microseconds a step
+    assert all(r["success"] == "true" and 0 < float(r["execution_time_s"]) < 1 for r in gt)
     assert all(float(r["affordance_f1"]) == 1.0 for r in gt)
     for r in rows:  # a failure always says why
         assert r["success"] == "true" or r["failure_reason"]

@@ -28,6 +28,7 @@ from typing import Any
 from utamp_gym.agents import OpenLoopPolicy, run_policy
 from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE, PhysicsBackend
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
+from utamp_gym.env.symbolic_backend import SymbolicBackend
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.io import scene_to_toml
@@ -227,13 +228,7 @@ def execute_plan(
         reason = f"not an action of the env's domain ({env.options.domain})"
         failure = {"step": unknown, "action": plan[unknown], "reason": reason}
     elif not ep.success:
-        base, goal = env.scene.tower_base, env.goal
-        reason = f"goal not reached: {base} holds {final_stack or 'nothing'}"
-        if goal.template != "tower":  # name what the scene's own goal still lacks
-            perception = env.perception
-            missing = unmet(goal, perception.atoms) if perception is not None else goal.literals
-            reason = f"goal not reached: {', '.join(missing) or 'an object it names is lost'}"
-        failure = {"step": len(steps), "action": None, "reason": reason}
+        failure = {"step": len(steps), "action": None, "reason": _shortfall(env, final_stack)}
     n_faults = sum(bool(r[1].get("fault")) for r in ep.records if not r[1]["failure_reason"])
     success = ep.success and failure is None  # a plan cut at an unknown step did not succeed
     return Execution(success, failure, final_stack, poses, elapsed, steps, n_faults)
@@ -311,6 +306,21 @@ def episode_result(
         n_faults=ex.n_faults,
         steps=ex.steps,
     )
+
+
+def _shortfall(env: UTampKitchenEnv, final_stack: Sequence[str]) -> str:
+    """Why a fully played plan missed the goal: in symbolic grounding the goal literals false
+    in the final state; in physics the tower on the base (the tower goal) or the goal
+    literals the perceived state lacks."""
+    goal, sim = env.goal, env.backend
+    if isinstance(sim, SymbolicBackend):
+        missing = unmet(goal, sim.state.true_atoms())
+        return f"goal not reached: goal literal(s) false at the end: {', '.join(missing)}"
+    if goal.template == "tower":
+        return f"goal not reached: {env.scene.tower_base} holds {list(final_stack) or 'nothing'}"
+    perception = env.perception  # name what the scene's own goal still lacks
+    missing = unmet(goal, perception.atoms) if perception is not None else goal.literals
+    return f"goal not reached: {', '.join(missing) or 'an object it names is lost'}"
 
 
 def _first_unknown(env: UTampKitchenEnv, plan: Sequence[str]) -> int | None:
