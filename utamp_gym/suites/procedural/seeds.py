@@ -3,16 +3,13 @@ SHA-256 digests."""
 
 from __future__ import annotations
 
-import hashlib
 from functools import lru_cache
-from pathlib import Path
 from typing import Any
 
 import tomli
 
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import asset_path
-from utamp_gym.scene.io import scene_from_dict, scene_to_dict, scene_to_toml
 from utamp_gym.suites.procedural.layout import (
     generate_scene,
 )
@@ -27,7 +24,7 @@ from utamp_gym.suites.procedural.spec import (
     Generated,
     _check_split,
 )
-from utamp_gym.suites.split_cache import cache_path, read_records, write_records
+from utamp_gym.suites.split_cache import read_split, toml_digest, write_split
 from utamp_gym.suites.split_cache import split_names as names_of
 
 
@@ -77,35 +74,23 @@ def split_scenes(split: str) -> tuple[Generated, ...]:
     return scenes
 
 
-def _cache_path(split: str) -> Path:
-    return cache_path(SUITE, split, split_hash(split))
-
-
 @lru_cache(maxsize=len(SPLITS))
 def _read_cache(split: str) -> tuple[Generated, ...] | None:
-    path = _cache_path(split)
-    records = read_records(path, len(split_seeds(split)))
-    if records is None:
+    rows = read_split(SUITE, split, split_hash(split), len(split_seeds(split)), _catalogue())
+    if rows is None:
         return None
-    file = f"<{SUITE} {split} cache {path.name}>"
     return tuple(
-        Generated(
-            scene_from_dict(r["scene"], file=file, catalogue=_catalogue()),
-            int(r["seed"]),
-            tuple(r["families"]),
-            bool(r["achievable"]),
-        )
-        for r in records
+        Generated(scene, int(r["seed"]), tuple(r["families"]), bool(r["achievable"]))
+        for scene, r in rows
     )
 
 
 def _write_cache(split: str, scenes: tuple[Generated, ...]) -> None:
-    records = [
-        {"seed": g.seed, "families": list(g.families), "achievable": g.achievable,
-         "scene": scene_to_dict(g.scene)}
+    rows = [
+        (g.scene, {"seed": g.seed, "families": list(g.families), "achievable": g.achievable})
         for g in scenes
-    ]  # fmt: skip
-    if write_records(_cache_path(split), records):
+    ]
+    if write_split(SUITE, split, split_hash(split), rows):
         _read_cache.cache_clear()
 
 
@@ -117,12 +102,8 @@ def split_digest(split: str, step: int = 1) -> str:
     """SHA-256 over the split's scene files (TOML, in order, each followed by a NUL), each
     generated anew from its seed (never read from the cache); with `step` > 1 over every
     step-th scene only (the quick check kept as ``sample_sha256``)."""
-    h = hashlib.sha256()
     seeds = split_seeds(split)
-    for i in range(0, len(seeds), step):
-        h.update(scene_to_toml(generate_scene(split, seeds[i], i).scene).encode())
-        h.update(b"\0")
-    return h.hexdigest()
+    return toml_digest(generate_scene(split, seeds[i], i).scene for i in range(0, len(seeds), step))
 
 
 SAMPLE_STEP = 20  # `sample_sha256` covers scenes 0, 20, 40, ...

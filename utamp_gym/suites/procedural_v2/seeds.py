@@ -8,21 +8,18 @@ draws from), ``seeds``, and per seed ``achievable`` and ``plan_length`` (0 if un
 
 from __future__ import annotations
 
-import hashlib
 from functools import lru_cache
-from pathlib import Path
 from typing import Any, NamedTuple
 
 import tomli
 
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import assets_dir
-from utamp_gym.scene.io import scene_from_dict, scene_to_dict, scene_to_toml
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites.procedural.objects import _catalogue
 from utamp_gym.suites.procedural_v2.scenes import generate_scene
 from utamp_gym.suites.procedural_v2.spec import SEEDS_FILE, SPLITS, SUITE, check_split
-from utamp_gym.suites.split_cache import cache_path, read_records, write_records
+from utamp_gym.suites.split_cache import read_split, toml_digest, write_split
 from utamp_gym.suites.split_cache import split_names as names_of
 
 SAMPLE_STEP = 20  # `sample_sha256` covers scenes 0, 20, 40, ...
@@ -107,34 +104,27 @@ def split_scenes(split: str) -> tuple[V2Scene, ...]:
     return scenes
 
 
-def _cache_path(split: str) -> Path:
-    return cache_path(SUITE, split, split_hash(split))
-
-
 @lru_cache(maxsize=len(SPLITS))
 def _read_cache(split: str) -> tuple[V2Scene, ...] | None:
-    path = _cache_path(split)
-    records = read_records(path, len(split_seeds(split)))
-    if records is None:
+    rows = read_split(SUITE, split, split_hash(split), len(split_seeds(split)), _catalogue())
+    if rows is None:
         return None
-    file = f"<{SUITE} {split} cache {path.name}>"
     return tuple(
         V2Scene(
-            scene_from_dict(r["scene"], file=file, catalogue=_catalogue()),
-            int(r["seed"]), tuple(r["families"]), str(r["template"]),
+            scene, int(r["seed"]), tuple(r["families"]), str(r["template"]),
             bool(r["achievable"]), int(r["plan_length"]),
         )
-        for r in records
+        for scene, r in rows
     )  # fmt: skip
 
 
 def _write_cache(split: str, scenes: tuple[V2Scene, ...]) -> None:
-    records = [
-        {**{k: v for k, v in g._asdict().items() if k != "scene"},
-         "families": list(g.families), "scene": scene_to_dict(g.scene)}
+    rows = [
+        (g.scene, {**{k: v for k, v in g._asdict().items() if k != "scene"},
+                   "families": list(g.families)})
         for g in scenes
     ]  # fmt: skip
-    if write_records(_cache_path(split), records):
+    if write_split(SUITE, split, split_hash(split), rows):
         _read_cache.cache_clear()
 
 
@@ -145,12 +135,8 @@ def split_names(split: str) -> list[str]:
 def split_digest(split: str, step: int = 1, seeds: tuple[int, ...] | None = None) -> str:
     """SHA-256 over the split's scene files (TOML with the goal, in order, each followed by
     a NUL), each generated anew (never from the cache); every `step`-th only if `step` > 1."""
-    h = hashlib.sha256()
     seeds = split_seeds(split) if seeds is None else seeds
-    for i in range(0, len(seeds), step):
-        h.update(scene_to_toml(generate_scene(split, seeds[i], i).scene).encode())
-        h.update(b"\0")
-    return h.hexdigest()
+    return toml_digest(generate_scene(split, seeds[i], i).scene for i in range(0, len(seeds), step))
 
 
 def parse_name(name: str) -> tuple[str, int] | None:
