@@ -416,9 +416,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         failure: str | None,
         stepped: Stepped,
     ) -> dict[str, Any]:
-        executed = stepped.executed
-        fault = None if executed is None or executed.fault is None else str(executed.fault)
-        macro = None if executed is None else executed.macro
+        macro = stepped.macro
         self._last = (macro, stepped.unexpected)
         return step_info(
             action=None if a is None else self.universe.actions[a],
@@ -429,7 +427,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             unexpected=self._last[1],
             objects=self.scene.object_names,
             anomalies=self._anomalies(),
-            fault=fault,
+            fault=stepped.fault,
             scene=self.scene.name,
             success=goal,
             goal=self.goal.literals,

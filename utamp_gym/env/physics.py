@@ -51,6 +51,17 @@ class Stepped:
     unexpected: tuple[str, ...] = ()
     timings: dict[str, float] = field(default_factory=dict)
 
+    @property
+    def macro(self) -> MacroResult | None:
+        """The executed macro action's result (None: nothing was executed)."""
+        return None if self.executed is None else self.executed.macro
+
+    @property
+    def fault(self) -> str | None:
+        """The injected fault after it, as text (None: none)."""
+        executed = self.executed
+        return None if executed is None or executed.fault is None else str(executed.fault)
+
 
 #: the step result of an action that did not fail and reached no simulator (shared: never
 #: changed): an applied symbolic action, or nothing run (reset, a masked-out action)
