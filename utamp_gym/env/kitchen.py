@@ -425,13 +425,13 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             timings=stepped.timings if self._grounding.recorded else None,
             macro=macro,
             unexpected=self._last[1],
-            objects=self.scene.object_names,
+            objects=self._scene.object_names,  # type: ignore[union-attr]  # set by reset
             anomalies=self._anomalies(),
             fault=stepped.fault,
-            scene=self.scene.name,
+            scene=self._scene.name,  # type: ignore[union-attr]
             success=goal,
-            goal=self.goal.literals,
-            instruction=self.instruction,
+            goal=self._goal.literals,  # type: ignore[union-attr]
+            instruction=self._goals.instruction(self._scene),  # type: ignore[arg-type]
         )
 
     # ------------------------------------------------------------------ pickling

@@ -65,8 +65,10 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
         #: perceived (`unrepresented`), never reached by an action of the universe
         self._goal_outside: tuple[tuple[str, bool], ...] = ()
         self._invert = (1 << half) - 1
+        self._half, self._n_fluent = half, len(universe.fluent_atoms)  # read every step
         self._nbytes = 8 * -(-2 * half // 64)  # [s, 1 - s] in whole 64-bit words
         self._static: frozenset[str] = frozenset()
+        self._data = bytes(self._nbytes)  # `_refresh`'s bytes of [s, 1 - s]
         n_words = self._nbytes // 8
         self._by_words = n_words * universe.n_actions <= len(universe.check_flat)
         self._literals = self._checks(universe.check_flat, universe.check_ptr)
@@ -151,8 +153,8 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
         return out
 
     def _refresh(self) -> None:
-        x = self.bits | ((~self.bits & self._invert) << self.universe.half)
-        data = x.to_bytes(self._nbytes, "little")
+        x = self.bits | ((~self.bits & self._invert) << self._half)
+        self._data = data = x.to_bytes(self._nbytes, "little")  # its first half is `bits`
         if isinstance(self._literals, np.ndarray):
             np.bitwise_and(self._literals, np.frombuffer(data, _WORD)[:, None], out=self._hits)
             self._mask = np.bitwise_or.reduce(self._hits, axis=0) == 0
@@ -206,9 +208,8 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
 
     def vector(self) -> np.ndarray:
         """A fresh int8 0/1 vector over `universe.fluent_atoms`."""
-        n = len(self.universe.fluent_atoms)
-        raw = np.frombuffer(self.bits.to_bytes(self.universe.half // 8, "little"), np.uint8)
-        return np.unpackbits(raw, count=n, bitorder="little").view(np.int8)
+        raw = np.frombuffer(self._data, np.uint8, self._half // 8)
+        return np.unpackbits(raw, count=self._n_fluent, bitorder="little").view(np.int8)
 
     def true_atoms(self) -> list[str]:
         """The fluent atoms that hold, as lower-case PDDL (`unrepresented` ones last)."""
