@@ -20,19 +20,20 @@ decide from geometry and mass alone, never from a family or a type name:
 * the wall stands upright: its foot (the ``under`` surface) lies at most `FLARE_LIMIT`
   inside its rim;
 * the object weighs at most `RIM_LIFT_LIMIT` and the moment of its weight about the pinch
-  stays within `hand.TORQUE_LIMIT` (`THIN_TORQUE_LIMIT` for a wall squeezed with the
-  reduced `PINCH_FORCE`).
+  stays within `THIN_TORQUE_LIMIT`, for a wall squeezed with the reduced `PINCH_FORCE`; a
+  wall at least `hand.MIN_PINCH` thick, squeezed with the full force, carries
+  `calibrated.EXTENDED_LIFT_LIMIT` and `THICK_TORQUE_LIMIT`.
 """
 
 from __future__ import annotations
 
 import math
 
+from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT
 from utamp_gym.affordances.hand import (
     GRIPPER_OPENING,
     MIN_PAD_OVERLAP,
     MIN_PINCH,
-    TORQUE_LIMIT,
     TOUCH,
     G,
     finger_room,
@@ -53,6 +54,9 @@ THIN_TORQUE_LIMIT = 0.6
 #: m a wall may slope out from its foot to its rim: flat pads meet a flared wall (a frying
 #: pan's) along a line and it pivots between them (6 of 6 light frying pans fell)
 FLARE_LIMIT = 0.003
+#: N m about the pinch of a wall at least `hand.MIN_PINCH` thick (trays held by a side
+#: rim: every one up to 2.39 N m lifted, one of two at 2.41 N m and all beyond 2.6 slipped)
+THICK_TORQUE_LIMIT = 2.3
 PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
 
 
@@ -146,13 +150,15 @@ def _rim_refusal(
         if not (body and short <= RIM_STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
             values = {"shortfall": short, "tolerance": RIM_STOP_TOLERANCE, "pad_overlap": overlap}
             return no("rim-finger-room", fingers=f"{f1}/{f2}", **values)
-    if t.mass > RIM_LIFT_LIMIT:
-        return no("rim-payload", mass=t.mass, limit=RIM_LIFT_LIMIT)
+    thin = width < MIN_PINCH
+    carries = RIM_LIFT_LIMIT if thin else EXTENDED_LIFT_LIMIT
+    if t.mass > carries:
+        return no("rim-payload", mass=t.mass, limit=carries)
     gx, gy = m.box.center_xy
     bx, by = centre_of_mass(t)
     lever = math.hypot(gx - bx, gy - by)
     moment = t.mass * G * lever
-    limit = THIN_TORQUE_LIMIT if width < MIN_PINCH else TORQUE_LIMIT
+    limit = THIN_TORQUE_LIMIT if thin else THICK_TORQUE_LIMIT
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None
