@@ -409,16 +409,21 @@ def object_facts(t: ObjectType, extended: bool = False) -> set[Fact]:
         if is_supportable(t, part):
             facts.add(("isSupportable", t.name, part))
     grasps = geometric_grasps(t, extended)
-    light = {m: liftable_via(t, m, extended) for m in t.members}
-    any_liftable = any(light[m] for m, *_ in grasps if t.members[m].kind != "edge")
+    paper = geometric_grasps(t) if extended else grasps
+    light = {m: liftable_via(t, m) for m in t.members}  # the paper's payload
+    heavy_ok = {m: liftable_via(t, m, extended) for m in t.members}  # utamp2x's
+    any_liftable = any(light[m] for m, *_ in paper if t.members[m].kind != "edge")
     for member, palm, f1, f2 in grasps:
         if t.members[member].kind == "edge" and not light[member] and any_liftable:
             continue  # an edge grasp that cannot carry the object is never useful
-        turns = light[member] and not holds(t, member, palm, extended, f1)
-        if turns and not (extended and _lug_holds(t, member, palm, f1, f2)):
+        lifts = heavy_ok[member] and (
+            holds(t, member, palm, extended, f1)
+            or (extended and _lug_holds(t, member, palm, f1, f2))
+        )
+        if light[member] and not lifts:
             continue  # light enough, but it would turn out of the pads when lifted
         facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
-        if light[member]:
+        if lifts:
             facts.add(("canLift", t.name, member))
     if extended:
         for member, palm, f1, f2 in rim_pinches(t):
