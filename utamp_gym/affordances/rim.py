@@ -34,6 +34,8 @@ from utamp_gym.affordances.hand import (
     GRIPPER_OPENING,
     MIN_PAD_OVERLAP,
     MIN_PINCH,
+    PAD_HEIGHT,
+    TORQUE_LIMIT,
     TOUCH,
     G,
     finger_room,
@@ -57,6 +59,10 @@ FLARE_LIMIT = 0.003
 #: N m about the pinch of a wall at least `hand.MIN_PINCH` thick (trays held by a side
 #: rim: every one up to 2.39 N m lifted, one of two at 2.41 N m and all beyond 2.6 slipped)
 THICK_TORQUE_LIMIT = 2.3
+#: m: a rim this tall takes the whole pad (`hand.PAD_HEIGHT` and 2 mm) and carries
+#: `THICK_TORQUE_LIMIT`; a lower one `hand.TORQUE_LIMIT` (sheet pans with 19.9 mm rims slipped
+#: at 2.1 N m, 22-26 mm ones held 1.9-2.1 N m)
+FULL_PAD_RIM = PAD_HEIGHT + 0.002
 PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
 
 
@@ -158,7 +164,8 @@ def _rim_refusal(
     bx, by = centre_of_mass(t)
     lever = math.hypot(gx - bx, gy - by)
     moment = t.mass * G * lever
-    limit = THIN_TORQUE_LIMIT if thin else THICK_TORQUE_LIMIT
+    full_pad = m.box.size[2] >= FULL_PAD_RIM - 1e-9
+    limit = THIN_TORQUE_LIMIT if thin else THICK_TORQUE_LIMIT if full_pad else TORQUE_LIMIT
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None
