@@ -94,23 +94,37 @@ def _strip_type(t: ObjectType, member: str, palm: str, f1: str) -> ObjectType | 
 
 
 def rim_pinch_refusal(
-    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+    t: ObjectType,
+    member: str,
+    palm: str,
+    f1: str,
+    f2: str,
+    why: bool = True,
+    calibrated: bool = True,
 ) -> Refusal | None:
     """Why the hand cannot pinch `member` as a rim from above and lift the object by it
     (None: it can; `REFUSED` if not `why`). A body too wide for the hand with an open top
     is judged by the wall strip the decoder pinches (`utamp_gym.scene.shapes.rim_strip`).
-    See the module docstring."""
+    See the module docstring; not `calibrated`: a thick wall carries only `RIM_LIFT_LIMIT`
+    and `hand.TORQUE_LIMIT`, as before issue #39's calibration (procedural-v2's goals were
+    drawn with those rules)."""
     if t.members[member].kind == "body":
         strip = _strip_type(t, member, palm, f1)
         if strip is None:
             values = {"member": member, "what": "a body the hand wraps, or without an open top"}
             return Refusal("rim", values) if why else REFUSED
-        return _rim_refusal(strip, STRIP, palm, f1, f2, why)
-    return _rim_refusal(t, member, palm, f1, f2, why)
+        return _rim_refusal(strip, STRIP, palm, f1, f2, why, calibrated)
+    return _rim_refusal(t, member, palm, f1, f2, why, calibrated)
 
 
 def _rim_refusal(
-    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+    t: ObjectType,
+    member: str,
+    palm: str,
+    f1: str,
+    f2: str,
+    why: bool = True,
+    calibrated: bool = True,
 ) -> Refusal | None:
 
     def no(rule: str, **values: object) -> Refusal:
@@ -157,28 +171,28 @@ def _rim_refusal(
             values = {"shortfall": short, "tolerance": RIM_STOP_TOLERANCE, "pad_overlap": overlap}
             return no("rim-finger-room", fingers=f"{f1}/{f2}", **values)
     thin = width < MIN_PINCH
-    carries = RIM_LIFT_LIMIT if thin else EXTENDED_LIFT_LIMIT
+    carries = EXTENDED_LIFT_LIMIT if calibrated and not thin else RIM_LIFT_LIMIT
     if t.mass > carries:
         return no("rim-payload", mass=t.mass, limit=carries)
     gx, gy = m.box.center_xy
     bx, by = centre_of_mass(t)
     lever = math.hypot(gx - bx, gy - by)
     moment = t.mass * G * lever
-    full_pad = m.box.size[2] >= FULL_PAD_RIM - 1e-9
+    full_pad = calibrated and m.box.size[2] >= FULL_PAD_RIM - 1e-9
     limit = THIN_TORQUE_LIMIT if thin else THICK_TORQUE_LIMIT if full_pad else TORQUE_LIMIT
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None
 
 
-def rim_pinches(t: ObjectType) -> list[tuple[str, str, str, str]]:
+def rim_pinches(t: ObjectType, calibrated: bool = True) -> list[tuple[str, str, str, str]]:
     """(member, palm, finger1, finger2) rim pinches that lift `t` (`rim_pinch_refusal`)."""
     out = []
     for name, m in t.members.items():
         if m.kind not in ("edge", "body"):
             continue
         for f1, f2 in (("left", "right"), ("front", "back")):
-            if rim_pinch_refusal(t, name, "on", f1, f2, why=False) is None:
+            if rim_pinch_refusal(t, name, "on", f1, f2, False, calibrated) is None:
                 out.append((name, "on", f1, f2))
     return out
 

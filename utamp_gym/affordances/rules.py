@@ -399,26 +399,28 @@ def _lug_holds(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> bool:
     return t.mass * G * math.hypot(gx - bx, gy - by) <= EXTENDED_TORQUE_LIMIT
 
 
-def object_facts(t: ObjectType, extended: bool = False) -> set[Fact]:
+def object_facts(t: ObjectType, extended: bool = False, calibrated: bool = True) -> set[Fact]:
     """Unary facts of one type: supportive/supportable parts, grasps, lifting. `extended`:
-    with the grasps of the extended domain ``utamp2x`` (`utamp_gym.affordances.rim`)."""
+    with the grasps of the extended domain ``utamp2x`` (`utamp_gym.affordances.rim`), and
+    if `calibrated` those issue #39 calibrated in physics (`utamp_gym.affordances.calibrated`;
+    procedural-v2's goals were drawn without them)."""
     facts: set[Fact] = set()
     for part in SIDES:
         if is_supportive(t, part):
             facts.add(("isSupportive", t.name, part))
         if is_supportable(t, part):
             facts.add(("isSupportable", t.name, part))
-    grasps = geometric_grasps(t, extended)
-    paper = geometric_grasps(t) if extended else grasps
+    more = extended and calibrated
+    grasps = geometric_grasps(t, more)
+    paper = geometric_grasps(t) if more else grasps
     light = {m: liftable_via(t, m) for m in t.members}  # the paper's payload
-    heavy_ok = {m: liftable_via(t, m, extended) for m in t.members}  # utamp2x's
+    heavy_ok = {m: liftable_via(t, m, more) for m in t.members}  # utamp2x's
     any_liftable = any(light[m] for m, *_ in paper if t.members[m].kind != "edge")
     for member, palm, f1, f2 in grasps:
         if t.members[member].kind == "edge" and not light[member] and any_liftable:
             continue  # an edge grasp that cannot carry the object is never useful
         lifts = heavy_ok[member] and (
-            holds(t, member, palm, extended, f1)
-            or (extended and _lug_holds(t, member, palm, f1, f2))
+            holds(t, member, palm, extended, f1) or (more and _lug_holds(t, member, palm, f1, f2))
         )
         if light[member] and not lifts:
             continue  # light enough, but it would turn out of the pads when lifted
@@ -426,18 +428,21 @@ def object_facts(t: ObjectType, extended: bool = False) -> set[Fact]:
         if lifts:
             facts.add(("canLift", t.name, member))
     if extended:
-        for member, palm, f1, f2 in rim_pinches(t):
+        for member, palm, f1, f2 in rim_pinches(t, calibrated):
             facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
             facts.add(("canLift", t.name, member))
     return facts
 
 
-def derive_affordances(types: Iterable[ObjectType], extended: bool = False) -> frozenset[Fact]:
-    """All affordance facts among the given object types (`extended`: see `object_facts`)."""
+def derive_affordances(
+    types: Iterable[ObjectType], extended: bool = False, calibrated: bool = True
+) -> frozenset[Fact]:
+    """All affordance facts among the given object types (`extended`, `calibrated`: see
+    `object_facts`)."""
     types = list(types)
     facts: set[Fact] = set()
     for t in types:
-        facts |= object_facts(t, extended)
+        facts |= object_facts(t, extended, calibrated)
     for t2 in types:
         for p2 in SIDES:
             for t1 in types:
