@@ -63,6 +63,14 @@ def test_the_extended_rules_only_add_to_the_paper_rules_on_the_calibrated_famili
             assert object_facts(t) <= object_facts(t, True), (fam, seed)
 
 
+def test_procedural_v2_draws_its_goals_with_the_rules_before_the_calibration():
+    pot, tray = generate("stock-pot", "v1", 1), generate("tray", "v1", 2)
+    lug = ("canGraspFrom", pot.name, "handle-left", "on", "left", "right")
+    rim = ("canLift", tray.name, "edge-left")
+    assert lug in object_facts(pot, True) and lug not in object_facts(pot, True, False)
+    assert rim in object_facts(tray, True) and rim not in object_facts(tray, True, False)
+
+
 # ------------------------------------------------------------------ physics
 def _lone(fam: str, seed: int) -> Any:
     return scene_from_dict({
@@ -103,6 +111,9 @@ def _pick_and_place(sim: Any, fam: str, seed: int, grasp: str) -> str:
         ("jar", 1, "body", "left", "right"),  # refused: a 24 mm lid stops the hand
         ("tray", 2, "edge-left", "left", "right"),  # granted: 2.27 N m
         ("tray", 6, "edge-left", "left", "right"),  # refused: 2.70 N m slips
+        ("sheet-pan", 20, "edge-left", "left", "right"),  # refused: a 19.9 mm rim, 2.1 N m
+        ("bowl", 0, "rim-front", "front", "back"),  # granted: a light steel bowl, at 15 N
+        ("tumbler", 0, "body", "front", "back"),  # granted: a light steel tumbler, at 15 N
     ],
 )
 def test_the_rule_decides_as_physics_does(sim, fam, seed, member, f1, f2):
