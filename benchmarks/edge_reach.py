@@ -115,11 +115,15 @@ def markdown(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--step", type=float, default=0.05)
     ap.add_argument("--out", default="docs/results/edge_reach")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     commit()
     start = time.perf_counter()
     data = {"step": args.step, "edges": measure(args.step)}
