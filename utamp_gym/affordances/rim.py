@@ -20,18 +20,21 @@ decide from geometry and mass alone, never from a family or a type name:
 * the wall stands upright: its foot (the ``under`` surface) lies at most `FLARE_LIMIT`
   inside its rim;
 * the object weighs at most `RIM_LIFT_LIMIT` and the moment of its weight about the pinch
-  stays within `hand.TORQUE_LIMIT` (`THIN_TORQUE_LIMIT` for a wall squeezed with the
-  reduced `PINCH_FORCE`).
+  stays within `THIN_TORQUE_LIMIT`, for a wall squeezed with the reduced `PINCH_FORCE`; a
+  wall at least `hand.MIN_PINCH` thick, squeezed with the full force, carries
+  `calibrated.EXTENDED_LIFT_LIMIT` and `THICK_TORQUE_LIMIT`.
 """
 
 from __future__ import annotations
 
 import math
 
+from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT
 from utamp_gym.affordances.hand import (
     GRIPPER_OPENING,
     MIN_PAD_OVERLAP,
     MIN_PINCH,
+    PAD_HEIGHT,
     TORQUE_LIMIT,
     TOUCH,
     G,
@@ -53,6 +56,13 @@ THIN_TORQUE_LIMIT = 0.6
 #: m a wall may slope out from its foot to its rim: flat pads meet a flared wall (a frying
 #: pan's) along a line and it pivots between them (6 of 6 light frying pans fell)
 FLARE_LIMIT = 0.003
+#: N m about the pinch of a wall at least `hand.MIN_PINCH` thick (trays held by a side
+#: rim: every one up to 2.39 N m lifted, one of two at 2.41 N m and all beyond 2.6 slipped)
+THICK_TORQUE_LIMIT = 2.3
+#: m: a rim this tall takes the whole pad (`hand.PAD_HEIGHT` and 2 mm) and carries
+#: `THICK_TORQUE_LIMIT`; a lower one `hand.TORQUE_LIMIT` (sheet pans with 19.9 mm rims slipped
+#: at 2.1 N m, 22-26 mm ones held 1.9-2.1 N m)
+FULL_PAD_RIM = PAD_HEIGHT + 0.002
 PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
 
 
@@ -84,23 +94,37 @@ def _strip_type(t: ObjectType, member: str, palm: str, f1: str) -> ObjectType | 
 
 
 def rim_pinch_refusal(
-    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+    t: ObjectType,
+    member: str,
+    palm: str,
+    f1: str,
+    f2: str,
+    why: bool = True,
+    calibrated: bool = True,
 ) -> Refusal | None:
     """Why the hand cannot pinch `member` as a rim from above and lift the object by it
     (None: it can; `REFUSED` if not `why`). A body too wide for the hand with an open top
     is judged by the wall strip the decoder pinches (`utamp_gym.scene.shapes.rim_strip`).
-    See the module docstring."""
+    See the module docstring; not `calibrated`: a thick wall carries only `RIM_LIFT_LIMIT`
+    and `hand.TORQUE_LIMIT`, as before issue #39's calibration (procedural-v2's goals were
+    drawn with those rules)."""
     if t.members[member].kind == "body":
         strip = _strip_type(t, member, palm, f1)
         if strip is None:
             values = {"member": member, "what": "a body the hand wraps, or without an open top"}
             return Refusal("rim", values) if why else REFUSED
-        return _rim_refusal(strip, STRIP, palm, f1, f2, why)
-    return _rim_refusal(t, member, palm, f1, f2, why)
+        return _rim_refusal(strip, STRIP, palm, f1, f2, why, calibrated)
+    return _rim_refusal(t, member, palm, f1, f2, why, calibrated)
 
 
 def _rim_refusal(
-    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+    t: ObjectType,
+    member: str,
+    palm: str,
+    f1: str,
+    f2: str,
+    why: bool = True,
+    calibrated: bool = True,
 ) -> Refusal | None:
 
     def no(rule: str, **values: object) -> Refusal:
@@ -146,26 +170,29 @@ def _rim_refusal(
         if not (body and short <= RIM_STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
             values = {"shortfall": short, "tolerance": RIM_STOP_TOLERANCE, "pad_overlap": overlap}
             return no("rim-finger-room", fingers=f"{f1}/{f2}", **values)
-    if t.mass > RIM_LIFT_LIMIT:
-        return no("rim-payload", mass=t.mass, limit=RIM_LIFT_LIMIT)
+    thin = width < MIN_PINCH
+    carries = EXTENDED_LIFT_LIMIT if calibrated and not thin else RIM_LIFT_LIMIT
+    if t.mass > carries:
+        return no("rim-payload", mass=t.mass, limit=carries)
     gx, gy = m.box.center_xy
     bx, by = centre_of_mass(t)
     lever = math.hypot(gx - bx, gy - by)
     moment = t.mass * G * lever
-    limit = THIN_TORQUE_LIMIT if width < MIN_PINCH else TORQUE_LIMIT
+    full_pad = calibrated and m.box.size[2] >= FULL_PAD_RIM - 1e-9
+    limit = THIN_TORQUE_LIMIT if thin else THICK_TORQUE_LIMIT if full_pad else TORQUE_LIMIT
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None
 
 
-def rim_pinches(t: ObjectType) -> list[tuple[str, str, str, str]]:
+def rim_pinches(t: ObjectType, calibrated: bool = True) -> list[tuple[str, str, str, str]]:
     """(member, palm, finger1, finger2) rim pinches that lift `t` (`rim_pinch_refusal`)."""
     out = []
     for name, m in t.members.items():
         if m.kind not in ("edge", "body"):
             continue
         for f1, f2 in (("left", "right"), ("front", "back")):
-            if rim_pinch_refusal(t, name, "on", f1, f2, why=False) is None:
+            if rim_pinch_refusal(t, name, "on", f1, f2, False, calibrated) is None:
                 out.append((name, "on", f1, f2))
     return out
 

@@ -41,16 +41,19 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
+from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, low_cover, lug_wall
 from utamp_gym.affordances.facts import Fact
-from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
 from utamp_gym.affordances.hand import (
+    EXTENDED_TORQUE_LIMIT,
     WRAP_CLEARANCE,
+    G,
     fingers_refusal,
     grip_limit,
     hold_refusal,
     holds,
     width_fits,
 )
+from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
 from utamp_gym.affordances.rim import rim_pinches
 from utamp_gym.affordances.solids import stand_refusal
 from utamp_gym.affordances.why import REFUSED, Refusal
@@ -263,15 +266,18 @@ def _cover(t: ObjectType, member: str, palm: str) -> str | None:
     return None
 
 
-def _palm_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Refusal | None:
-    """Why the hand cannot come down with its palm on `palm` onto `member` (None: it can)."""
+def _palm_refusal(
+    t: ObjectType, member: str, palm: str, why: bool = True, extended: bool = False
+) -> Refusal | None:
+    """Why the hand cannot come down with its palm on `palm` onto `member` (None: it can;
+    `extended`: around a low cover, `utamp_gym.affordances.calibrated.low_cover`)."""
     below = rest_refusal(t, OPPOSITE[palm], why)
     if below is not None:  # that part never faces up
         if not why:
             return REFUSED
         return Refusal("palm-never-up", {"member": member, "palm": palm, "why": below})
     other = _cover(t, member, palm)
-    if other is not None:  # the hand cannot reach the member
+    if other is not None and not (extended and low_cover(t, member, palm, other)):
         if not why:
             return REFUSED
         return Refusal("covered", {"member": member, "palm": palm, "other": other})
@@ -279,9 +285,16 @@ def _palm_refusal(t: ObjectType, member: str, palm: str, why: bool = True) -> Re
 
 
 def _fingers_refusal(
-    t: ObjectType, member: str, palm: str, f1: str, f2: str, why: bool = True
+    t: ObjectType,
+    member: str,
+    palm: str,
+    f1: str,
+    f2: str,
+    why: bool = True,
+    extended: bool = False,
 ) -> Refusal | None:
-    """Why the fingers cannot close on `member` along f1/f2 (None: they can)."""
+    """Why the fingers cannot close on `member` along f1/f2 (None: they can; `extended`: a
+    finger may go down inside an open body beside a lug, `calibrated.lug_wall`)."""
     m = t.members[member]
     width = float(m.box.size[axis_of(f1)])
     if width < MIN_GRASP_WIDTH:
@@ -296,14 +309,25 @@ def _fingers_refusal(
         values = {"member": member, "width": width, "fingers": f"{f1}/{f2}"}
         values.update(limit=grip_limit(m), opening=GRIPPER_OPENING, how=how)
         return Refusal("grip-width", values)
+    excused = set()  # what the extended domain's grasps let a finger or the hand pass
     for side in (f1, f2):
         other = _blocker(t, member, side)
+        if other is not None and extended and lug_wall(t, member, palm, side, other):
+            excused.add(("finger-room", other))  # the pads close on the lug and the wall
+            continue
         if other is not None:
             if not why:
                 return REFUSED
             values = {"member": member, "side": side, "other": other, "gap": BLOCKING_GAP}
             return Refusal("finger-blocked", values)
-    return fingers_refusal(t, member, palm, f1, why)
+    refusal = fingers_refusal(t, member, palm, f1, why or extended)
+    if extended and refusal is not None:
+        other = refusal.values.get("other")
+        if other is not None and low_cover(t, member, palm, other):
+            excused.add(("hand-room", other))  # the hand comes down around the cover
+        if (refusal.rule, other) in excused:
+            return None
+    return refusal if why or refusal is None else REFUSED
 
 
 def grasp_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Refusal | None:
@@ -314,29 +338,34 @@ def grasp_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Re
     return _palm_refusal(t, member, palm) or _fingers_refusal(t, member, palm, f1, f2)
 
 
-def geometric_grasps(t: ObjectType) -> list[tuple[str, str, str, str]]:
-    """(member, palm, finger1, finger2) grasps the gripper can physically close on."""
+def geometric_grasps(t: ObjectType, extended: bool = False) -> list[tuple[str, str, str, str]]:
+    """(member, palm, finger1, finger2) grasps the gripper can physically close on
+    (`extended`: with the extended domain's, `utamp_gym.affordances.calibrated`)."""
     if not t.movable:
         return []
     out = []
     for mname in t.members:
         for palm in PALM_PARTS:
-            if _palm_refusal(t, mname, palm, why=False) is not None:
+            if _palm_refusal(t, mname, palm, False, extended) is not None:
                 continue
             for f1, f2 in FINGER_PAIRS:
-                if _fingers_refusal(t, mname, palm, f1, f2, why=False) is None:
+                if _fingers_refusal(t, mname, palm, f1, f2, False, extended) is None:
                     out.append((mname, palm, f1, f2))
     return out
 
 
-def liftable_via(t: ObjectType, member: str) -> bool:
-    return lift_refusal(t, member, why=False) is None
+def liftable_via(t: ObjectType, member: str, extended: bool = False) -> bool:
+    return lift_refusal(t, member, False, extended) is None
 
 
-def lift_refusal(t: ObjectType, member: str, why: bool = True) -> Refusal | None:
-    """Why `t` is too heavy to lift by `member` (None: light enough)."""
+def lift_refusal(
+    t: ObjectType, member: str, why: bool = True, extended: bool = False
+) -> Refusal | None:
+    """Why `t` is too heavy to lift by `member` (None: light enough; `extended`: a wrapped
+    member carries `calibrated.EXTENDED_LIFT_LIMIT`)."""
     edge = t.members[member].kind == "edge"
-    limit = EDGE_LIFT_LIMIT if edge else PAYLOAD * LIFT_FRACTION
+    wrap = EXTENDED_LIFT_LIMIT if extended else PAYLOAD * LIFT_FRACTION
+    limit = EDGE_LIFT_LIMIT if edge else wrap
     if t.mass <= limit:
         return None
     if not why:
@@ -356,38 +385,64 @@ def pick_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Ref
     )
 
 
-def object_facts(t: ObjectType, extended: bool = False) -> set[Fact]:
+def _lug_holds(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> bool:
+    """A lug pinched with the wall behind it (`calibrated.lug_wall`): the wall bears the
+    moment about the closing axis, so the whole moment may reach `EXTENDED_TORQUE_LIMIT`
+    (stock pots up to 2.2 N m about a lug held)."""
+    if not any(
+        (o := _blocker(t, member, side)) is not None and lug_wall(t, member, palm, side, o)
+        for side in (f1, f2)
+    ):
+        return False
+    gx, gy = t.members[member].box.center_xy
+    bx, by = t.body.box.center_xy
+    return t.mass * G * math.hypot(gx - bx, gy - by) <= EXTENDED_TORQUE_LIMIT
+
+
+def object_facts(t: ObjectType, extended: bool = False, calibrated: bool = True) -> set[Fact]:
     """Unary facts of one type: supportive/supportable parts, grasps, lifting. `extended`:
-    with the grasps of the extended domain ``utamp2x`` (`utamp_gym.affordances.rim`)."""
+    with the grasps of the extended domain ``utamp2x`` (`utamp_gym.affordances.rim`), and
+    if `calibrated` those issue #39 calibrated in physics (`utamp_gym.affordances.calibrated`;
+    procedural-v2's goals were drawn without them)."""
     facts: set[Fact] = set()
     for part in SIDES:
         if is_supportive(t, part):
             facts.add(("isSupportive", t.name, part))
         if is_supportable(t, part):
             facts.add(("isSupportable", t.name, part))
-    grasps = geometric_grasps(t)
-    any_liftable = any(liftable_via(t, m) for m, *_ in grasps if t.members[m].kind != "edge")
+    more = extended and calibrated
+    grasps = geometric_grasps(t, more)
+    paper = geometric_grasps(t) if more else grasps
+    light = {m: liftable_via(t, m) for m in t.members}  # the paper's payload
+    heavy_ok = {m: liftable_via(t, m, more) for m in t.members}  # utamp2x's
+    any_liftable = any(light[m] for m, *_ in paper if t.members[m].kind != "edge")
     for member, palm, f1, f2 in grasps:
-        if t.members[member].kind == "edge" and not liftable_via(t, member) and any_liftable:
+        if t.members[member].kind == "edge" and not light[member] and any_liftable:
             continue  # an edge grasp that cannot carry the object is never useful
-        if liftable_via(t, member) and not holds(t, member, palm, extended, f1):
+        lifts = heavy_ok[member] and (
+            holds(t, member, palm, extended, f1) or (more and _lug_holds(t, member, palm, f1, f2))
+        )
+        if light[member] and not lifts:
             continue  # light enough, but it would turn out of the pads when lifted
         facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
-        if liftable_via(t, member):
+        if lifts:
             facts.add(("canLift", t.name, member))
     if extended:
-        for member, palm, f1, f2 in rim_pinches(t):
+        for member, palm, f1, f2 in rim_pinches(t, calibrated):
             facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
             facts.add(("canLift", t.name, member))
     return facts
 
 
-def derive_affordances(types: Iterable[ObjectType], extended: bool = False) -> frozenset[Fact]:
-    """All affordance facts among the given object types (`extended`: see `object_facts`)."""
+def derive_affordances(
+    types: Iterable[ObjectType], extended: bool = False, calibrated: bool = True
+) -> frozenset[Fact]:
+    """All affordance facts among the given object types (`extended`, `calibrated`: see
+    `object_facts`)."""
     types = list(types)
     facts: set[Fact] = set()
     for t in types:
-        facts |= object_facts(t, extended)
+        facts |= object_facts(t, extended, calibrated)
     for t2 in types:
         for p2 in SIDES:
             for t1 in types:

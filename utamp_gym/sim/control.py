@@ -44,6 +44,11 @@ THIN_MARGIN, THIN_FRACTION, THIN_GAP = 0.002, 0.5, 0.0004
 #: light wall and squirt it out (bowls of procedural v1: 25 of 40 lifted and placed at 70 N,
 #: 39 of 40 at 30 N; 15 N lets the heavier ones slip)
 PINCH_WIDTH, PINCH_FORCE = 0.007, 30.0
+#: a steel-thin wall (below `STEEL_WIDTH`) whose expected weight has a moment about the pinch
+#: of at most `LIGHT_MOMENT` N m is pinched with `LIGHT_PINCH_FORCE`: at 30 N the light steel
+#: bowls and tumblers of procedural v1 chattered out of the pads (6 of their grasps slipped;
+#: all held at 15 N), while saucepans with 0.35 N m and more slipped at 15-20 N
+STEEL_WIDTH, LIGHT_MOMENT, LIGHT_PINCH_FORCE = 0.002, 0.25, 15.0
 MAX_JOINT_JUMP = 0.25  # rad between consecutive Cartesian waypoints (no IK branch flips)
 FINGERS_STILL = 2e-3  # m/s, fingers slower than this have stopped
 SQUEEZE = 0.99  # fraction of the gripper's force limit: the fingers squeeze at full force
@@ -204,13 +209,17 @@ class ArmDriver:
         """True if the closed fingers are held apart by something."""
         return self.gap() > self.min_gap
 
-    def expect_width(self, width: float) -> None:
+    def expect_width(self, width: float, moment: float | None = None) -> None:
         """The fingers are about to close on a member `width` m across: a thin wall (below
         `MIN_GAP` + `THIN_MARGIN`) is held at a smaller gap than `MIN_GAP`, one narrower
-        than `PINCH_WIDTH` is squeezed with `PINCH_FORCE` (else the full `GRIPPER_FORCE`)."""
+        than `PINCH_WIDTH` is squeezed with `PINCH_FORCE` (else the full `GRIPPER_FORCE`),
+        one below `STEEL_WIDTH` whose expected weight's `moment` about the grasp is at most
+        `LIGHT_MOMENT` with `LIGHT_PINCH_FORCE`."""
         thin = width < MIN_GAP + THIN_MARGIN
         self.min_gap = max(THIN_GAP, THIN_FRACTION * width) if thin else MIN_GAP
         force = PINCH_FORCE if width < PINCH_WIDTH else GRIPPER_FORCE
+        if width < STEEL_WIDTH and moment is not None and moment <= LIGHT_MOMENT:
+            force = LIGHT_PINCH_FORCE
         self.model.actuator_forcerange[self.ids.gripper_actuator_id] = (-force, force)
 
     def open_gripper(self, gap: float, *, clear: float | None = None, max_s: float = 0.6) -> None:

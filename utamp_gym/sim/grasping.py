@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.errors import GroundingError
 from utamp_gym.robot.collision import CollisionChecker
 from utamp_gym.scene.catalogue import ObjectType
@@ -139,3 +140,13 @@ def _approach_and_lift(
 
 
 __all__ = ["GRASP_RAISES", "PAD_HOLD", "UNCERTAINTY_SIGMAS", "plan_grasp"]
+
+
+def weight_moment(t: ObjectType, obj_world: np.ndarray, tcp_world: np.ndarray) -> float:
+    """N m: the moment of `t`'s catalogue weight about the grasp point (`tcp_world`), its
+    centre of mass where `obj_world` puts it (what the robot expects to hold; it sets the
+    pinch force, `ArmDriver.expect_width`)."""
+    cx, cy = centre_of_mass(t)
+    com = obj_world @ np.array([cx, cy, 0.0, 1.0])
+    lever = float(np.hypot(*(com[:2] - tcp_world[:2, 3])))
+    return t.mass * 9.81 * lever

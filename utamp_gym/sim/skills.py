@@ -30,7 +30,7 @@ from utamp_gym.sim.decode import (
     footprint_centre,
     slide_vector,
 )
-from utamp_gym.sim.grasping import plan_grasp
+from utamp_gym.sim.grasping import plan_grasp, weight_moment
 from utamp_gym.sim.measure import (
     Held,
     SimState,
@@ -115,7 +115,9 @@ def _grasp(st: SimState, sym: GraspSymbols, lift: float = 0.0) -> tuple[GraspPos
             f"the wrist camera saw the {sym.member} of {sym.obj} {relook.describe(off)} "
             "before the fingers closed"
         )
-    arm.expect_width(g.width)
+    arm.expect_width(
+        g.width, weight_moment(st.world.scene.type_of(sym.obj), obj_pose(st, sym.obj), g.tcp)
+    )
     gap = arm.close_gripper()
     hand_t_world = np.linalg.inv(arm.tcp())
     tcp_t_obj = hand_t_world @ obj_pose(st, sym.obj)

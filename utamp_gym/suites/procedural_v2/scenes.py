@@ -62,7 +62,9 @@ def generate_scene(split: str, seed: int, index: int = 0) -> GoalScene:
     options = SPLIT_TEMPLATES[split]
     template_id = options[int(rng.integers(len(options)))]
     facts = derive_affordances(
-        [_catalogue()[TABLE_TYPE], *scene.custom_types.values()], DOMAIN in EXTENDED_DOMAINS
+        [_catalogue()[TABLE_TYPE], *scene.custom_types.values()],
+        DOMAIN in EXTENDED_DOMAINS,
+        calibrated=False,  # the rules its goals were drawn with: the split files stay as chosen
     )
     initial = scene_facts(scene, (), DOMAIN)
     first: Goal | None = None
