@@ -39,12 +39,14 @@ declared members by geometry for scoring.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
+from utamp_gym.perception.confidence import packaged_calibration, raw_confidences
 from utamp_gym.perception.material import (
     MaterialEstimate,
     classify_material,
@@ -79,6 +81,12 @@ class PerceivedObject:
     mass_low: float  # kg, the lightest plausible
     mass_high: float  # kg, the heaviest plausible
     edges: tuple[SeenMember, ...]
+    #: attribute (`methods.attributes.ATTRIBUTES`: material, mass, robustness, members) ->
+    #: probability that the chosen value is right (`perception.confidence`)
+    confidence: Mapping[str, float] = field(default_factory=dict)
+    #: attribute -> the other plausible values, most likely first (materials; robustness
+    #: classes; for mass the heaviest plausible mass of each other plausible class, kg)
+    alternatives: Mapping[str, tuple] = field(default_factory=dict)
 
     @property
     def pose(self) -> np.ndarray:
@@ -295,9 +303,15 @@ def perceive_instance(
     provisional = MaterialEstimate("default", {"default": 1.0})
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     mat = classify_material(colours, looks.shape_class())
-    mass, low, high = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
-    return PerceivedObject(instance, shape, mat, lift_mass(mass, high), low, high,
-                           _edges(shape, high))  # fmt: skip
+    volume, area = _solid_volume(shape), _shell_area(shape)
+    mass, low, high = estimate_mass(mat.name, volume, area)
+    reported = lift_mass(mass, high)
+    conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
+    calibration = packaged_calibration()
+    if calibration is not None:
+        conf = calibration.apply(conf)
+    return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape, high),
+                           conf, alts)  # fmt: skip
 
 
 def lift_mass(mass: float, high: float) -> float:
