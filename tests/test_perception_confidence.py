@@ -16,6 +16,8 @@ from utamp_gym.perception.confidence import (
     packaged_calibration,
     raw_confidences,
 )
+from utamp_gym.perception.objects import SLAB_EDGE, SLAB_EDGE_INSET, _edges
+from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.scene.materials import material
 
 
@@ -68,3 +70,19 @@ def test_the_packaged_calibration_maps_into_probabilities() -> None:
     for a in ("material", "mass", "robustness", "members"):
         values = [cal(a, r) for r in np.linspace(0, 1, 11)]
         assert all(0.0 <= v <= 1.0 for v in values) and np.all(np.diff(values) >= -1e-12), a
+
+
+def _slab(members: tuple = (), top: str = "flat") -> SeenShape:
+    body = SeenMember("body", "", SeenBox((-0.15, -0.1, 0.0), (0.15, 0.1, 0.02)))
+    return SeenShape(0.0, np.zeros(3), body, members, SeenTop(top, (0.3, 0.2), 0.02),
+                     (0.3, 0.2), 0.0, 0.0012, 0.13, 0.0)  # fmt: skip
+
+
+def test_a_bare_board_is_offered_its_end_strips_as_edges() -> None:
+    edges = _edges(_slab(), 0.8)
+    assert [e.side for e in edges] == ["front", "back"]
+    front = edges[0].box
+    assert np.isclose(front.hi[0], 0.15) and np.isclose(front.size[0], SLAB_EDGE)
+    assert np.isclose(front.size[1], 0.2 - 2 * SLAB_EDGE_INSET)
+    handle = SeenMember("handle", "back", SeenBox((-0.22, -0.02, 0.0), (-0.15, 0.02, 0.02)))
+    assert _edges(_slab((handle,)), 0.8) == ()  # a board with a handle is held by it

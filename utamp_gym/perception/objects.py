@@ -22,6 +22,9 @@ then need and no camera sees is filled in by stated assumptions:
 * a rim (an open, concave or well top) is offered as **edges** only where it is the only
   grip: on a body too wide for the hand, with no handles or too heavy to lift by them (a
   tray); on the two sides across from the handles, else front and back;
+* a bare flat slab (no members, lower than `THIN_SIDE`, wider than the hand: a board
+  without a handle) has the end strips of its longer axis as **edges**, as the catalogues
+  declare them (the rules judge whether a finger fits beside them);
 * the **mass** is volume x the material's nominal density (`material.estimate_mass`),
   except where that is light enough for the hand to lift (`LIFTABLE`) but the material's
   density range may make it too heavy: then the heaviest plausible mass (`lift_mass`). A
@@ -64,6 +67,7 @@ THIN_TOP = 0.015  # m: a body thinner than this has a thin top
 THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
+SLAB_EDGE, SLAB_EDGE_INSET = 0.0225, 0.02  # m: a bare slab's end strips (`_slab_edges`)
 EDGE_SPAN = 0.09  # m: an edge on a round body spans at least this much (0.6 of its width)
 OPPOSITE_SIDE = {"front": "back", "back": "front", "left": "right", "right": "left"}
 ACROSS = {"front": ("left", "right"), "back": ("left", "right"), "left": ("front", "back")}
@@ -210,8 +214,10 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
     """Rim members where the rim is the only grip (module docstring)."""
     top, body = shape.top, shape.body.box
     rimmed = top.visible and (top.shape in ("open", "concave") or top.rim > 0)
-    if not rimmed or min(body.size[:2]) <= GRIPPER_OPENING:
+    if min(body.size[:2]) <= GRIPPER_OPENING:
         return ()
+    if not rimmed:
+        return _slab_edges(shape)
     handles = [m.side for m in shape.members if m.kind == "handle" and m.side != "on"]
     if handles and mass <= LIFTABLE:
         return ()
@@ -234,6 +240,30 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
             elo[across], ehi[across] = mid - half, mid + half
         elo[2] = z0
         out.append(SeenMember("edge", side, SeenBox(tuple(elo.tolist()), tuple(ehi.tolist()))))  # type: ignore[arg-type]
+    return tuple(out)
+
+
+def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
+    """The end strips of a bare flat slab (a board without a handle: no members, a flat
+    top, lower than `THIN_SIDE`), `SLAB_EDGE` deep across its longer axis, inset
+    `SLAB_EDGE_INSET` from its sides: what the catalogues declare as its edges (the rules
+    then judge whether a finger fits beside them)."""
+    body = shape.body.box
+    flat = shape.top.shape == "flat" and shape.top.visible
+    if shape.members or shape.body.geom != "box" or not flat or body.size[2] >= THIN_SIDE:
+        return ()
+    ax = 0 if body.size[0] >= body.size[1] else 1
+    across = 1 - ax
+    out = []
+    for side in ("front", "back") if ax == 0 else ("left", "right"):
+        lo, hi = np.asarray(body.lo, float), np.asarray(body.hi, float)
+        if side in ("front", "left"):
+            lo[ax] = hi[ax] - SLAB_EDGE
+        else:
+            hi[ax] = lo[ax] + SLAB_EDGE
+        lo[across] += SLAB_EDGE_INSET
+        hi[across] -= SLAB_EDGE_INSET
+        out.append(SeenMember("edge", side, SeenBox(tuple(lo.tolist()), tuple(hi.tolist()))))  # type: ignore[arg-type]
     return tuple(out)
 
 
