@@ -9,7 +9,8 @@ thresholds, `perception.confidence.MASS_BOUNDS`). Rows are cached per scene unde
 ``--cache`` (resumable). The raw confidences (`perception.confidence.raw_confidences`) of
 the even-numbered scenes fit the isotonic calibration written to
 ``assets/perception/confidence_calibration.json`` (``--write-calibration``); the
-reliability table is measured on the odd-numbered ones (held out from the fit).
+reliability table is measured on the odd-numbered ones (held out from the fit); a map is
+shipped only for an attribute whose held-out calibration error it lowers.
 
     python benchmarks/perceiver_train.py [--limit N] [--write-calibration]
         [--cache runs/perceiver_train] [--results docs/results]
@@ -138,7 +139,8 @@ def _markdown(payload: dict[str, object]) -> str:
     lines += ["", "Material confusions (declared -> perceived: count):", ""]
     for k, v in payload["confusions"].items():  # type: ignore[attr-defined]
         lines.append(f"- {k}: {v}")
-    for label, key in (("raw", "reliability_raw"), ("calibrated", "reliability")):
+    kept = ", ".join(payload["calibrated_attributes"]) or "none"  # type: ignore[arg-type]
+    for label, key in (("raw", "reliability_raw"), (f"shipped (maps for {kept})", "reliability")):
         lines += [
             "",
             f"Reliability of the {label} confidences on the odd-numbered scenes (the "
@@ -179,6 +181,12 @@ def main() -> None:
     cal = Calibration.fit(
         {a: ([r["raw"][a] for r in fit], [float(r["right"][a]) for r in fit]) for a in CALIBRATED}  # type: ignore[index]
     )
+    raw_rel = reliability(held, None)
+    fitted = reliability(held, cal)
+    # a map is kept only where it lowers the held-out calibration error (material's
+    # posterior is temperature-calibrated already: isotonic on half the scenes overfits it)
+    kept = [a for a in CALIBRATED if fitted[a][-1]["ece"] < raw_rel[a][-1]["ece"]]
+    cal = Calibration({a: cal.knots[a] for a in kept})
     crowded = max(int(r["n_objects"]) for r in rows)  # type: ignore[call-overload]
     confusions: dict[str, int] = {}
     for r in rows:
@@ -195,8 +203,9 @@ def main() -> None:
             "body top over 30 % covered": accuracy([r for r in rows if r["covered"] >= 0.3]),
         },
         "confusions": dict(sorted(confusions.items(), key=lambda kv: -kv[1])),
-        "reliability_raw": reliability(held, None),
+        "reliability_raw": raw_rel,
         "reliability": reliability(held, cal),
+        "calibrated_attributes": kept,
         "calibration": cal.to_json(),
     }  # fmt: skip
     md = _markdown(payload)
