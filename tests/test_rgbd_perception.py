@@ -416,3 +416,12 @@ def test_an_rgbd_env_pickles_mid_episode() -> None:
         assert np.allclose(one[0]["object_poses"], two[0]["object_poses"], atol=1e-6)
     env.close()
     clone.close()
+
+
+def test_every_perceived_object_says_how_sure_it_is(single):
+    _, _, _, _, bundle = single
+    for p in perceive_objects(bundle).values():
+        assert {"material", "mass", "robustness", "members"} <= set(p.confidence)
+        assert all(0.0 <= v <= 1.0 for v in p.confidence.values())
+        assert p.material.name not in p.alternatives["material"]
+        assert set(p.alternatives) == set(p.confidence)

@@ -22,6 +22,9 @@ then need and no camera sees is filled in by stated assumptions:
 * a rim (an open, concave or well top) is offered as **edges** only where it is the only
   grip: on a body too wide for the hand, with no handles or too heavy to lift by them (a
   tray); on the two sides across from the handles, else front and back;
+* a bare flat slab (no members, lower than `THIN_SIDE`, wider than the hand: a board
+  without a handle) has the end strips of its longer axis as **edges**, as the catalogues
+  declare them (the rules judge whether a finger fits beside them);
 * the **mass** is volume x the material's nominal density (`material.estimate_mass`),
   except where that is light enough for the hand to lift (`LIFTABLE`) but the material's
   density range may make it too heavy: then the heaviest plausible mass (`lift_mass`). A
@@ -39,12 +42,14 @@ declared members by geometry for scoring.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
+from utamp_gym.perception.confidence import packaged_calibration, raw_confidences
 from utamp_gym.perception.material import (
     MaterialEstimate,
     classify_material,
@@ -62,6 +67,7 @@ THIN_TOP = 0.015  # m: a body thinner than this has a thin top
 THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
+SLAB_EDGE, SLAB_EDGE_INSET = 0.0225, 0.02  # m: a bare slab's end strips (`_slab_edges`)
 EDGE_SPAN = 0.09  # m: an edge on a round body spans at least this much (0.6 of its width)
 OPPOSITE_SIDE = {"front": "back", "back": "front", "left": "right", "right": "left"}
 ACROSS = {"front": ("left", "right"), "back": ("left", "right"), "left": ("front", "back")}
@@ -79,6 +85,12 @@ class PerceivedObject:
     mass_low: float  # kg, the lightest plausible
     mass_high: float  # kg, the heaviest plausible
     edges: tuple[SeenMember, ...]
+    #: attribute (`methods.attributes.ATTRIBUTES`: material, mass, robustness, members) ->
+    #: probability that the chosen value is right (`perception.confidence`)
+    confidence: Mapping[str, float] = field(default_factory=dict)
+    #: attribute -> the other plausible values, most likely first (materials; robustness
+    #: classes; for mass the heaviest plausible mass of each other plausible class, kg)
+    alternatives: Mapping[str, tuple] = field(default_factory=dict)
 
     @property
     def pose(self) -> np.ndarray:
@@ -202,8 +214,10 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
     """Rim members where the rim is the only grip (module docstring)."""
     top, body = shape.top, shape.body.box
     rimmed = top.visible and (top.shape in ("open", "concave") or top.rim > 0)
-    if not rimmed or min(body.size[:2]) <= GRIPPER_OPENING:
+    if min(body.size[:2]) <= GRIPPER_OPENING:
         return ()
+    if not rimmed:
+        return _slab_edges(shape)
     handles = [m.side for m in shape.members if m.kind == "handle" and m.side != "on"]
     if handles and mass <= LIFTABLE:
         return ()
@@ -226,6 +240,30 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
             elo[across], ehi[across] = mid - half, mid + half
         elo[2] = z0
         out.append(SeenMember("edge", side, SeenBox(tuple(elo.tolist()), tuple(ehi.tolist()))))  # type: ignore[arg-type]
+    return tuple(out)
+
+
+def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
+    """The end strips of a bare flat slab (a board without a handle: no members, a flat
+    top, lower than `THIN_SIDE`), `SLAB_EDGE` deep across its longer axis, inset
+    `SLAB_EDGE_INSET` from its sides: what the catalogues declare as its edges (the rules
+    then judge whether a finger fits beside them)."""
+    body = shape.body.box
+    flat = shape.top.shape == "flat" and shape.top.visible
+    if shape.members or shape.body.geom != "box" or not flat or body.size[2] >= THIN_SIDE:
+        return ()
+    ax = 0 if body.size[0] >= body.size[1] else 1
+    across = 1 - ax
+    out = []
+    for side in ("front", "back") if ax == 0 else ("left", "right"):
+        lo, hi = np.asarray(body.lo, float), np.asarray(body.hi, float)
+        if side in ("front", "left"):
+            lo[ax] = hi[ax] - SLAB_EDGE
+        else:
+            hi[ax] = lo[ax] + SLAB_EDGE
+        lo[across] += SLAB_EDGE_INSET
+        hi[across] -= SLAB_EDGE_INSET
+        out.append(SeenMember("edge", side, SeenBox(tuple(lo.tolist()), tuple(hi.tolist()))))  # type: ignore[arg-type]
     return tuple(out)
 
 
@@ -295,9 +333,15 @@ def perceive_instance(
     provisional = MaterialEstimate("default", {"default": 1.0})
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     mat = classify_material(colours, looks.shape_class())
-    mass, low, high = estimate_mass(mat.name, _solid_volume(shape), _shell_area(shape))
-    return PerceivedObject(instance, shape, mat, lift_mass(mass, high), low, high,
-                           _edges(shape, high))  # fmt: skip
+    volume, area = _solid_volume(shape), _shell_area(shape)
+    mass, low, high = estimate_mass(mat.name, volume, area)
+    reported = lift_mass(mass, high)
+    conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
+    calibration = packaged_calibration()
+    if calibration is not None:
+        conf = calibration.apply(conf)
+    return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape, high),
+                           conf, alts)  # fmt: skip
 
 
 def lift_mass(mass: float, high: float) -> float:
