@@ -9,7 +9,6 @@ the kitchenware generator) is imported only when one of its names is used, so th
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -88,6 +87,8 @@ def nearest_scene_names(name: str, valid: Sequence[str], n: int = 3) -> list[str
     normalised = _normalised(name, set(valid))
     if normalised is not None:
         return [normalised]
+    import difflib  # stdlib, only for a name that is not a scene: off `utamp plan`'s start-up
+
     return difflib.get_close_matches(name, list(valid), n=n, cutoff=0.6)
 
 
