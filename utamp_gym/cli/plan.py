@@ -8,7 +8,7 @@ import json
 from typing import TYPE_CHECKING, Any
 
 from utamp_gym.cli import help_line
-from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, timeout_seconds
+from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, default_method, timeout_seconds
 from utamp_gym.outputs import output_dir
 
 if TYPE_CHECKING:
@@ -25,6 +25,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     # planner's imports included), not from when planning begins.
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
+    args.method = args.method or default_method(scene.name)
     out = None if args.out is None else output_dir(args.out, "--out")
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
         from utamp_gym.methods.perceived import plan_perceived
@@ -101,7 +102,7 @@ def add_parser(sub: Any) -> None:
 
     plan = sub.add_parser("plan", help=help_line("plan"))
     plan.add_argument("scene", help=SCENE_HELP)
-    plan.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)
+    plan.add_argument("--method", choices=METHODS, help=METHOD_HELP)
     plan.add_argument("--seed", type=int, default=0, help="seed of utamp2-noisy's detection")
     plan.add_argument(
         "--timeout",
