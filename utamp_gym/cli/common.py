@@ -12,7 +12,25 @@ MAX_TIMEOUT_S = 86400.0
 """The largest accepted ``--timeout`` (one day): anything longer is a typo."""
 
 SCENE_HELP = "suite scene (pick-place/017), packaged scene or scene-file path"
-METHOD_HELP = "where the affordances come from: ground truth, rules, noisy rules, none (UTAMP-1)"
+METHOD_HELP = (
+    "where the affordances come from: ground truth, rules, noisy rules, none (UTAMP-1); "
+    "default: utamp2-gt, or on a procedural-v2 scene the method its labels assume "
+    "(utamp2x-rules, the extended domain)"
+)
+PAPER_METHOD = "utamp2-gt"  # the default method of every scene but procedural-v2's
+
+
+def default_method(scene_name: str) -> str:
+    """The method `utamp plan` / `utamp run` use when none is given: a procedural-v2
+    scene's labelling method (its splits' `achievable` assumes the extended domain), else
+    the paper's ``utamp2-gt``."""
+    from utamp_gym.suites import PROCEDURAL_V2
+
+    if not scene_name.startswith(f"{PROCEDURAL_V2}/"):
+        return PAPER_METHOD
+    from utamp_gym.suites.procedural_v2.spec import LABEL_METHOD  # numpy: v2 scenes only
+
+    return LABEL_METHOD
 
 
 class _HelpFormatter(argparse.HelpFormatter):

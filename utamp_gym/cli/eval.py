@@ -30,6 +30,8 @@ def _cmd_eval(args: argparse.Namespace) -> int:
 
     # lazy: keeps `utamp --help` from loading utamp_gym.eval.sweep
     from utamp_gym.eval.sweep import SweepConfig, parse_shard, run_sweep, write_outputs
+    from utamp_gym.suites.procedural_v2.spec import LABEL_METHOD
+    from utamp_gym.suites.procedural_v2.spec import SUITE as V2_SUITE
 
     noise = (args.noise,)
     if args.sweep_noise:
@@ -40,6 +42,8 @@ def _cmd_eval(args: argparse.Namespace) -> int:
                 f"--sweep-noise: expected numbers like 0,0.01,0.05, got {args.sweep_noise!r}"
             ) from None
     default = "utamp2-noisy" if args.sweep_noise else "utamp1,utamp2-gt,utamp2-rules,utamp2-noisy"
+    if not args.sweep_noise and args.suite and args.suite.startswith(f"{V2_SUITE}/"):
+        default = LABEL_METHOD  # the extended domain the split's labels assume
     methods = tuple(m.strip() for m in (args.methods or default).split(",") if m.strip())
     if any(m.startswith("rl:") for m in methods):  # a saved agent: torch, stable-baselines3
         require("utamp eval --methods rl:PATH", "rl")
@@ -136,9 +140,10 @@ def add_parser(sub: Any) -> None:
     ev.add_argument("--suite", choices=SUITES, help="required for a sweep")
     ev.add_argument(
         "--methods",
-        help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2-vlm, "
-        "vlm-planner, rl:PATH (a model.zip from `utamp train`; its env options come from the "
-        "model) (default: the first four; utamp2-noisy alone with --sweep-noise)",
+        help="comma-separated: utamp1, utamp2-gt, utamp2-rules, utamp2-noisy, utamp2x-gt, "
+        "utamp2x-rules, utamp2-vlm, vlm-planner, rl:PATH (a model.zip from `utamp train`; its "
+        "env options come from the model) (default: the first four; on a procedural-v2 suite "
+        "utamp2x-rules, the method its labels assume; utamp2-noisy alone with --sweep-noise)",
     )
     ev.add_argument("--seeds", type=int, default=1, help="K seeds per scene and method")
     ev.add_argument(

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 from utamp_gym.affordances.sources import DEFAULT_NOISE
 from utamp_gym.cli import help_line
-from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, timeout_seconds
+from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, default_method, timeout_seconds
 from utamp_gym.deadline import Deadline
 from utamp_gym.outputs import output_dir
 from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
@@ -26,6 +26,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     # planner's imports included), not from when planning begins.
     deadline = Deadline.after(args.timeout, args.started)
     scene = resolve_scene(args.scene)
+    args.method = args.method or default_method(scene.name)
     out = None if args.out is None else output_dir(args.out, "--out")
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
         # lazy: keeps `utamp --help` from loading utamp_gym.methods.perceived
@@ -100,7 +101,7 @@ def add_parser(sub: Any) -> None:
     """``utamp plan SCENE``."""
     plan = sub.add_parser("plan", help=help_line("plan"))
     plan.add_argument("scene", help=SCENE_HELP)
-    plan.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)
+    plan.add_argument("--method", choices=METHODS, help=METHOD_HELP)
     plan.add_argument("--seed", type=int, default=0, help="seed of utamp2-noisy's detection")
     plan.add_argument(
         "--timeout",

@@ -7,17 +7,19 @@ import json
 from typing import Any
 
 from utamp_gym.cli import help_line
-from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, add_physics_options
+from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, add_physics_options, default_method
 from utamp_gym.errors import UtampError
 from utamp_gym.outputs import output_file
 from utamp_gym.planning.methods import METHODS
 from utamp_gym.suites import resolve_scene
+from utamp_gym.tasks.language import instruction
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     # lazy: keeps `utamp --help` from loading utamp_gym.agents.runs
     from utamp_gym.agents.runs import run_episode
 
+    args.method = args.method or default_method(resolve_scene(args.scene).name)
     if args.closed_loop:
         return _run_closed_loop(args)
     if args.video:
@@ -48,6 +50,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         f"  plan {len(result.plan)} steps, planning {result.planning_time_s:.3f} s, "
         f"execution {result.execution_time_s:.2f} s, wall {result.wall_time_s:.2f} s"
     )
+    if scene.goal is not None and scene.goal.template != "tower":  # the scene's own goal
+        print(f"  goal ({scene.goal.template}): {instruction(scene, scene.goal)}")
+        return 0
     base = scene.tower_base  # the tray, or a procedural scene's base (a tray or a board)
     print(
         f"  tower on {base} ({scene.type_of(base).name}): "
@@ -89,7 +94,7 @@ def add_parser(sub: Any) -> None:
     """``utamp run SCENE``."""
     run = sub.add_parser("run", help=help_line("run"))
     run.add_argument("scene", help=SCENE_HELP)
-    run.add_argument("--method", choices=METHODS, default="utamp2-gt", help=METHOD_HELP)
+    run.add_argument("--method", choices=METHODS, help=METHOD_HELP)
     run.add_argument("--seed", type=int, default=0, help="pose noise, IK restarts and OMPL seed")
     run.add_argument("--video", help="write an MP4 (or .gif) of the episode here")
     run.add_argument("--json", action="store_true", help="print one JSON object")

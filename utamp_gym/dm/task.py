@@ -1,4 +1,4 @@
-"""`StackTask`: the kitchen-stacking task as a `dm_control.rl.control.Task` (low-level control).
+"""`StackTask`: the kitchen task as a `dm_control.rl.control.Task` (low-level control).
 
 **Actions** – 8 continuous values per control step, the commands of the Panda's position
 servos: the 7 arm joint-position targets (rad, within the joint limits) and the gripper gap
@@ -10,10 +10,16 @@ whole control step (``CONTROL_TIMESTEP`` = 0.02 s, 50 Hz: 10 physics steps of 2 
 (int8 0/1 over `atoms`: the perceived fluent atoms of the U-TAMP-2 domain, as in the Gym
 envs) and ``tower_height`` (1: objects standing on the tray's tower).
 
-**Reward** – tower progress: the fraction of the non-base objects perceived in the tower on
-the tray (`Perception.tower`), so 1 exactly when everything stands in it; the episode ends
-(discount 0) when the domain's goal holds in the perceived state (hand empty, every slot but
-the tray's clear, no object without a symbol).
+**Goal** – the scene's own goal (`Scene.goal`: procedural-v2 scenes, scene files with
+``[goal]``), else the paper's tower on `Scene.tower_base`.
+
+**Reward** – progress towards the goal: the fraction of the goal's literals that hold in the
+perceived atoms (`utamp_gym.tasks.success.literals_held`); for the paper's tower (and a goal
+of the ``tower`` template) the fraction of the non-base objects perceived in the tower on its
+base (`Perception.tower`). Either is 1 exactly at the goal. The episode ends (discount 0) when
+the goal holds in the perceived state: the paper's tower, hand empty, every slot but the base's
+clear, no object without a symbol; a scene's goal, every literal holds and every object it is
+about is perceived (`utamp_gym.tasks.success.check_perception`, as the Gym envs' success).
 
 **Episodes** – the object poses get fresh noise from the task's random state
 (`pos_noise` m, `yaw_noise_deg`); the arm starts at its ready pose, fingers open, and the
@@ -34,13 +40,15 @@ from utamp_gym.perception.abstraction import Perception
 from utamp_gym.robot.panda_mjcf import set_home
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.problem import goal_atoms
+from utamp_gym.tasks.success import check_perception, literals_held
 
 CONTROL_TIMESTEP = 0.02  # s: 50 Hz control, 10 physics steps of 2 ms
 N_ARM = 7
 
 
 class StackTask(control.Task):
-    """Stack every object of a kitchen scene on the tray by commanding joints (module doc)."""
+    """Reach a kitchen scene's goal (the paper's: everything in one tower on its base) by
+    commanding joints (module doc)."""
 
     def __init__(
         self,
@@ -63,6 +71,7 @@ class StackTask(control.Task):
         self.scene, self.atoms = scene, tuple(atoms)
         self.pos_noise, self.yaw_noise_deg, self.settle_s = pos_noise, yaw_noise_deg, settle_s
         self._index = {a: i for i, a in enumerate(self.atoms)}
+        self.goal = scene.goal  # None: the paper's tower
         self._goal = frozenset(a.lower() for a in goal_atoms(scene))
         self._others = max(1, scene.n_objects - 1)
         self._perception: Perception | None = None
@@ -144,13 +153,19 @@ class StackTask(control.Task):
         )
 
     def get_reward(self, physics: KitchenPhysics) -> float:
-        """Fraction of the other objects standing in the tray's tower (1 at the goal)."""
-        tower = self.perception(physics).tower(self.scene.tower_base)
-        return len(tower) / self._others
+        """Progress towards the goal, 1 at it: the fraction of its literals that hold, or of
+        the other objects standing in the tower (the paper's goal, the tower template)."""
+        perception = self.perception(physics)
+        if self.goal is None or self.goal.template == "tower":
+            return len(perception.tower(self.scene.tower_base)) / self._others
+        return literals_held(self.goal, perception.atoms) / len(self.goal.literals)
 
     def goal_reached(self, physics: KitchenPhysics) -> bool:
-        """The domain's goal holds in the perceived state and every object has a symbol."""
+        """The goal holds in the perceived state (the paper's tower: its atoms, and every
+        object has a symbol; a scene's goal: `check_perception`)."""
         perception = self.perception(physics)
+        if self.goal is not None:
+            return check_perception(self.scene, self.goal, perception).reached
         return not perception.anomalies and self._goal <= perception.fluent
 
     def get_termination(self, physics: KitchenPhysics) -> float | None:

@@ -8,9 +8,10 @@ MuJoCo simulator with perception and faults: `utamp_gym.env.physics.PhysicalGrou
 * `reset` / `step`: start an episode, run an action the mask allows (`Stepped`: its failure,
   what was executed, unexpected atoms, timings), keeping the env's symbolic state current;
 * `progress`: goal reached (symbolic: its literals hold in the state; physics: in the
-  measured state, `utamp_gym.tasks.success`) and tower height; `pose_rows` / `robot`: the
-  observation's poses and joints; `image` (the camera observation), `frame` (what
-  ``render()`` shows), `draw` (the labelled schematic for the symbolic human window);
+  measured state, `utamp_gym.tasks.success`) and reward shaping's progress towards it
+  (`utamp_gym.env.task.progress`); `pose_rows` / `robot`: the observation's poses and
+  joints; `image` (the camera observation), `frame` (what ``render()`` shows), `draw` (the
+  labelled schematic for the symbolic human window);
 * `backend`, `simulator` (the backend, if it simulates: what the viewers watch),
   `perception` (None when nothing is perceived), `recorded` (whether
   ``info["timings"]`` holds wall-clock times).
@@ -26,6 +27,7 @@ import numpy as np
 from utamp_gym.backend import DEFAULT_PERCEPTION, PhysicsBackend, backend_factory
 from utamp_gym.env.physics import NOT_RUN, PhysicalGrounding, Stepped
 from utamp_gym.env.symbolic_backend import SymbolicBackend
+from utamp_gym.env.task import TOWER, progress
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.scene_cache import SceneCache
 from utamp_gym.symbolic.state import SymbolicState
@@ -76,7 +78,7 @@ class Grounding(Protocol):
 
     def step(self, a: int, np_random: np.random.Generator) -> Stepped: ...
 
-    def progress(self, goal: Goal, base: str, need_height: bool) -> tuple[bool, int]: ...
+    def progress(self, goal: Goal, base: str, need_progress: bool) -> tuple[bool, int]: ...
 
     def pose_rows(self) -> np.ndarray: ...
 
@@ -123,11 +125,13 @@ class SymbolicGrounding:
         failure = self._execute(a)
         return NOT_RUN if failure is None else Stepped(failure)
 
-    def progress(self, goal: Goal, base: str, need_height: bool) -> tuple[bool, int]:
+    def progress(self, goal: Goal, base: str, need_progress: bool) -> tuple[bool, int]:
         """(every goal literal holds in the symbolic state, which the state was given at
-        reset; tower height)."""
-        height = len(self.backend.poses.tower(base)) if need_height else 0
-        return self.state.goal_reached(), height
+        reset; the shaping's progress, `utamp_gym.env.task.progress`, 0 unless asked)."""
+        if not need_progress:
+            return self.state.goal_reached(), 0
+        height = len(self.backend.poses.tower(base)) if goal.template == TOWER else 0
+        return self.state.goal_reached(), progress(goal, self.state.goal_literals_held(), height)
 
     def image(self, size: tuple[int, int]) -> np.ndarray:
         return self.backend.render(size[1], size[0])

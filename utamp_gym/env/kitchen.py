@@ -79,8 +79,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     interface (`utamp_gym.env.grounding`): `backend` is the simulator or the
     `SymbolicBackend`.
 
-    **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per object newly
-    on the tower (over the episode's best) and −0.01 per failed action (`utamp_gym.env.task`).
+    **Reward** – +1 on reaching the goal; ``reward_shaping=True`` adds +0.1 per goal literal
+    newly holding (over the episode's best; the paper's tower goal: per object newly on the
+    tower) and −0.01 per failed action (`utamp_gym.env.task`).
 
     **Goal** – `goal` (a `utamp_gym.tasks.goal.Goal`): the option ``task``, by default the
     scene's own goal (procedural-v2 scenes, scene files with ``[goal]``), else the paper's
@@ -321,8 +322,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
         self._present.reset(scene)
         self._grounding.reset(scene, atoms.static, self.np_random, world_seed)
-        goal, height = self._progress(self.options.reward_shaping)
-        self._task.initialize_episode(height)
+        goal, progress = self._progress(self.options.reward_shaping)
+        self._task.initialize_episode(progress)
         self._rendering.reset()
         if self._objects is not None:  # drawn last: the other draws match the grounded env's
             self._objects.reset(scene, self.np_random)
@@ -343,9 +344,9 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         else:  # the grounding runs it: the backend executes (or the outcome model decides)
             stepped = self._grounding.step(a, self.np_random)
             failure = stepped.failure
-        goal, height = self._progress(self.options.reward_shaping)
+        goal, progress = self._progress(self.options.reward_shaping)
         reward, terminated = self._task.outcome(
-            goal=goal, failed=failure is not None, tower_height=height
+            goal=goal, failed=failure is not None, progress=progress
         )
         terminated = terminated or self._state.dead_end() or bool(self._anomalies())
         info = self._info(goal, a, failure, stepped)
@@ -381,9 +382,10 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             )
         return a, None
 
-    def _progress(self, need_height: bool) -> tuple[bool, int]:
-        """(goal reached, objects on the tower; 0 unless `need_height`), measured once."""
-        return self._grounding.progress(self.goal, self.scene.tower_base, need_height)
+    def _progress(self, need_progress: bool) -> tuple[bool, int]:
+        """(goal reached, reward shaping's progress towards it; 0 unless `need_progress`),
+        measured once."""
+        return self._grounding.progress(self.goal, self.scene.tower_base, need_progress)
 
     def _observation(self) -> Obs:
         poses, robot = self._grounding.pose_rows(), self._grounding.robot()

@@ -18,12 +18,13 @@ from typing import Any
 import numpy as np
 
 from utamp_gym.backend import Disturbable, Fault, MacroResult, PhysicsBackend
+from utamp_gym.env.task import TOWER, progress
 from utamp_gym.perception.abstraction import Perception, perceive
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe, UniverseByKey
 from utamp_gym.tasks.goal import Goal
-from utamp_gym.tasks.success import check_perception
+from utamp_gym.tasks.success import check_perception, literals_held
 
 #: the second stream of an episode's world seed: its injected faults
 FAULT_STREAM = 0xFA17
@@ -162,12 +163,17 @@ class PhysicalGrounding(UniverseByKey):
         perception, seconds = self._perceive()
         return Executed(macro, fault, perception, seconds)
 
-    def progress(self, goal: Goal, base: str, need_height: bool) -> tuple[bool, int]:
+    def progress(self, goal: Goal, base: str, need_progress: bool) -> tuple[bool, int]:
         """(`goal` reached in the measured state: its literals hold in the perceived atoms and
-        every object it is about is perceived, `utamp_gym.tasks.success`; tower height)."""
-        assert self.perception is not None and self._scene is not None
-        reached = check_perception(self._scene, goal, self.perception).reached
-        return reached, len(self.perception.tower(base))
+        every object it is about is perceived, `utamp_gym.tasks.success`; reward shaping's
+        progress in the perceived atoms, `utamp_gym.env.task.progress`, 0 unless asked)."""
+        p = self.perception
+        assert p is not None and self._scene is not None
+        reached = check_perception(self._scene, goal, p).reached
+        if not need_progress:
+            return reached, 0
+        height = len(p.tower(base)) if goal.template == TOWER else 0
+        return reached, progress(goal, literals_held(goal, p.atoms), height)
 
     def pose_rows(self) -> np.ndarray:
         poses = np.zeros((len(self._rows), 7), np.float32)

@@ -4,9 +4,11 @@ Why separate from the env: both groundings share these definitions; only where t
 come from differs (the symbolic state or the physics backend).
 
 Reward: `GOAL_REWARD` on the step that reaches the goal. With shaping, additionally
-`TOWER_BONUS` per object newly standing on the tower (counted against the highest tower of the
-episode so far, so taking an object off and putting it back earns nothing) and
-`-FAILURE_PENALTY` per failed action.
+`PROGRESS_BONUS` per unit of progress towards the goal newly made and `-FAILURE_PENALTY` per
+failed action. Progress (`progress`) is the number of the goal's literals that hold (in the
+symbolic state; in physics in the measured one), or for the paper's tower goal the number of
+objects standing on its tower (as before goals were data: the tower's results stand). It is
+counted against the episode's best so far, so undoing a step and redoing it earns nothing.
 """
 
 from __future__ import annotations
@@ -16,8 +18,12 @@ import math
 import numpy as np
 from gymnasium import spaces
 
+from utamp_gym.tasks.goal import Goal
+
 GOAL_REWARD = 1.0
-TOWER_BONUS = 0.1
+PROGRESS_BONUS = 0.1
+TOWER_BONUS = PROGRESS_BONUS  # its name while the tower was the only goal
+TOWER = "tower"  # the paper's goal template: progress is its tower's height
 FAILURE_PENALTY = 0.01
 POSE_SIZE = 7  # x, y, z, qw, qx, qy, qz
 N_JOINTS = 9  # 7 arm joints + 2 fingers
@@ -48,6 +54,12 @@ def observation_space(
     return spaces.Dict(entries)
 
 
+def progress(goal: Goal, held: int, tower_height: int) -> int:
+    """Reward shaping's progress towards `goal`: its literals that hold (`held`), or for the
+    paper's tower the objects standing on it (`tower_height`)."""
+    return tower_height if goal.template == TOWER else held
+
+
 class KitchenTask:
     """Reward and termination of one episode."""
 
@@ -56,16 +68,16 @@ class KitchenTask:
         self.terminate_on_failure = terminate_on_failure
         self._best = 0
 
-    def initialize_episode(self, tower_height: int) -> None:
-        self._best = tower_height
+    def initialize_episode(self, progress: int) -> None:
+        self._best = progress
 
-    def outcome(self, *, goal: bool, failed: bool, tower_height: int) -> tuple[float, bool]:
-        """(reward, terminated) of a step."""
+    def outcome(self, *, goal: bool, failed: bool, progress: int) -> tuple[float, bool]:
+        """(reward, terminated) of a step; `progress` as `progress` measures it."""
         reward = GOAL_REWARD if goal else 0.0
         if self.shaping:
             if failed:
                 reward -= FAILURE_PENALTY
-            if tower_height > self._best:
-                reward += TOWER_BONUS * (tower_height - self._best)
-        self._best = max(self._best, tower_height)
+            if progress > self._best:
+                reward += PROGRESS_BONUS * (progress - self._best)
+        self._best = max(self._best, progress)
         return reward, goal or (failed and self.terminate_on_failure)

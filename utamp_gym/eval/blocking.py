@@ -13,6 +13,15 @@ ground truth lacks is named as such. Fast Downward then checks the rest of the g
 the blocked atoms (`SolvabilityOracle`). When every object can join the tower on its own but
 the planner finds no order that stacks them all, each object without which the others do
 stack is named, with its goal atom (rule ``one-tower``; an object above it takes its place).
+
+A scene with a goal of its own (`Scene.goal`, other than the tower template: procedural-v2)
+is explained by its goal's literals instead (`goal_blocks`): each literal the scene does not
+satisfy yet names the objects that must move (the one that must stand on a target, be put in
+a region or taken off something; everything standing on a surface to clear or on the target
+of such a move), and each such object is asked whether it can be picked up and put down
+where the goal allows (on its target; on the table if the goal leaves it a region; else on
+an object the goal allows that carries it), with the refusing rules as for the tower. Block
+atoms are then the goal's literals (``(not (oc under obj3 slot1))`` included).
 """
 
 from __future__ import annotations
@@ -28,6 +37,7 @@ from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene, SceneObject
 from utamp_gym.symbolic.problem import goal_atoms
+from utamp_gym.tasks.goal import Goal, split_literal
 
 #: rules of the grasp's later tests first: the closest the object came to being picked up
 _PICK_ORDER = ("ground-truth", "torque", "payload", "finger-room", "hand-room", "pinch")
@@ -174,6 +184,12 @@ def blocking_goals(
     """The blocks of an unsolvable `scene` under `facts`, and whether the rest of the goal
     is solvable without their atoms (None: not checked, no `oracle`)."""
     facts = frozenset(facts)
+    if scene.goal is not None and scene.goal.template != "tower":
+        blocks = goal_blocks(scene, facts, scene.goal)
+        if oracle is None or not blocks:
+            return blocks, None
+        blocked = {split_literal(b.atom)[1] for b in blocks}
+        return blocks, oracle(facts, [g for g in oracle.goal if g not in blocked])
     joined = tower(scene, facts)
     slot_atom = dict(zip((s.name for s in scene.slots), _slot_atoms(scene), strict=True))
     blocks: list[Block] = []
@@ -237,3 +253,101 @@ def _slot_atoms(scene: Scene) -> list[str]:
     return [
         f"(oc on {s.name} air)" if f"(oc on {s.name} air)" in atoms else "" for s in scene.slots
     ]
+
+
+# ------------------------------------------------------------------ a scene's own goal
+class _Move(NamedTuple):
+    """An object a goal literal makes move, and where the goal lets it stand: `target` (one
+    support) or, when None, anything but `excluded`."""
+
+    literal: str
+    object: str
+    target: str | None
+    excluded: frozenset[str]
+
+
+def _moves(scene: Scene, goal: Goal) -> list[_Move]:
+    """The objects the goal's literals unmet in the scene make move (the hand's literal
+    always holds at the start)."""
+    objects, slots = set(scene.object_names), {s.name for s in scene.slots}
+    excluded: dict[str, set[str]] = {}  # per object, the supports its negations rule out
+    for lit in goal.literals:
+        positive, a = split_literal(lit)
+        _, _, x, y = a.strip("()").split()
+        if not positive and x in objects:
+            excluded.setdefault(x, set()).add(y)
+    moves = []
+    for lit in goal.literals:
+        positive, a = split_literal(lit)
+        _, _, x, y = a.strip("()").split()
+        if x == "hand":
+            continue
+        if y == "air":  # clear a surface: everything standing on it moves
+            if positive:
+                moves += [
+                    _Move(lit, o.name, None, frozenset({x, *excluded.get(o.name, ())}))
+                    for o in scene.objects
+                    if o.on == x
+                ]
+        elif x in slots:  # an object in a region
+            if positive and scene.object(y).on != x:
+                moves.append(_Move(lit, y, x, frozenset()))
+        elif positive and scene.object(x).on != y:  # x must stand on y
+            moves.append(_Move(lit, x, y, frozenset()))
+        elif not positive and scene.object(x).on == y:  # x must leave y
+            moves.append(_Move(lit, x, None, frozenset(excluded.get(x, ()))))
+    for m in [m for m in moves if m.target is not None]:  # what stands on a target moves off
+        moves += [
+            _Move(m.literal, o.name, None, frozenset({m.target, *excluded.get(o.name, ())}))
+            for o in scene.objects
+            if o.on == m.target and o.name != m.object
+        ]
+    return moves
+
+
+def _put_blocks(scene: Scene, facts: frozenset[Fact], m: _Move) -> list[tuple[str, Refusal]]:
+    """(subject, refusal) for each reason `m.object` cannot be put down where the goal
+    allows (none: it can)."""
+    o = scene.object(m.object)
+    t, stand, label = scene.catalogue[o.type], STANDING_PART[o.orientation], _label(o)
+    slots = [s.name for s in scene.slots]
+    if m.target is not None:
+        allowed = [m.target]
+    else:
+        allowed = [z for z in (*slots, *scene.object_names) if z != o.name]
+        allowed = [z for z in allowed if z not in m.excluded]
+    supportable = ("isSupportable", o.type, stand)
+    out: list[tuple[str, Refusal]] = []
+    if any(z in slots for z in allowed):
+        if supportable in facts:
+            return []
+        refusal = _or_truth(rules.supportable_refusal(t, stand), [supportable])
+        out.append((f"{label} cannot be put down on its {stand}", refusal))
+    for z in (z for z in allowed if z not in slots):
+        y = scene.object(z)
+        if _carries(facts, y, o):
+            return []
+        missing = [f for f in _carry_facts(y, o) if f not in facts]
+        refusal = _or_truth(rules.p2p_refusal(scene.catalogue[y.type], UP_PART[y.orientation],
+                                              t, stand), missing)  # fmt: skip
+        out.append((f"{_label(y)} does not carry {label}", refusal))
+    return out
+
+
+def goal_blocks(scene: Scene, facts: Iterable[Fact], goal: Goal) -> tuple[Block, ...]:
+    """Why the goal's literals cannot be reached under `facts`: per literal the scene does
+    not satisfy, each object it makes move that cannot be picked up (stage ``pick``) or put
+    down where the goal allows (``stand``: on the table; ``place``: on an object)."""
+    facts = frozenset(facts)
+    blocks: list[Block] = []
+    for m in _moves(scene, goal):
+        o = scene.object(m.object)
+        t, label = scene.catalogue[o.type], _label(o)
+        if not _pickable(facts, o):
+            for grasps, refusal in _pick_blocks(facts, t, o):
+                subject = f"{label} cannot be picked up by {grasps}"
+                blocks.append(Block(m.literal, o.name, o.type, "pick", subject, refusal))
+        for subject, refusal in _put_blocks(scene, facts, m):
+            stage = "stand" if subject.startswith(label) else "place"
+            blocks.append(Block(m.literal, o.name, o.type, stage, subject, refusal))
+    return tuple(blocks)

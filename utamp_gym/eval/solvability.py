@@ -113,7 +113,8 @@ class SolvabilityOracle:
             literals = tuple(lit for lit in literals if _text(lit.atom) in wanted)
         self.checks += 1
         positive = [lit.atom for lit in literals if lit.positive]
-        if len(positive) == len(literals) and all(a in self.problem.init for a in positive):
+        init = self.problem.init
+        if all((lit.atom in init) == lit.positive for lit in literals):
             return True  # the goal holds already (Fast Downward refuses a task without variables)
         ops = self.allowed(facts)
         if not _relaxed_reachable(ops, self.problem.init, positive):

@@ -206,6 +206,15 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
             return all((a in seen) == positive for a, positive in self._goal_outside)
         return True
 
+    def goal_literals_held(self) -> int:
+        """How many goal literals hold now (reward shaping's progress, `utamp_gym.env.task`)."""
+        bits = self.bits
+        held = (self._goal & bits).bit_count() + (self._goal_not & ~bits).bit_count()
+        if self._goal_outside:
+            seen = set(self.unrepresented)
+            held += sum((a in seen) == positive for a, positive in self._goal_outside)
+        return held
+
     def vector(self) -> np.ndarray:
         """A fresh int8 0/1 vector over `universe.fluent_atoms`."""
         raw = np.frombuffer(self._data, np.uint8, self._half // 8)

@@ -9,6 +9,7 @@ atoms), so every object the goal names must have a symbol too: all objects for t
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import NamedTuple
 
 from utamp_gym.contract.state import PhysicalState
@@ -53,9 +54,14 @@ def check_perception(scene: Scene, goal: Goal, perception: Perception) -> GoalCh
     return GoalCheck(not missing and not lost, missing, lost)
 
 
+def literals_held(goal: Goal, atoms: Iterable[str]) -> int:
+    """How many of the goal's literals hold in a state given by its true atoms."""
+    return len(goal.literals) - len(unmet(goal, atoms))
+
+
 def goal_reached(scene: Scene, goal: Goal, state: PhysicalState) -> GoalCheck:
     """The goal checked on the atoms perceived in a physical state."""
     return check_perception(scene, goal, perceive(scene, state))
 
 
-__all__ = ["GoalCheck", "check_perception", "goal_objects", "goal_reached"]
+__all__ = ["GoalCheck", "check_perception", "goal_objects", "goal_reached", "literals_held"]
