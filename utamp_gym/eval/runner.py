@@ -209,6 +209,8 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
         plan=PLAN_SEPARATOR.join(out.actions),
         n_faults=out.n_faults,
         n_replans=out.n_replans,
+        n_weighings=out.n_weighings,
+        n_looks=out.n_looks,
     )
 
 
