@@ -79,17 +79,22 @@ class InteractivePerception:
         self.seen: PerceivedScene | None = None
         self.beliefs: dict[str, ObjectType] = {}  # object -> believed (perceived) type
         self.doubts: tuple[Doubt, ...] = ()  # planned at their cautious values
+        self.untested: set[str] = set()  # objects whose lighter mass is a hypothesis
+        self.weighed: dict[str, float] = {}  # object -> kg it weighs at least (torques)
         self.withdrawn: set[Fact] = set()  # declared-name facts refuted by the robot's acts
         self.revisions: list[str] = []  # what was learnt, in order
 
     def __call__(self, obs: Any, info: Mapping[str, Any]) -> int:
         if not info.get("action"):  # a new episode: look first
             self.n_weighings = self.n_looks = 0
+            self.weighed.clear()
             self.withdrawn.clear()
             self.revisions.clear()
-            self._look(first=True)
+            self._look("first")
         elif info.get("failure_reason"):
             self._revise(str(info["failure_reason"]))
+        else:
+            self._lifted(str(info["action"]))
         while True:
             try:
                 return self.policy(obs, info)
@@ -104,32 +109,48 @@ class InteractivePerception:
             return perceive_live(scene, backend, perceiver=self.perceiver)
         return perceive_world(scene, self.world_seed, perceiver=self.perceiver)
 
-    def _look(self, *, first: bool) -> None:
-        """Survey and perceive; doubtful attributes at their cautious values (`first`) or,
-        on an extra look, at their likely ones."""
+    def _look(self, mode: str) -> None:
+        """Survey and perceive; the attributes with alternatives at their cautious values
+        where in doubt (``first``), at the likely ones (``likely``), or at the values that
+        promise most (``hopeful``: hypotheses the robot's acts then test)."""
         seen = self._perceive()
-        masses = {o: t.mass for o, t in self.beliefs.items()} if not first else {}
-        self.seen = seen
-        if first:
-            self.beliefs, self.doubts = cautious_types(
-                seen.planning, seen.types, seen.reports, self.doubt
-            )
-        else:
+        self.seen, self.untested = seen, set()
+        if mode == "likely":
             self.beliefs, self.doubts = dict(seen.types), ()
-        for obj, kg in masses.items():  # what was weighed stays weighed
+        else:
+            hopeful = mode == "hopeful"
+            self.beliefs, doubts = cautious_types(
+                seen.planning, seen.types, seen.reports, self.doubt, hopeful=hopeful
+            )
+            self.doubts = () if hopeful else doubts
+            if hopeful:
+                self.untested = {d.object for d in doubts if d.attribute == "mass"}
+        for obj, kg in self.weighed.items():  # what was weighed stays weighed
             if obj in self.beliefs and kg > self.beliefs[obj].mass:
                 self.beliefs[obj] = self.beliefs[obj]._replace(mass=kg)
+                self.untested.discard(obj)
         self._believe()
 
     def _look_at_blockers(self) -> bool:
-        """No plan from the beliefs: look again (module docstring); False to give up."""
+        """No plan from the beliefs: look again (module docstring); False to give up. The
+        first extra look plans the cautious doubts at their likely values (if any); the
+        next one tries the values that promise most, to be tested by acting."""
         if self.n_looks >= self.max_looks:
             return False
         self.n_looks += 1
+        mode = "likely" if self.doubts else "hopeful"
         blockers = ", ".join(f"{d.object}.{d.attribute}" for d in self.doubts) or "none in doubt"
-        self.revisions.append(f"look {self.n_looks}: no plan; blocking doubts: {blockers}")
-        self._look(first=False)
+        self.revisions.append(f"look {self.n_looks} ({mode}): no plan; doubts: {blockers}")
+        self._look(mode)
         return True
+
+    def _lifted(self, action: str) -> None:
+        """A successful action: a pick of an object whose mass was a hypothesis weighed it."""
+        words = action.strip("()").split()
+        if len(words) > 1 and words[0].startswith("pick") and words[1] in self.untested:
+            self.untested.discard(words[1])
+            self.n_weighings += 1
+            self.revisions.append(f"weighed {words[1]}: the arm lifts it")
 
     # ------------------------------------------------------------------ revising
     def _revise(self, reason: str) -> None:
@@ -139,6 +160,8 @@ class InteractivePerception:
         if m and m["obj"] in self.beliefs:
             kg = float(m["kg"])
             kg = max(kg, SATURATED_MASS) if "cannot hold" in reason else kg
+            self.weighed[m["obj"]] = max(kg, self.weighed.get(m["obj"], 0.0))
+            self.untested.discard(m["obj"])
             t = self.beliefs[m["obj"]]
             self.beliefs[m["obj"]] = t._replace(mass=max(t.mass, kg))
             self.n_weighings += 1
@@ -148,6 +171,7 @@ class InteractivePerception:
         m = _NOT_LIFTABLE.match(reason)
         if m and m["obj"] in self.beliefs:
             self.n_weighings += 1
+            self.untested.discard(m["obj"])
             self.withdrawn.add(("canLift", scene.object(m["obj"]).type, m["member"].strip()))
             self.revisions.append(f"lifted {m['obj']} by its {m['member']}: it stayed down")
             self._believe()

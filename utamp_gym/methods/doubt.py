@@ -80,19 +80,24 @@ def cautious_types(
     reports: Mapping[str, PerceivedAttributes],
     threshold: float = DOUBT_THRESHOLD,
     affordances: Callable[[Scene], frozenset[Fact]] = plan_affordances,
+    *,
+    hopeful: bool = False,
 ) -> tuple[dict[str, ObjectType], tuple[Doubt, ...]]:
     """Object -> type with every doubtful attribute at its cautious value, and the doubts
     acted on. `types`: object -> its perceived type (named ``<object>-seen``) as in
     `planning`, whose catalogue is updated as values are chosen (one attribute at a time,
-    in the order reported, each judged with the earlier choices in place)."""
+    in the order reported, each judged with the earlier choices in place). `hopeful`: the
+    value that promises *most* instead, for every attribute with alternatives (what the
+    closed loop tries, and then tests by acting, when nothing else reaches the goal)."""
     out = dict(types)
     doubts: list[Doubt] = []
     for obj, report in reports.items():
         if obj not in out:
             continue
-        for attribute, p in report.confidence.items():
+        for attribute in report.alternatives if hopeful else report.confidence:
+            p = report.confidence_of(attribute)
             alts = tuple(report.alternatives.get(attribute, ()))
-            if p >= threshold or not alts:
+            if (p >= threshold and not hopeful) or not alts:
                 continue
             current = out[obj]
             candidates = [current]
@@ -106,7 +111,8 @@ def cautious_types(
             for t in candidates:
                 scene = _with_type(planning, t)
                 counts.append(_involving(affordances(scene), t.name))
-            best = min(range(len(candidates)), key=lambda i: (counts[i], i))
+            sign = -1 if hopeful else 1
+            best = min(range(len(candidates)), key=lambda i: (sign * counts[i], i))
             if best:
                 chosen = candidates[best]
                 doubts.append(

@@ -38,11 +38,16 @@ class PerceiverLoadError(UtampError, ValueError):
 
 def _attributes(obj: PerceivedObject, name: str, orientation: str) -> PerceivedAttributes:
     """The protocol's result for one object the built-in perceiver saw (the only place that
-    reads the perceiver's optional ``confidence`` / ``alternatives``: certain if absent)."""
+    reads the perceiver's optional ``confidence`` / ``alternatives``: certain if absent).
+    Without mass alternatives, the lightest plausible mass is one where it is below the
+    reported one (the perceiver reports the heaviest plausible where that decides a lift)."""
+    alternatives = dict(getattr(obj, "alternatives", None) or {})
+    if "mass" not in alternatives and obj.mass_low < obj.mass:
+        alternatives["mass"] = (obj.mass_low,)
     return PerceivedAttributes(
         obj.as_type(name, orientation),
         dict(getattr(obj, "confidence", None) or {}),
-        dict(getattr(obj, "alternatives", None) or {}),
+        alternatives,
     )
 
 
