@@ -39,6 +39,7 @@ from utamp_gym.errors import PlanningError
 from utamp_gym.methods.doubt import DOUBT_THRESHOLD, Doubt, cautious_types
 from utamp_gym.methods.perceived import (
     PerceivedScene,
+    PerceptionError,
     build_perceived_scene,
     perceive_live,
     perceive_world,
@@ -105,9 +106,12 @@ class InteractivePerception:
     # ------------------------------------------------------------------ looking
     def _perceive(self) -> PerceivedScene:
         backend, scene = self.env.backend, self.env.scene
-        if isinstance(backend, Surveying):
-            return perceive_live(scene, backend, perceiver=self.perceiver)
-        return perceive_world(scene, self.world_seed, perceiver=self.perceiver)
+        try:
+            if isinstance(backend, Surveying):
+                return perceive_live(scene, backend, perceiver=self.perceiver)
+            return perceive_world(scene, self.world_seed, perceiver=self.perceiver)
+        except PerceptionError as exc:  # the episode ends: lost at the perception stage
+            raise PlanningError(f"perception: {exc}") from None
 
     def _look(self, mode: str) -> None:
         """Survey and perceive; the attributes with alternatives at their cautious values
