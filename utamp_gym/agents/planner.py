@@ -117,8 +117,12 @@ class PlannerPolicy:
 
     def believe(self, scene: str, facts: Iterable[Fact]) -> None:
         """Plan scene `scene` with these affordance facts (e.g. perceived ones) instead of
-        the method's own source."""
-        self._facts[scene] = frozenset(facts)
+        the method's own source (a change of belief drops the current plan: the next
+        decision replans)."""
+        facts = frozenset(facts)
+        if self._facts.get(scene) != facts:
+            self._plan = []
+        self._facts[scene] = facts
 
     def reset(self) -> None:
         """Start a new episode: forget the plan, the bans and the replan count."""

@@ -21,7 +21,9 @@ from utamp_gym.agents import PlannerPolicy, run_policy
 from utamp_gym.agents.episode import Policy
 from utamp_gym.backend import DEFAULT_PERCEPTION
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
+from utamp_gym.eval.interactive import InteractivePerception
 from utamp_gym.methods.perceived import perceive_live
+from utamp_gym.methods.perceivers import load_perceiver, split_method
 from utamp_gym.planning.methods import method_spec
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, resolve_scene
@@ -41,6 +43,8 @@ class ClosedLoopResult:
     n_replans: int
     planning_time_s: float
     execution_time_s: float
+    n_weighings: int = 0  # interactive perception: lifts that weighed an object
+    n_looks: int = 0  # interactive perception: extra looks after the first
 
 
 def run_closed_loop(
@@ -55,10 +59,14 @@ def run_closed_loop(
     timeout: float = 30.0,
     max_steps: int = MAX_STEPS,
     perception: str = DEFAULT_PERCEPTION,
+    interactive: bool = True,
 ) -> ClosedLoopResult:
     """Run `method`'s planner policy on `scene` in the env until the episode ends
-    (`perception`: the env option, where the robot's poses come from in physics)."""
-    spec = method_spec(method)
+    (`perception`: the env option, where the robot's poses come from in physics).
+    ``utamp2-perceived[:PERCEIVER]`` looks first and, if `interactive`, measures and revises
+    its beliefs as it acts (`utamp_gym.eval.interactive`); else it believes its one look."""
+    base, perceiver_spec = split_method(method)
+    spec = method_spec(base)
     suite = scene.split("/", 1)[0] if scene.split("/", 1)[0] in SUITES else None
     names = resolve_scene(scene).object_names  # a procedural scene: the universe of its own
     objects = DEFAULT_OBJECTS if set(names) <= set(DEFAULT_OBJECTS) else names
@@ -75,10 +83,14 @@ def run_closed_loop(
         disturbance=disturbance,
         **physics,
     )
-    policy = PlannerPolicy(env, method, timeout=timeout, noise=noise, seed=seed)
+    policy = PlannerPolicy(env, base, timeout=timeout, noise=noise, seed=seed)
     world_seed = run_seed(resolve_scene(scene).name, seed)  # the one seed of the episode
     acting: Policy = policy
-    if spec.affordances == "perceived":  # look at the episode's world before the first step
+    interacting = None
+    if spec.affordances == "perceived" and interactive:
+        perceiver = load_perceiver(perceiver_spec)
+        acting = interacting = InteractivePerception(policy, env, world_seed, perceiver=perceiver)
+    elif spec.affordances == "perceived":  # look at the episode's world before the first step
         acting = _LookFirst(policy, env)
     # symbolic: the world a look renders is the one this seed makes in physics (the physics
     # episode draws its world from the env's generator, seeded the same, as measured)
@@ -103,6 +115,8 @@ def run_closed_loop(
         n_replans=policy.n_replans,
         planning_time_s=sum(policy.planning_times),
         execution_time_s=ep.reset_s + ep.step_s,
+        n_weighings=0 if interacting is None else interacting.n_weighings,
+        n_looks=0 if interacting is None else interacting.n_looks,
     )
 
 

@@ -169,6 +169,8 @@ class ResultRow(RunIdentity):
     acc_material: float | None = None
     acc_mass: float | None = None
     acc_robustness: float | None = None
+    n_weighings: int = 0  # closed loop, interactive perception: weighing lifts
+    n_looks: int = 0  # closed loop, interactive perception: extra looks
 
     def to_csv(self) -> dict[str, str]:
         return {k: _fmt(v) for k, v in asdict(self).items()}
@@ -213,6 +215,8 @@ class ResultRow(RunIdentity):
             perception=d.get("perception") or DEFAULT_PERCEPTION,
             failure_stage=d.get("failure_stage", ""),
             **{c: _opt_float(d.get(c, "")) for c in ATTRIBUTE_COLUMNS},
+            n_weighings=int(d.get("n_weighings") or 0),
+            n_looks=int(d.get("n_looks") or 0),
         )
 
 

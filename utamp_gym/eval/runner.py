@@ -30,6 +30,7 @@ from utamp_gym.eval.explain import explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
 from utamp_gym.methods.perceived import attribute_accuracy, mean_accuracy, plan_perceived
+from utamp_gym.methods.perceivers import PERCEIVED, check_perceiver, load_perceiver, split_method
 from utamp_gym.methods.vlm import RUNNERS, VLM_METHODS
 from utamp_gym.methods.vlm_client import VlmClient
 from utamp_gym.planning.crosscheck import check_against_ground_truth
@@ -41,15 +42,20 @@ from utamp_gym.suites import resolve_scene, suite_of
 EVAL_METHODS = (*METHODS, *VLM_METHODS)
 DEFAULT_TIMEOUT = 30.0
 RL_METHOD = "rl:PATH"  # a saved agent (utamp train's model.zip)
+USER_PERCEIVER = PERCEIVED + ":PACKAGE.MODULE:CLASS"  # a user's perceiver (or an entry point)
 
 
 def check_method(method: str, suite: str | None = None) -> None:
     """Raise if `method` is neither one of `EVAL_METHODS` nor a usable ``rl:PATH`` model
-    (missing, without its env metadata, or trained on another suite)."""
-    if method.startswith("rl:"):
+    (missing, without its env metadata, or trained on another suite), nor
+    ``utamp2-perceived:SPEC`` with a loadable perceiver (`utamp_gym.methods.perceivers`)."""
+    _, perceiver = split_method(method)
+    if perceiver is not None:
+        check_perceiver(perceiver)
+    elif method.startswith("rl:"):
         check_rl_method(method, suite)
     elif method not in EVAL_METHODS:
-        raise UnknownNameError("method", method, (*EVAL_METHODS, RL_METHOD))
+        raise UnknownNameError("method", method, (*EVAL_METHODS, RL_METHOD, USER_PERCEIVER))
 
 
 @dataclass(frozen=True)
@@ -109,8 +115,11 @@ def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
         return _Planned(
             out.solved, out.plan, out.planning_time_s, out.reason, out.scores, out.facts
         )
-    if task.method == "utamp2-perceived":
-        o, seen = plan_perceived(scene, task.seed, timeout=task.timeout, backend=look)
+    base, spec = split_method(task.method)
+    if base == PERCEIVED:
+        o, seen = plan_perceived(
+            scene, task.seed, timeout=task.timeout, backend=look, perceiver=load_perceiver(spec)
+        )
         accuracy = None if seen is None else seen.accuracy
         return _Planned(
             o.solved, o.plan, o.planning_time_s, o.reason, o.affordance_scores, o.facts, accuracy
@@ -189,6 +198,8 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
         plan=PLAN_SEPARATOR.join(out.actions),
         n_faults=out.n_faults,
         n_replans=out.n_replans,
+        n_weighings=out.n_weighings,
+        n_looks=out.n_looks,
     )
 
 
@@ -199,7 +210,7 @@ def _run(task: EvalTask, start: float) -> ResultRow:
         return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)
     env = None  # the env the plan is played in, made before planning to look through
-    if task.method == "utamp2-perceived":
+    if split_method(task.method)[0] == PERCEIVED:
         env = _open_loop_env(task)
     try:
         return _run_open_loop(task, scene, start, env)

@@ -42,7 +42,8 @@ def failure_stage(
     if plan_ok and grounding == "physics":
         return "physics"
     if affordance_f1 is not None and affordance_f1 < 1.0 - 1e-9:
-        return "perception" if method in DETECTED else "affordances"
+        detected = method in DETECTED or method.partition(":")[0] == "utamp2-perceived"
+        return "perception" if detected else "affordances"
     return "plan"
 
 

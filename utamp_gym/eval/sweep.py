@@ -177,7 +177,7 @@ def plan_tasks(cfg: SweepConfig) -> tuple[list[EvalTask], list[str]]:
                     if cfg.shard and key_shard(task.key, cfg.shard[1]) != cfg.shard[0] - 1:
                         continue
                     cost = scene.n_objects * (20 if method == "utamp1" else 1)
-                    cost *= 3 if method == "utamp2-perceived" else 1
+                    cost *= 3 if method.startswith("utamp2-perceived") else 1
                     cost *= 50 if method in VLM_METHODS else 1
                     tasks.append((cost, task))
     tasks.sort(key=lambda ct: -ct[0])  # longest first: better load balance

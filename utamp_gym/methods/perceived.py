@@ -20,10 +20,11 @@ in the evaluation layer, may read the scene, and does what needs both:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -32,8 +33,11 @@ from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.affordances.sources import SEEN_SUFFIX, ground_truth_for, plan_affordances
 from utamp_gym.agents.runs import episode_result, open_loop_env
 from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, backend_factory
+from utamp_gym.contract.perceiver import PerceivedAttributes, Perceiver, PerceptionRequest
 from utamp_gym.errors import UtampError
 from utamp_gym.methods.attributes import ATTRIBUTES
+from utamp_gym.methods.doubt import DOUBT_THRESHOLD, DoubtfulPlan, cautious_types
+from utamp_gym.methods.perceivers import PERCEIVED, BuiltinPerceiver
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box
@@ -111,6 +115,9 @@ class PerceivedScene:
     members: Mapping[str, Mapping[str, str]]  # object -> perceived member -> declared member
     accuracy: Mapping[str, float]  # attribute -> mean accuracy over the objects
     perceive_s: float = 0.0
+    #: object -> what the perceiver reported (confidences, alternatives); empty: certain
+    reports: Mapping[str, PerceivedAttributes] = field(default_factory=dict)
+    doubt: DoubtfulPlan = field(default_factory=DoubtfulPlan)  # how doubt was planned
 
     def declared_facts(self, facts: Iterable[Fact]) -> frozenset[Fact]:
         """Facts over the perceived types, in the declared types' and members' names."""
@@ -200,13 +207,18 @@ def build_perceived_scene(
     return PerceivedScene(scene, planning, types, members, mean_accuracy(acc), perceive_s)
 
 
-def perceive_scene(scene: Scene, seed: int = 0, *, backend: Any = None) -> PerceivedScene:
+def perceive_scene(
+    scene: Scene, seed: int = 0, *, backend: Any = None, perceiver: Perceiver | None = None
+) -> PerceivedScene:
     """Look at the episode's world of (`scene`, `seed`) with the survey cameras and perceive
-    every object (module docstring). `backend`: a `MujocoBackend` to reuse (it is reset)."""
-    return perceive_world(scene, run_seed(scene.name, seed), backend=backend)
+    every object (module docstring). `backend`: a `MujocoBackend` to reuse (it is reset);
+    `perceiver`: any `utamp_gym.contract.perceiver.Perceiver` (default: the built-in one)."""
+    return perceive_world(scene, run_seed(scene.name, seed), backend=backend, perceiver=perceiver)
 
 
-def perceive_world(scene: Scene, world_seed: int, *, backend: Any = None) -> PerceivedScene:
+def perceive_world(
+    scene: Scene, world_seed: int, *, backend: Any = None, perceiver: Perceiver | None = None
+) -> PerceivedScene:
     """`perceive_scene` of the world whose generator is seeded with `world_seed` (already
     derived from the scene and the run's seed: `utamp_gym.seeding.run_seed`). Without a
     `backend`, one of the default physics backend (`utamp_gym.backend.DEFAULT_BACKEND`) is
@@ -216,29 +228,31 @@ def perceive_world(scene: Scene, world_seed: int, *, backend: Any = None) -> Per
     start = time.perf_counter()
     try:
         sim.reset(scene, np.random.default_rng(world_seed))
-        return perceive_live(scene, sim, start)
+        return perceive_live(scene, sim, start, perceiver=perceiver)
     finally:
         if own:
             sim.close()
 
 
-def perceive_live(scene: Scene, backend: Any, start: float | None = None) -> PerceivedScene:
-    """Perceive the world a backend simulates now (its survey look); `scene` is the
-    declared scene (for the orientations and the alignment)."""
-    # lazy: utamp_gym.perception.objects imports scipy
-    from utamp_gym.perception.objects import perceive_objects
-
+def perceive_live(
+    scene: Scene, backend: Any, start: float | None = None, *, perceiver: Perceiver | None = None
+) -> PerceivedScene:
+    """Perceive the world a backend simulates now (its survey look) with `perceiver` (the
+    protocol's request: the views, the instance ids' object names and their orientations);
+    `scene` is the declared scene (for the orientations and the alignment)."""
     start = time.perf_counter() if start is None else start
-    bundle = backend.survey()
-    names = backend.cameras.instances
-    seen = {
-        names[i]: p.as_type(names[i], scene.object(names[i]).orientation)
-        for i, p in perceive_objects(bundle).items()
-    }
+    request = PerceptionRequest(
+        backend.survey(),
+        {i: n for i, n in backend.cameras.instances.items() if n in scene.object_names},
+        {o.name: o.orientation for o in scene.objects},
+    )
+    reports = dict((perceiver or BuiltinPerceiver()).perceive(request))
+    seen = {n: r.type for n, r in reports.items() if n in scene.object_names}
     missing = [o.name for o in scene.objects if o.name not in seen]
     if missing:
         raise PerceptionError(f"no camera saw {', '.join(missing)} in {scene.name}")
-    return build_perceived_scene(scene, seen, time.perf_counter() - start)
+    ps = build_perceived_scene(scene, seen, time.perf_counter() - start)
+    return dataclasses.replace(ps, reports=reports)
 
 
 class PerceptionError(UtampError):
@@ -253,6 +267,8 @@ def plan_perceived(
     search: str | None = None,
     deadline: Any = None,
     backend: Any = None,
+    perceiver: Perceiver | None = None,
+    doubt: float = DOUBT_THRESHOLD,
 ) -> tuple[PlanOutcome, PerceivedScene | None]:
     """`utamp2-perceived` on a declared scene: perceive it, turn the perceived attributes into
     affordances with the rules, and plan the declared scene with them. As for `utamp2-noisy`,
@@ -262,31 +278,67 @@ def plan_perceived(
     no symbol to plan with, but count as false positives in the scores (against the declared
     scene's ground truth). The planning time includes the perception (render and fit). A
     scene the cameras could not perceive is unsolved, with the reason (and no perceived
-    scene)."""
+    scene). Attributes reported with a confidence below `doubt` are planned at their
+    cautious values (`utamp_gym.methods.doubt`; the returned scene's ``doubt`` says how)."""
     start = time.perf_counter()
     try:
-        ps = perceive_scene(scene, seed, backend=backend)
+        ps = perceive_scene(scene, seed, backend=backend, perceiver=perceiver)
     except PerceptionError as exc:
         nothing = Scores(0.0, 0.0, 0.0, 0, 0, 0)
         reason = f"perception: {exc}"
         elapsed = time.perf_counter() - start
         outcome = PlanOutcome(
-            scene.name, "utamp2-perceived", scene.n_objects, False, (), elapsed, reason, seed,
-            nothing,
+            scene.name, PERCEIVED, scene.n_objects, False, (), elapsed, reason, seed, nothing,
         )  # fmt: skip
         return outcome, None
-    perceived = plan_affordances(ps.planning)
-    scores = ps.scores(perceived, ground_truth_for(scene))
-    outcome = plan_scene(
-        scene,
-        "utamp2-perceived",
-        seed=seed,
-        timeout=timeout,
-        search=search,
-        deadline=deadline,
-        affordances=(ps.usable_facts(perceived), scores),
+    outcome, ps = plan_seen(
+        scene, ps, seed=seed, timeout=timeout, search=search, deadline=deadline, doubt=doubt
     )
     return outcome._replace(planning_time_s=outcome.planning_time_s + ps.perceive_s), ps
+
+
+def plan_seen(
+    scene: Scene,
+    ps: PerceivedScene,
+    *,
+    seed: int = 0,
+    timeout: float = 30.0,
+    search: str | None = None,
+    deadline: Any = None,
+    doubt: float = DOUBT_THRESHOLD,
+) -> tuple[PlanOutcome, PerceivedScene]:
+    """Plan `scene` with the affordances of a perceived scene, cautiously where in doubt
+    (`plan_perceived`); a goal the cautious values make unsolvable is planned with the
+    likely ones (marked in the returned scene's ``doubt``)."""
+    cautious, doubts = cautious_types(ps.planning, ps.types, ps.reports, doubt)
+    attempts: list[tuple[PerceivedScene, DoubtfulPlan]] = []
+    if doubts:
+        seen = build_perceived_scene(scene, cautious)
+        attempts.append(
+            (
+                dataclasses.replace(
+                    ps, planning=seen.planning, types=seen.types, members=seen.members
+                ),
+                DoubtfulPlan(doubts),
+            )
+        )
+    attempts.append((ps, DoubtfulPlan(doubts, fell_back=bool(doubts))))
+    truth = ground_truth_for(scene)
+    planned, how = attempts[0]
+    for planned, how in attempts:  # noqa: B007 - the last one tried is returned
+        perceived = plan_affordances(planned.planning)
+        outcome = plan_scene(
+            scene,
+            PERCEIVED,
+            seed=seed,
+            timeout=timeout,
+            search=search,
+            deadline=deadline,
+            affordances=(planned.usable_facts(perceived), planned.scores(perceived, truth)),
+        )
+        if outcome.solved:
+            break
+    return outcome, dataclasses.replace(planned, doubt=how)
 
 
 def run_perceived_episode(
@@ -327,6 +379,7 @@ __all__ = [
     "perceive_scene",
     "perceive_world",
     "plan_perceived",
+    "plan_seen",
     "rename_fact",
     "run_perceived_episode",
     "seen_type_name",

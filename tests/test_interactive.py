@@ -1,0 +1,102 @@
+"""Interactive perception in the closed loop (eval/interactive.py): beliefs revised by weighing,
+topples and extra looks; counts reported per episode."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from utamp_gym.agents import PlannerPolicy
+from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.errors import PlanningError
+from utamp_gym.eval.closed_loop import run_closed_loop
+from utamp_gym.eval.interactive import SATURATED_MASS, InteractivePerception
+from utamp_gym.seeding import run_seed
+
+SCENE = "pick-place/000"  # a board on a tray: the tower's one support
+
+
+@pytest.fixture
+def loop():
+    env = UTampKitchenEnv(suite="pick-place", scene=SCENE, grounding="symbolic", affordances="gt")
+    obs, info = env.reset(seed=run_seed(SCENE, 0))
+    policy = PlannerPolicy(env, "utamp2-perceived")
+    ip = InteractivePerception(policy, env, run_seed(SCENE, 0))
+    ip(obs, info)  # the first decision: look, believe, plan
+    yield ip, obs, info
+    env.close()
+
+
+def _believed(ip: InteractivePerception) -> frozenset:
+    return ip.policy._facts[SCENE]
+
+
+def test_first_look_believes_the_perceived_affordances(loop) -> None:
+    ip, _, _ = loop
+    assert ip.n_looks == 0 and ip.n_weighings == 0
+    assert ("canLift", "cutting-board", "handle") in _believed(ip)
+    assert set(ip.beliefs) == {"tray", "board"}
+
+
+def test_a_payload_refusal_weighs_the_object(loop) -> None:
+    ip, _, _ = loop
+    ip._revise(
+        "board exceeds the Panda's 3 kg payload while lifting it: the joint torques measure "
+        "3.4 kg (33 N) at the hand"
+    )
+    assert ip.n_weighings == 1 and ip.beliefs["board"].mass == pytest.approx(3.4)
+    assert not any(f[0] == "canLift" and f[1] == "cutting-board" for f in _believed(ip))
+    ip._revise(
+        "board exceeds the Panda's payload while lifting it: the torque of joint 4 at its "
+        "87 N·m limit cannot hold it (measured load at least 2.1 kg (21 N))"
+    )  # saturated: a lower bound, at least SATURATED_MASS
+    assert ip.n_weighings == 2 and ip.beliefs["board"].mass == pytest.approx(SATURATED_MASS)
+
+
+def test_a_lift_that_stays_down_withdraws_that_members_lift(loop) -> None:
+    ip, _, _ = loop
+    ip._revise("board is not liftable by its handle: it stayed down (rose 0.1 cm while ...)")
+    assert ip.n_weighings == 1
+    assert ("canLift", "cutting-board", "handle") not in _believed(ip)
+
+
+def test_a_topple_marks_the_support_and_an_unsolvable_goal_triggers_looks(loop) -> None:
+    ip, obs, info = loop
+    ip._revise("board tipped over on tray")
+    assert not any(
+        f[0] == "isP2PSupportive" and (f[2], f[4]) == ("wooden-tray", "cutting-board")
+        for f in _believed(ip)
+    )
+    assert ip.revisions[-1] == "board does not stand on tray"
+    # the board has no other way onto the tray: two extra looks, then the policy gives up
+    with pytest.raises(PlanningError):
+        ip(obs, {**info, "action": "(noop)", "failure_reason": "board tipped over on tray"})
+    assert ip.n_looks == 2
+    assert [r.split(":")[0] for r in ip.revisions[-2:]] == ["look 1 (hopeful)", "look 2 (hopeful)"]
+
+
+def test_a_pick_of_a_hypothesised_mass_counts_as_weighing(loop) -> None:
+    ip, _, _ = loop
+    ip.untested = {"board"}
+    ip._lifted("(pick-support board board-handle on left right back on slot2 under on)")
+    ip._lifted("(pick-support board board-handle on left right back on slot2 under on)")
+    assert ip.n_weighings == 1 and ip.untested == set()
+
+
+def test_closed_loop_reports_weighings_and_looks() -> None:
+    out = run_closed_loop(SCENE, "utamp2-perceived", grounding="physics", pose_noise=0.0)
+    assert out.success, out.failure
+    assert (out.n_weighings, out.n_looks) == (0, 0)  # nothing in doubt, nothing failed
+    named = run_closed_loop(SCENE, "utamp2-perceived:builtin", grounding="symbolic")
+    assert named.success and named.n_looks == 0
+
+
+def test_a_perceiver_that_sees_nothing_ends_the_episode_at_perception(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    out = run_closed_loop(
+        SCENE, "utamp2-perceived:user_perceiver:BlindPerceiver", grounding="symbolic"
+    )
+    assert not out.success and out.failure.startswith("perception: no camera saw")

@@ -1,0 +1,209 @@
+"""Interactive perception in the closed loop: look, plan under doubt, revise from what happens.
+
+`InteractivePerception` wraps `utamp2-perceived`'s `PlannerPolicy`. Before the first
+decision it looks at the episode's world (the survey; a `Perceiver` of
+`utamp_gym.contract.perceiver`) and believes the affordances of the perceived types, with
+each attribute the perceiver is unsure of at its cautious value (`utamp_gym.methods.doubt`).
+Then the robot's own actions are its measurements:
+
+* **weighing by lifting** – a lift or carry the arm's joint torques refuse (the payload
+  model, `utamp_gym.sim.payload`, names the object and the measured load in the failure)
+  raises that object's mass belief to the measured load (at least the rated payload when
+  the torques saturate), and the rules then withdraw its lifts; a lift that leaves the object
+  down ("not liftable by its member") withdraws that member's lift;
+* **topples** – a placement after which the object fell off, tipped over on its support or
+  toppled the stack marks that support as not supportive for that object (its
+  ``isP2PSupportive`` facts are withdrawn);
+* **extra looks** – when no plan reaches the goal from what is believed, the robot looks
+  again (a new survey, perceived afresh: what moved since may have uncovered members and
+  rims) and the attributes that block the goal — the doubts planned cautiously — take their
+  likely values; only when that still leaves the goal unsolvable does it give up.
+
+After every revision the policy replans from the revised beliefs. `n_weighings` and
+`n_looks` count the measurements of the episode (`ClosedLoopResult`, the eval row).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from typing import Any
+
+from utamp_gym.affordances.facts import Fact
+from utamp_gym.affordances.sources import plan_affordances
+from utamp_gym.agents.planner import PlannerPolicy
+from utamp_gym.backend import Surveying
+from utamp_gym.contract.perceiver import Perceiver
+from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.env.symbolic_backend import NoWorldToLook
+from utamp_gym.errors import PlanningError
+from utamp_gym.methods.doubt import DOUBT_THRESHOLD, Doubt, cautious_types
+from utamp_gym.methods.perceived import (
+    PerceivedScene,
+    PerceptionError,
+    build_perceived_scene,
+    perceive_live,
+    perceive_world,
+)
+from utamp_gym.scene.catalogue import ObjectType
+
+#: extra looks an episode may take when no plan reaches the goal
+MAX_LOOKS = 2
+#: kg: a load the torques could not hold (saturated) is believed at least this heavy
+SATURATED_MASS = 3.5
+
+_PAYLOAD = re.compile(r"^(?P<obj>\S+) exceeds the Panda's .*?(?P<kg>\d+(?:\.\d+)?) kg \(")
+_NOT_LIFTABLE = re.compile(r"^(?P<obj>\S+) is not liftable by its (?P<member>[^:]+):")
+_TOPPLES = (
+    re.compile(r"^(?P<obj>\S+) fell off (?P<support>\S+):"),
+    re.compile(r"^(?P<obj>\S+) tipped over on (?P<support>\S+)$"),
+    re.compile(r"^placing (?P<obj>\S+) on (?P<support>\S+) toppled the stack"),
+)
+
+
+class InteractivePerception:
+    """``policy(obs, info)``: `utamp2-perceived` acting with interactive perception (module
+    docstring). `world_seed` builds the world to look at when the env has no cameras."""
+
+    def __init__(
+        self,
+        policy: PlannerPolicy,
+        env: UTampKitchenEnv,
+        world_seed: int,
+        *,
+        perceiver: Perceiver | None = None,
+        doubt: float = DOUBT_THRESHOLD,
+        max_looks: int = MAX_LOOKS,
+    ) -> None:
+        self.policy, self.env, self.world_seed = policy, env, world_seed
+        self.perceiver, self.doubt, self.max_looks = perceiver, doubt, max_looks
+        self.n_weighings = self.n_looks = 0
+        self.seen: PerceivedScene | None = None
+        self.beliefs: dict[str, ObjectType] = {}  # object -> believed (perceived) type
+        self.doubts: tuple[Doubt, ...] = ()  # planned at their cautious values
+        self.untested: set[str] = set()  # objects whose lighter mass is a hypothesis
+        self.weighed: dict[str, float] = {}  # object -> kg it weighs at least (torques)
+        self.withdrawn: set[Fact] = set()  # declared-name facts refuted by the robot's acts
+        self.revisions: list[str] = []  # what was learnt, in order
+
+    def __call__(self, obs: Any, info: Mapping[str, Any]) -> int:
+        if not info.get("action"):  # a new episode: look first
+            self.n_weighings = self.n_looks = 0
+            self.weighed.clear()
+            self.withdrawn.clear()
+            self.revisions.clear()
+            self._look("first")
+        elif info.get("failure_reason"):
+            self._revise(str(info["failure_reason"]))
+        else:
+            self._lifted(str(info["action"]))
+        while True:
+            try:
+                return self.policy(obs, info)
+            except PlanningError:
+                if not self._look_at_blockers():
+                    raise
+
+    # ------------------------------------------------------------------ looking
+    def _perceive(self) -> PerceivedScene:
+        backend, scene = self.env.backend, self.env.scene
+        try:
+            if isinstance(backend, Surveying):
+                try:
+                    return perceive_live(scene, backend, perceiver=self.perceiver)
+                except NoWorldToLook:  # symbolic grounding after the first action: the
+                    pass  # attributes are the initial world's, rendered from its seed
+            return perceive_world(scene, self.world_seed, perceiver=self.perceiver)
+        except PerceptionError as exc:  # the episode ends: lost at the perception stage
+            raise PlanningError(f"perception: {exc}") from None
+
+    def _look(self, mode: str) -> None:
+        """Survey and perceive; the attributes with alternatives at their cautious values
+        where in doubt (``first``), at the likely ones (``likely``), or at the values that
+        promise most (``hopeful``: hypotheses the robot's acts then test)."""
+        seen = self._perceive()
+        self.seen, self.untested = seen, set()
+        if mode == "likely":
+            self.beliefs, self.doubts = dict(seen.types), ()
+        else:
+            hopeful = mode == "hopeful"
+            self.beliefs, doubts = cautious_types(
+                seen.planning, seen.types, seen.reports, self.doubt, hopeful=hopeful
+            )
+            self.doubts = () if hopeful else doubts
+            if hopeful:
+                self.untested = {d.object for d in doubts if d.attribute == "mass"}
+        for obj, kg in self.weighed.items():  # what was weighed stays weighed
+            if obj in self.beliefs and kg > self.beliefs[obj].mass:
+                self.beliefs[obj] = self.beliefs[obj]._replace(mass=kg)
+                self.untested.discard(obj)
+        self._believe()
+
+    def _look_at_blockers(self) -> bool:
+        """No plan from the beliefs: look again (module docstring); False to give up. The
+        first extra look plans the cautious doubts at their likely values (if any); the
+        next one tries the values that promise most, to be tested by acting."""
+        if self.n_looks >= self.max_looks:
+            return False
+        self.n_looks += 1
+        mode = "likely" if self.doubts else "hopeful"
+        blockers = ", ".join(f"{d.object}.{d.attribute}" for d in self.doubts) or "none in doubt"
+        self.revisions.append(f"look {self.n_looks} ({mode}): no plan; doubts: {blockers}")
+        self._look(mode)
+        return True
+
+    def _lifted(self, action: str) -> None:
+        """A successful action: a pick of an object whose mass was a hypothesis weighed it."""
+        words = action.strip("()").split()
+        if len(words) > 1 and words[0].startswith("pick") and words[1] in self.untested:
+            self.untested.discard(words[1])
+            self.n_weighings += 1
+            self.revisions.append(f"weighed {words[1]}: the arm lifts it")
+
+    # ------------------------------------------------------------------ revising
+    def _revise(self, reason: str) -> None:
+        """Revise the beliefs from a failed action's reason (module docstring)."""
+        scene = self.env.scene
+        m = _PAYLOAD.match(reason)
+        if m and m["obj"] in self.beliefs:
+            kg = float(m["kg"])
+            kg = max(kg, SATURATED_MASS) if "cannot hold" in reason else kg
+            self.weighed[m["obj"]] = max(kg, self.weighed.get(m["obj"], 0.0))
+            self.untested.discard(m["obj"])
+            t = self.beliefs[m["obj"]]
+            self.beliefs[m["obj"]] = t._replace(mass=max(t.mass, kg))
+            self.n_weighings += 1
+            self.revisions.append(f"weighed {m['obj']}: at least {kg:.2f} kg")
+            self._believe()
+            return
+        m = _NOT_LIFTABLE.match(reason)
+        if m and m["obj"] in self.beliefs:
+            self.n_weighings += 1
+            self.untested.discard(m["obj"])
+            self.withdrawn.add(("canLift", scene.object(m["obj"]).type, m["member"].strip()))
+            self.revisions.append(f"lifted {m['obj']} by its {m['member']}: it stayed down")
+            self._believe()
+            return
+        for pattern in _TOPPLES:
+            m = pattern.match(reason)
+            if m and m["obj"] in self.beliefs and m["support"] in scene.object_names:
+                under, over = scene.object(m["support"]).type, scene.object(m["obj"]).type
+                self.withdrawn.update(
+                    f
+                    for f in self._facts()
+                    if f[0] == "isP2PSupportive" and f[2:5:2] == (under, over)
+                )
+                self.revisions.append(f"{m['obj']} does not stand on {m['support']}")
+                self._believe()
+                return
+
+    def _facts(self) -> frozenset[Fact]:
+        assert self.seen is not None
+        ps = build_perceived_scene(self.seen.declared, self.beliefs)
+        return ps.usable_facts(plan_affordances(ps.planning))
+
+    def _believe(self) -> None:
+        self.policy.believe(self.env.scene.name, self._facts() - self.withdrawn)
+
+
+__all__ = ["MAX_LOOKS", "InteractivePerception"]
