@@ -66,8 +66,10 @@ def test_open_loop_policy_stops_at_the_first_failure() -> None:
 def test_planner_policy_in_the_loop_reaches_the_goal() -> None:
     env = UTampKitchenEnv(suite="pick-place", grounding="symbolic", scene=SCENE)
     ep = run_policy(env, PlannerPolicy(env), max_steps=40, seed=1)
-    assert ep.success and ep.n_failed == 0 and len(ep.actions) == len(
-        plan_scene(resolve_scene(SCENE), "utamp2-gt").plan
+    assert (
+        ep.success
+        and ep.n_failed == 0
+        and len(ep.actions) == len(plan_scene(resolve_scene(SCENE), "utamp2-gt").plan)
     )
 
 
@@ -89,7 +91,10 @@ VLM_SCENE = "pick-place/013"  # tray/pan | board (the VLM tests' scene)
 @pytest.mark.parametrize("grounding", ["physics", "symbolic"])
 @pytest.mark.parametrize("method", EVAL_METHODS)
 def test_every_open_loop_method_steps_the_env_once_per_action(
-    method: str, grounding: str, monkeypatch: pytest.MonkeyPatch, vlm: Server  # noqa: F811
+    method: str,
+    grounding: str,
+    monkeypatch: pytest.MonkeyPatch,
+    vlm: Server,  # noqa: F811
 ) -> None:
     vlm.reply(completion(fenced(attributes(VLM_SCENE))))
     plan = ["pick cutting-board table", "place cutting-board frying-pan"]

@@ -24,11 +24,13 @@ def default_method(scene_name: str) -> str:
     """The method `utamp plan` / `utamp run` use when none is given: a procedural-v2
     scene's labelling method (its splits' `achievable` assumes the extended domain), else
     the paper's ``utamp2-gt``."""
+    # lazy: keeps `utamp --help` from loading utamp_gym.suites
     from utamp_gym.suites import PROCEDURAL_V2
 
     if not scene_name.startswith(f"{PROCEDURAL_V2}/"):
         return PAPER_METHOD
-    from utamp_gym.suites.procedural_v2.spec import LABEL_METHOD  # numpy: v2 scenes only
+    # lazy: utamp_gym.suites.procedural_v2.spec imports numpy (v2 scenes only)
+    from utamp_gym.suites.procedural_v2.spec import LABEL_METHOD
 
     return LABEL_METHOD
 

@@ -30,8 +30,10 @@ def _cmd_eval(args: argparse.Namespace) -> int:
 
     # lazy: keeps `utamp --help` from loading utamp_gym.eval.sweep
     from utamp_gym.eval.sweep import SweepConfig, parse_shard, run_sweep, write_outputs
+
+    # lazy: utamp_gym.suites.procedural_v2.spec imports numpy (only utamp eval needs it)
     from utamp_gym.suites.procedural_v2.spec import LABEL_METHOD
-    from utamp_gym.suites.procedural_v2.spec import SUITE as V2_SUITE
+    from utamp_gym.suites.procedural_v2.spec import SUITE as V2_SUITE  # lazy: as above
 
     noise = (args.noise,)
     if args.sweep_noise:

@@ -108,11 +108,11 @@ class InteractivePerception:
     def _perceive(self) -> PerceivedScene:
         backend, scene = self.env.backend, self.env.scene
         try:
-            if isinstance(backend, Surveying):
-                try:
+            try:  # (the isinstance check reads `cameras`, which may raise NoWorldToLook)
+                if isinstance(backend, Surveying):
                     return perceive_live(scene, backend, perceiver=self.perceiver)
-                except NoWorldToLook:  # symbolic grounding after the first action: the
-                    pass  # attributes are the initial world's, rendered from its seed
+            except NoWorldToLook:  # symbolic grounding without the world seed or after the
+                pass  # first action: the attributes are the initial world's, from its seed
             return perceive_world(scene, self.world_seed, perceiver=self.perceiver)
         except PerceptionError as exc:  # the episode ends: lost at the perception stage
             raise PlanningError(f"perception: {exc}") from None
