@@ -34,7 +34,6 @@ import cli_reference  # noqa: E402
 import env_pages  # noqa: E402
 import facts  # noqa: E402
 
-
 README_MAX_LINES = 200
 #: a path in the repository that a page names
 PATH = r"\b((?:benchmarks|tests|examples|assets|envs|utamp_gym)/[\w/.-]+\.(?:py|toml|pddl))"
