@@ -309,7 +309,8 @@ def plan_seen(
 ) -> tuple[PlanOutcome, PerceivedScene]:
     """Plan `scene` with the affordances of a perceived scene, cautiously where in doubt
     (`plan_perceived`); a goal the cautious values make unsolvable is planned with the
-    likely ones (marked in the returned scene's ``doubt``)."""
+    likely ones (marked in the returned scene's ``doubt``). The scores are the likely
+    values' (what was perceived), whichever values were planned with."""
     cautious, doubts = cautious_types(ps.planning, ps.types, ps.reports, doubt)
     attempts: list[tuple[PerceivedScene, DoubtfulPlan]] = []
     if doubts:
@@ -324,6 +325,7 @@ def plan_seen(
         )
     attempts.append((ps, DoubtfulPlan(doubts, fell_back=bool(doubts))))
     truth = ground_truth_for(scene)
+    scores = ps.scores(plan_affordances(ps.planning), truth)  # perception, not caution
     planned, how = attempts[0]
     for planned, how in attempts:  # noqa: B007 - the last one tried is returned
         perceived = plan_affordances(planned.planning)
@@ -334,7 +336,7 @@ def plan_seen(
             timeout=timeout,
             search=search,
             deadline=deadline,
-            affordances=(planned.usable_facts(perceived), planned.scores(perceived, truth)),
+            affordances=(planned.usable_facts(perceived), scores),
         )
         if outcome.solved:
             break
