@@ -5,6 +5,8 @@ procedural-v1 instance it was measured on (a grant lifts and places, a refusal f
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -13,9 +15,12 @@ import pytest
 from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, LOW_COVER_LIMIT
 from utamp_gym.affordances.rim import THICK_TORQUE_LIMIT, rim_pinch_refusal
 from utamp_gym.affordances.rules import object_facts, pick_refusal
-from utamp_gym.kitchenware import family, generate, type_table
-from utamp_gym.kitchenware.params import draw
-from utamp_gym.scene.io import scene_from_dict
+from utamp_gym.kitchenware import generate
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "_scripts"))
+import readme
+
+grasp_coverage = readme.load_script("benchmarks/grasp_coverage.py")
 
 physics = pytest.mark.physics
 
@@ -73,15 +78,8 @@ def test_procedural_v2_draws_its_goals_with_the_rules_before_the_calibration():
 
 # ------------------------------------------------------------------ physics
 def _lone(fam: str, seed: int) -> Any:
-    return scene_from_dict({
-        "name": "lone", "types": {"obj": type_table(family(fam), draw(family(fam), "v1", seed))},
-        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
-        "slots": [
-            {"name": "slot1", "position": [0.5, -0.18], "min": [0.2, -0.5], "max": [0.8, 0.08]},
-            {"name": "slot2", "position": [0.5, 0.3], "min": [0.2, 0.08], "max": [0.8, 0.6]},
-        ],
-        "objects": [{"name": "obj", "type": "obj", "on": "slot1"}],
-    })  # fmt: skip
+    """The benchmark's scene: instance `seed` of `fam` alone on a two-slot table."""
+    return grasp_coverage.lone_scene(fam, seed)
 
 
 @pytest.fixture(scope="module")
