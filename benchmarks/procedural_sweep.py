@@ -152,16 +152,24 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
     return "\n".join(out) + "\n"
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """This script's options (tests check recorded result commands against them)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=3)
+def sweep_parser(
+    description: str, *, seeds: int, splits: list[str] | tuple[str, ...], out: str
+) -> argparse.ArgumentParser:
+    """The options of a sweep of `utamp eval` over a suite's splits (this script and
+    `v2_physics.py`), with their defaults."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--seeds", type=int, default=seeds)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--splits", default=",".join(SPLITS))
-    ap.add_argument("--out", default="out/procedural")
+    ap.add_argument("--splits", default=",".join(splits))
+    ap.add_argument("--out", default=out)
     ap.add_argument("--results", default="docs/results")
     ap.add_argument("--summarize-only", action="store_true", help="read OUT, run nothing")
     return ap
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """This script's options (tests check recorded result commands against them)."""
+    return sweep_parser(__doc__.splitlines()[0], seeds=3, splits=SPLITS, out="out/procedural")
 
 
 def main() -> None:

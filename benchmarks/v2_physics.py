@@ -26,7 +26,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from procedural_sweep import reason_kind
+from procedural_sweep import reason_kind, sweep_parser
 
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.suites import procedural_v2
@@ -217,14 +217,7 @@ def below_target(summaries: list[dict[str, Any]]) -> list[str]:
 
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--splits", default=",".join(SPLITS))
-    ap.add_argument("--out", default="out/v2_physics")
-    ap.add_argument("--results", default="docs/results")
-    ap.add_argument("--summarize-only", action="store_true", help="read OUT, run nothing")
-    return ap
+    return sweep_parser(__doc__.splitlines()[0], seeds=1, splits=SPLITS, out="out/v2_physics")
 
 
 def main() -> None:
