@@ -15,7 +15,7 @@ decide from geometry and mass alone, never from a family or a type name:
   horizontal extent): at least `RIM_MIN_WIDTH`, within the hand's opening;
 * each finger reaches its place beside the wall (`hand.finger_room`): a finger may land on
   the object's own body up to `RIM_STOP_TOLERANCE` early (a plate's well beside its rim:
-  the approach guard stops the hand 1 cm short at most, `sim.skills.APPROACH_STOP`) while
+  the approach guard stops the hand 1 cm short at most, `sim.grasp_phases.APPROACH_STOP`) while
   its pad keeps `hand.MIN_PAD_OVERLAP` on the rim; the hand above comes down freely;
 * the wall stands upright: its foot (the ``under`` surface) lies at most `FLARE_LIMIT`
   inside its rim;
