@@ -186,6 +186,7 @@ def main() -> None:
 
     table: dict[str, Any] = {
         "splits": split_suites,
+        "limit": args.limit,
         "env_id": env_id,
         "methods": {},
         "demos": {
@@ -286,9 +287,11 @@ def write(table: dict[str, Any], docs: Path) -> None:
     splits_ = list(table["splits"])
     train = splits_[0]
     ceiling = table.setdefault("achievable", achievable(table["splits"]))
+    limit = table.get("limit")
+    scenes = "all its scenes" if limit is None else f"its first {limit} scenes only (--limit)"
     lines = [
         f"Training split: `{table['splits'][train]}` ({table['env_id']}, objects interface, "
-        "geometric masks, symbolic grounding); every split evaluated on all its scenes, seed 0, "
+        f"geometric masks, symbolic grounding); every split evaluated on {scenes}, seed 0, "
         "symbolic grounding, deterministic masked policy, 10 steps per object. Learned rows: "
         "mean over seeds ± 95 % t interval; planner rows: one deterministic run per scene.",
         "",
