@@ -32,8 +32,9 @@ TIP_CLEARANCE = 0.003  # m, fingertips stay this far above the surface the objec
 FINGER_CLEARANCE = 0.008  # m, pre-grasp opening beyond the member's width, per side
 MAX_OPENING = 0.08  # m, Panda hand fully open
 PLACE_DROP = 0.004  # m, a placed object is released this far above its support
-ACTIONS = ("pick-support", "place-support", "slide-support")
-ARITY = {"pick-support": 10, "place-support": 11, "slide-support": 13}
+ACTIONS = ("pick-support", "place-support", "slide-support", "slide-edge")
+#: slide-edge (the extended domain ``utamp2x``): a pick-support's symbols
+ARITY = {"pick-support": 10, "place-support": 11, "slide-support": 13, "slide-edge": 10}
 
 
 @dataclass(frozen=True)
@@ -90,7 +91,7 @@ def parse_action(action: str, scene: Scene) -> MacroAction:
     grasp = GraspSymbols(obj, member, args[2], args[3], args[4])
     if axis_of(grasp.palm) == axis_of(grasp.finger1):
         raise GroundingError(f"'{action}': palm part and finger part lie on the same axis")
-    if kind == "pick-support":
+    if kind in ("pick-support", "slide-edge"):
         return MacroAction(kind, grasp, support=args[7], text=action)
     if kind == "place-support":
         return MacroAction(kind, grasp, support=args[8], support_part=args[10], text=action)
