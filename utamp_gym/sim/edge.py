@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from utamp_gym.affordances.edge import BASE_CLEARANCE, EDGE_Y, OVERHANG, PAD_IN
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim import relook
 from utamp_gym.sim.control import ignoring
@@ -41,16 +42,10 @@ from utamp_gym.sim.measure import (
     snapshot,
 )
 
-#: m the board's back end is dragged beyond the near edge: the pads (`PAD_IN` inside the end,
-#: 18.5 mm long) and the lower finger then clear the table's edge by 5 mm
-OVERHANG = 0.035
-OVERHANG_TOL = 0.008  # m: an overhang this far off after the drags fails the action
 PRESS = 0.006  # m the fingertips are commanded below the board's top while dragging
-#: m from the base's axis (|y|) the board is dragged to, in turn: the pinch beyond the near
-#: edge is reached there and the board clears the robot's base (`BASE_CLEARANCE`)
-EDGE_Y = (0.3, 0.33, 0.27)
-BASE_CLEARANCE = 0.16  # m from the base's axis the board's near side keeps while dragged
-PAD_IN = 0.022  # m: the TCP (the pads' middle) this far inside the board's back end
+OVERHANG_TOL = 0.008  # m: an overhang this far off after the drags fails the action
+PAD_HALF = 0.00925  # m: half the pads' length along the approach
+PAD_CLEAR = 0.003  # m the pads stay short of the table's edge
 PINCH_BACKOFF = (0.06, 0.04, 0.03)  # m the horizontal approach starts back from the pinch
 DRAG = (0.12, 0.3)  # m/s, m/s^2
 DRAG_ROUNDS = 2
@@ -189,15 +184,17 @@ def _check_overhang(st: SimState, obj: str, edge: float) -> None:
         )
 
 
-def pinch_pose(lo: np.ndarray, hi: np.ndarray, roll: float) -> np.ndarray:
+def pinch_pose(lo: np.ndarray, hi: np.ndarray, roll: float, edge: float) -> np.ndarray:
     """TCP pose pinching the overhang of a board with world extent `lo`..`hi`: `PAD_IN`
-    inside its back end, at its mid-height, approaching along +x, the fingers closing
-    vertically (`roll` +1 or -1: which way up the hand is)."""
+    inside its back end (or less, the pads `PAD_CLEAR` short of the table's edge at x =
+    `edge`), at its mid-height, approaching along +x, the fingers closing vertically (`roll`
+    +1 or -1: which way up the hand is)."""
     z = np.array([1.0, 0.0, 0.0])
     x = np.array([0.0, roll, 0.0])
     out = np.eye(4)
     out[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-    out[:3, 3] = [lo[0] + PAD_IN, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2]
+    x = min(lo[0] + PAD_IN, edge - PAD_HALF - PAD_CLEAR)
+    out[:3, 3] = [x, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2]
     return out
 
 
@@ -218,8 +215,8 @@ def edge_pinch(
     plan = None
     with ignoring(near, geoms):
         for roll in (1.0, -1.0):
-            pinch = pinch_pose(lo, hi, roll)
-            for q in arm.ik_solutions(pinch, near.is_valid, restarts=4):
+            pinch = pinch_pose(lo, hi, roll, near_edge(st))
+            for q in arm.ik_solutions(pinch, near.is_valid, restarts=10):
                 for dist in PINCH_BACKOFF:
                     try:
                         back = arm.line(q, pinch, np.array([-dist, 0.0, 0.0]), near.is_valid,
@@ -267,4 +264,4 @@ def slide_edge(st: SimState, act: MacroAction) -> None:
     edge_pinch(st, act, before)
 
 
-__all__ = ["OVERHANG", "PAD_IN", "drag_to_edge", "edge_pinch", "pinch_pose", "slide_edge"]
+__all__ = ["drag_to_edge", "edge_pinch", "pinch_pose", "slide_edge"]
