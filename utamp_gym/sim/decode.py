@@ -32,9 +32,15 @@ TIP_CLEARANCE = 0.003  # m, fingertips stay this far above the surface the objec
 FINGER_CLEARANCE = 0.008  # m, pre-grasp opening beyond the member's width, per side
 MAX_OPENING = 0.08  # m, Panda hand fully open
 PLACE_DROP = 0.004  # m, a placed object is released this far above its support
-ACTIONS = ("pick-support", "place-support", "slide-support", "slide-edge")
-#: slide-edge (the extended domain ``utamp2x``): a pick-support's symbols
-ARITY = {"pick-support": 10, "place-support": 11, "slide-support": 13, "slide-edge": 10}
+ACTIONS = ("pick-support", "place-support", "slide-support", "slide-edge", "place-edge")
+#: slide-edge and place-edge (the extended domain ``utamp2x``): a pick's and a place's symbols
+ARITY = {
+    "pick-support": 10,
+    "place-support": 11,
+    "slide-support": 13,
+    "slide-edge": 10,
+    "place-edge": 11,
+}
 
 
 @dataclass(frozen=True)
@@ -93,7 +99,7 @@ def parse_action(action: str, scene: Scene) -> MacroAction:
         raise GroundingError(f"'{action}': palm part and finger part lie on the same axis")
     if kind in ("pick-support", "slide-edge"):
         return MacroAction(kind, grasp, support=args[7], text=action)
-    if kind == "place-support":
+    if kind in ("place-support", "place-edge"):
         return MacroAction(kind, grasp, support=args[8], support_part=args[10], text=action)
     return MacroAction(kind, grasp, support=args[6], space=args[9], text=action)
 

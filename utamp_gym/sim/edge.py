@@ -10,9 +10,9 @@ edge (behind its base, ``docs/results/edge_reach.md``), between `EDGE_Y` from it
    board's top, `PRESS` below it (the servos then press with several tens of newtons, and the
    pads' friction, `affordances.edge.PAD_FRICTION`, beats the table's), and drag it first
    sideways to the target line `EDGE_Y` from the base's axis, then back until its back side
-   overhangs the near edge by `OVERHANG`; where it lagged the hand (a few centimetres), a
-   second drag of the measured error corrects it (`DRAG_ROUNDS`). The sweep must be clear of
-   every other object.
+   overhangs the near edge by `OVERHANG` (each leg a press of its own, the fingers closing
+   across the drag); where it lagged the hand (a few centimetres), a drag of the measured
+   error corrects it (`DRAG_ROUNDS`). The sweep must be clear of every other object.
 2. Pinch (`edge_pinch`): the hand approaches horizontally from outside the table (its z
    along +x, towards the robot), the fingers open `MAX_OPENING` and closing vertically on the
    board's thickness, the pads `PAD_IN` inside the board's back end, clear of the table's
@@ -24,34 +24,50 @@ the scene's yaw) and fingers ``on``/``under``; after it the hand holds the board
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from utamp_gym.affordances.edge import BASE_CLEARANCE, EDGE_Y, OVERHANG, PAD_IN
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim import relook
 from utamp_gym.sim.control import ignoring
-from utamp_gym.sim.decode import MAX_OPENING, TIP_BELOW_TCP, MacroAction, world_aabb
+from utamp_gym.sim.decode import (
+    MAX_OPENING,
+    PLACE_DROP,
+    TIP_BELOW_TCP,
+    MacroAction,
+    footprint_centre,
+    world_aabb,
+)
 from utamp_gym.sim.grasp_phases import APPROACH, check_lift, verify_lift
 from utamp_gym.sim.measure import (
     Held,
     SimState,
     SkillFailure,
+    disturbed,
     lift_height,
     obj_pose,
     settle_objects,
     snapshot,
+    verify_on,
 )
 
 PRESS = 0.006  # m the fingertips are commanded below the board's top while dragging
 OVERHANG_TOL = 0.008  # m: an overhang this far off after the drags fails the action
 PAD_HALF = 0.00925  # m: half the pads' length along the approach
 PAD_CLEAR = 0.003  # m the pads stay short of the table's edge
+RELEASE_DROP = 0.02  # m the open hand goes down before backing off a board it let go
+RELEASE_BACKOFF = (0.06, 0.045)  # m it backs off by, in turn: the pads clear the board's end
 PINCH_BACKOFF = (0.06, 0.04, 0.03)  # m the horizontal approach starts back from the pinch
 DRAG = (0.12, 0.3)  # m/s, m/s^2
 DRAG_ROUNDS = 2
+MOVED = 0.005  # m: a board moved this far by a failed drag is not dragged along another line
 SWEEP_MARGIN = 0.01  # m another object's footprint must clear the dragged board by
 PRESS_ABOVE = 0.10  # m above the press point the hand comes down from
 HAND_DOWN = np.diag([1.0, -1.0, -1.0])
+#: (lo, hi) of the dragged board's world box -> the (x, y) error still to drag
+Aim = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 def _aabb(st: SimState, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -73,17 +89,22 @@ def target_y(lo: np.ndarray, hi: np.ndarray) -> list[float]:
     return ys
 
 
-def _sweep_clear(st: SimState, obj: str, lo: np.ndarray, hi: np.ndarray, shift: np.ndarray) -> str:
-    """The first other object whose footprint the board meets when moved by `shift` (first
-    along y, then along x), or ""."""
-    a_lo, a_hi = lo[:2].copy(), hi[:2].copy()
-    dy, dx = np.array([0.0, shift[1]]), np.array([shift[0], 0.0])
-    mid_lo, mid_hi = a_lo + dy, a_hi + dy
-    end_lo, end_hi = mid_lo + dx, mid_hi + dx
-    boxes = [
-        (np.minimum(a_lo, mid_lo), np.maximum(a_hi, mid_hi)),
-        (np.minimum(mid_lo, end_lo), np.maximum(mid_hi, end_hi)),
-    ]
+def _legs(shift: np.ndarray, y_first: bool) -> list[np.ndarray]:
+    """The drag's two straight legs (3-vectors): along y then x, or x then y."""
+    dy, dx = np.array([0.0, shift[1], 0.0]), np.array([shift[0], 0.0, 0.0])
+    return [dy, dx] if y_first else [dx, dy]
+
+
+def _in_the_way(
+    st: SimState, obj: str, lo: np.ndarray, hi: np.ndarray, legs: list[np.ndarray]
+) -> str:
+    """The first other object whose footprint the board meets when dragged along `legs`
+    (within `SWEEP_MARGIN`), or ""."""
+    a_lo, a_hi, boxes = lo[:2].copy(), hi[:2].copy(), []
+    for leg in legs:
+        b_lo, b_hi = a_lo + leg[:2], a_hi + leg[:2]
+        boxes.append((np.minimum(a_lo, b_lo), np.maximum(a_hi, b_hi)))
+        a_lo, a_hi = b_lo, b_hi
     for other in st.world.body_ids:
         if other == obj:
             continue
@@ -101,75 +122,94 @@ def _press_pose(x: float, y: float, top: float) -> np.ndarray:
     return out
 
 
-def drag_to_edge(st: SimState, obj: str) -> None:
-    """Press `obj` from above and drag it until its back end overhangs the near edge by
-    `OVERHANG` (see the module docstring); raises `GroundingError` / `SkillFailure`."""
-    arm, geoms = st.arm, st.world.geom_ids[obj]
+def press_drag(
+    st: SimState, obj: str, goal: np.ndarray, y_first: bool, aim: Aim | None = None
+) -> None:
+    """Drag `obj` until its middle (of its world box) lies at `goal` (x, y): two straight
+    legs (`y_first`: sideways first), each a press and drag (`_drag`), then a correcting
+    drag of the error `aim` measures on its world box (default: of its middle from `goal`;
+    `DRAG_ROUNDS`). `GroundingError` if an object is in the way or the arm cannot follow."""
     lo, hi = _aabb(st, obj)
+    legs = _legs(goal - (lo[:2] + hi[:2]) / 2, y_first)
+    other = _in_the_way(st, obj, lo, hi, legs)
+    if other:
+        raise GroundingError(f"{other} is in the way")
+    for leg in legs:
+        if np.abs(leg).max() >= 1e-3:
+            _drag(st, obj, leg, DRAG)
+    if aim is None:
+        aim = lambda lo, hi: goal - (lo[:2] + hi[:2]) / 2  # noqa: E731
+    for _ in range(DRAG_ROUNDS - 1):
+        if st.estimator is not None:
+            st.estimator.forget(obj)
+        err = np.array([*aim(*_aabb(st, obj)), 0.0])
+        if np.abs(err).max() >= 1e-3:
+            _drag(st, obj, err, (DRAG[0] / 2, DRAG[1]))
+
+
+def _drag(st: SimState, obj: str, leg: np.ndarray, speed: tuple[float, float]) -> None:
+    """Press `obj` at its middle with the closed fingertips, drag it by `leg` (x, y[, 0]),
+    rise and open the hand. The fingers close across the drag: along it, the board's pull
+    on the pads would slide the fingers open instead of dragging it."""
+    arm, geoms = st.arm, st.world.geom_ids[obj]
+    if st.estimator is not None:
+        st.estimator.forget(obj)
+    lo, hi = _aabb(st, obj)
+    leg = np.array([leg[0], leg[1], 0.0])
+    press = _press_pose((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2])
+    if abs(leg[1]) > abs(leg[0]):  # the fingers close along x
+        press[:3, :3] = HAND_DOWN @ np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    above = press.copy()
+    above[2, 3] += PRESS_ABOVE
+    arm.set_gripper(0.0)
+    arm.close_gripper(max_s=0.4)
+    near = arm.sync(arm.near, gap=arm.gap())
+    with ignoring(near, geoms):
+        q = next(arm.ik_solutions(above, near.is_valid), None)
+        if q is None:
+            raise GroundingError(f"IK infeasible: no configuration over {obj} to press it")
+        down = arm.line(q, above, np.array([0.0, 0.0, -PRESS_ABOVE]), near.is_valid,
+                        what=f"pressing {obj}")  # fmt: skip
+        path = arm.line(down.end, press, leg, near.is_valid, what=f"dragging {obj}")
+    arm.transfer(q, what=f"moving over {obj}")
+    arm.move_line(down, *APPROACH)
+    arm.move_line(path, *speed)
+    press[:3, 3] += leg
+    up = arm.line(arm.q(), press, np.array([0.0, 0.0, PRESS_ABOVE]), lambda _q: True,
+                  what="the retreat")  # fmt: skip
+    arm.move_line(up, *APPROACH)
+    settle_objects(st, min_s=0.05)
+
+
+def drag_to_edge(st: SimState, obj: str) -> None:
+    """Drag `obj` (`press_drag`, sideways first) until its back end overhangs the near edge
+    by `OVERHANG`, on the first line `target_y` the arm and the scene allow; raises
+    `GroundingError` / `SkillFailure`."""
+    lo, hi = _aabb(st, obj)
+    start = _true_lo(st, obj)
     edge = near_edge(st)
     tried = []
     for y in target_y(lo, hi):
-        mid = (lo + hi) / 2
-        shift = np.array([edge - OVERHANG - lo[0], y - mid[1]])
-        other = _sweep_clear(st, obj, lo, hi, shift)
-        if other:
-            tried.append(f"y {y:+.2f}: {other} is in the way")
-            continue
-        press = _press_pose(mid[0], mid[1], hi[2])
-        above = press.copy()
-        above[2, 3] += PRESS_ABOVE
-        arm.set_gripper(0.0)
-        arm.close_gripper(max_s=0.4)
-        near = arm.sync(arm.near, gap=arm.gap())
+        goal = np.array([edge - OVERHANG + (hi[0] - lo[0]) / 2, y])
+
+        def aim(lo: np.ndarray, hi: np.ndarray, y: float = y) -> np.ndarray:
+            return np.array([edge - OVERHANG - lo[0], y - (lo[1] + hi[1]) / 2])
+
         try:
-            with ignoring(near, geoms):
-                q = next(arm.ik_solutions(above, near.is_valid), None)
-                if q is None:
-                    raise GroundingError("IK infeasible: no configuration above the board")
-                down = arm.line(q, above, np.array([0.0, 0.0, -PRESS_ABOVE]), near.is_valid,
-                                what=f"pressing {obj}")  # fmt: skip
-                side = arm.line(down.end, press, np.array([0.0, shift[1], 0.0]), near.is_valid,
-                                what=f"dragging {obj} sideways")  # fmt: skip
-                turn = press.copy()
-                turn[1, 3] += shift[1]
-                back = arm.line(side.end, turn, np.array([shift[0], 0.0, 0.0]), near.is_valid,
-                                what=f"dragging {obj} to the edge")  # fmt: skip
+            press_drag(st, obj, goal, y_first=True, aim=aim)
         except GroundingError as exc:
+            if np.abs(_true_lo(st, obj) - start).max() > MOVED:
+                raise  # the drag began: no other line is tried
             tried.append(f"y {y:+.2f}: {exc}")
             continue
-        arm.transfer(q, what=f"moving over {obj}")
-        arm.move_line(down, *APPROACH)
-        arm.move_line(side, *DRAG)
-        arm.move_line(back, *DRAG)
-        hand = turn.copy()
-        hand[0, 3] += shift[0]
-        for _ in range(DRAG_ROUNDS - 1):
-            _correct(st, obj, hand, np.array([edge - OVERHANG, y]))
-        up = arm.line(arm.q(), hand, np.array([0.0, 0.0, PRESS_ABOVE]), lambda _q: True,
-                      what="the retreat")  # fmt: skip
-        arm.move_line(up, *APPROACH)
-        arm.open_gripper(MAX_OPENING, max_s=0.3)
-        settle_objects(st)
         _check_overhang(st, obj, edge)
         return
     raise GroundingError(f"cannot slide {obj} to the table's edge ({'; '.join(tried)})")
 
 
-def _correct(st: SimState, obj: str, hand: np.ndarray, want: np.ndarray) -> None:
-    """Drag the pressed board again by the error of its back end and middle (it lags the
-    hand); `hand` (the commanded press pose) is updated."""
-    if st.estimator is not None:
-        st.estimator.forget(obj)
-    lo, hi = _aabb(st, obj)
-    err = np.array([want[0] - lo[0], want[1] - (lo[1] + hi[1]) / 2, 0.0])
-    if np.abs(err).max() < 1e-3:
-        return
-    arm = st.arm
-    near = arm.sync(arm.near, gap=arm.gap())
-    with ignoring(near, st.world.geom_ids[obj]):
-        path = arm.line(arm.q(), hand, err, near.is_valid, what=f"dragging {obj} on")
-    arm.move_line(path, DRAG[0] / 2, DRAG[1])
-    hand[:3, 3] += err
+def _true_lo(st: SimState, obj: str) -> np.ndarray:
+    """The (x, y) corner of `obj`'s world box where it truly is."""
+    return world_aabb(st.world.scene.type_of(obj).bbox, obj_pose(st, obj))[0][:2]
 
 
 def _check_overhang(st: SimState, obj: str, edge: float) -> None:
@@ -254,6 +294,65 @@ def edge_pinch(
     verify_lift(st, st.held, start_obj, start_tcp, before)
 
 
+def place_edge(st: SimState, act: MacroAction) -> None:
+    """``place-edge``: lower the edge-pinched board onto the table's edge where it was picked
+    up, let go, back the hand off, and drag the board (`press_drag`, away from the edge
+    first) until its footprint centre lies on the slot's position; verify it rests there."""
+    obj, held, arm = act.grasp.obj, st.held, st.arm
+    if held is None or held.obj != obj:
+        raise SkillFailure(f"cannot place {obj}: the hand holds {held.obj if held else 'nothing'}")
+    slots = {s.name: s for s in st.world.scene.slots}
+    if act.support not in slots:
+        raise GroundingError(f"place-edge puts a board on a table slot, not on {act.support}")
+    before = snapshot(st, {obj})
+    t = st.world.scene.type_of(obj)
+    tcp = arm.tcp()
+    if tcp[0, 3] > near_edge(st) - PAD_HALF:
+        raise GroundingError(f"{obj} is not held over the table's edge")
+    bottom = float(world_aabb(t.bbox, tcp @ held.belief)[0][2])
+    down = arm.line(arm.q(), tcp, np.array([0.0, 0.0, PLACE_DROP - bottom]), lambda _q: True,
+                    what=f"lowering {obj} onto the table's edge")  # fmt: skip
+    arm.move_line(down, *APPROACH)
+    arm.open_gripper(MAX_OPENING)
+    st.held = None
+    _let_go(st, obj)
+    settle_objects(st)
+    if st.estimator is not None:
+        st.estimator.forget(obj)
+    pose = st.estimate(obj)
+    lo, hi = world_aabb(t.bbox, pose)
+    offset = footprint_centre(t, pose) - (lo[:2] + hi[:2]) / 2
+    goal = np.asarray(slots[act.support].position, dtype=float) - offset
+    press_drag(st, obj, goal, y_first=False)
+    verify_on(st, obj, act.support)
+    moved = disturbed(st, before)
+    if moved:
+        raise SkillFailure(f"placing {obj} on {act.support} disturbed the scene: {moved}")
+
+
+def _let_go(st: SimState, obj: str) -> None:
+    """With the fingers open around the board's overhang: lower the hand `RELEASE_DROP` (the
+    lower finger leaves the board's underside, the upper stays above its top), then back it
+    off along -x until the pads clear the board's end (`RELEASE_BACKOFF`)."""
+    arm = st.arm
+    near = arm.sync(arm.near, gap=arm.gap())
+    tried = []
+    with ignoring(near, st.world.geom_ids[obj]):
+        drop = arm.line(arm.q(), arm.tcp(), np.array([0.0, 0.0, -RELEASE_DROP]), near.is_valid,
+                        what="lowering the open hand")  # fmt: skip
+        for dist in RELEASE_BACKOFF:
+            try:
+                back = arm.line(drop.end, arm.kin.fk(drop.end), np.array([-dist, 0.0, 0.0]),
+                                near.is_valid, what="backing off the board")  # fmt: skip
+                break
+            except GroundingError as exc:
+                tried.append(str(exc))
+        else:
+            raise GroundingError("; ".join(dict.fromkeys(tried)))
+    arm.move_line(drop, *APPROACH)
+    arm.move_line(back, *APPROACH)
+
+
 def slide_edge(st: SimState, act: MacroAction) -> None:
     """``slide-edge``: drag the board to the near edge, pinch its overhang, lift it."""
     obj = act.grasp.obj
@@ -264,4 +363,4 @@ def slide_edge(st: SimState, act: MacroAction) -> None:
     edge_pinch(st, act, before)
 
 
-__all__ = ["drag_to_edge", "edge_pinch", "pinch_pose", "slide_edge"]
+__all__ = ["drag_to_edge", "edge_pinch", "pinch_pose", "place_edge", "press_drag", "slide_edge"]
