@@ -138,7 +138,7 @@ class Universe:
     check_flat: np.ndarray  # extended-bit indices of every fluent literal (module docstring)
     static_pre: np.ndarray  # static positive preconditions, (n_actions, static words)
     static_neg: np.ndarray  # static negative preconditions that some scene can violate
-    roles: tuple[tuple[str, str, str], ...]  # (paper action it moves like, moved, target) per action
+    roles: tuple[tuple[str, str, str], ...]  # (paper action it moves like, moved, target)
     action_objects: tuple[tuple[str, ...], ...]  # scene symbols among each action's arguments
     action_index: Mapping[str, int]
     fluent_index: Mapping[str, int]
