@@ -13,9 +13,9 @@ the payload the rules lift (`grasp_coverage.IN_PAYLOAD`).
 Physics (``--physics N``, 0: none): for every family with an instance the rule does not
 refuse for its shape (a slab: neither ``edge-slab`` nor ``edge-thickness``), each of the first
 N instances alone on the table (`grasp_coverage.lone_scene`, MuJoCo, no pose noise) is slid
-to the edge and lifted (``slide-edge``); allowed ones that succeed measure the rule's
-precision, refused ones that succeed the picks it misses. Writes ``<out>.json`` and
-``<out>.md``.
+to the edge and lifted (``slide-edge``), and if the rule allows it, put on the other slot
+(``place-edge``); allowed ones that succeed measure the rule's precision, refused ones that
+are lifted the picks it misses. Writes ``<out>.json`` and ``<out>.md``.
 """
 
 from __future__ import annotations
@@ -39,7 +39,8 @@ from utamp_gym.kitchenware import FAMILIES, generate
 from utamp_gym.provenance import commit, write_json, write_markdown
 
 SHAPE_RULES = ("edge-slab", "edge-thickness")
-ACTION = "(slide-edge obj obj-body back on under under on slot1 under on)"
+SLIDE = "(slide-edge obj obj-body back on under back on slot1 under on)"
+PLACE = "(place-edge obj obj-body back on under back on under slot2 back on)"
 
 
 def rules_table(n: int) -> dict[str, dict[str, Any]]:
@@ -99,8 +100,11 @@ def physics_table(n: int, families: list[str]) -> list[dict[str, Any]]:
                     case.update(ok=False, reason=f"scene: {exc}")
                     cases.append(case)
                     continue
-                res = sim.execute(ACTION)
-                case.update(ok=res.success, reason=res.reason or "")
+                res = sim.execute(SLIDE)
+                case.update(ok=res.success, reason=res.reason or "", placed=False)
+                if res.success and refusal is None:  # allowed: put on the other slot too
+                    placed = sim.execute(PLACE)
+                    case.update(placed=placed.success, place_reason=placed.reason or "")
                 cases.append(case)
                 verdict = "allowed" if refusal is None else refusal.rule
                 outcome = "ok" if res.success else res.reason
@@ -143,13 +147,14 @@ def markdown(data: dict[str, Any]) -> str:
         lines += [
             "",
             f"Physics, each of the first {m} instances alone on the table (MuJoCo, no pose "
-            "noise), slid to the edge, pinched and lifted: allowed by the rule, succeeded "
-            f"(target ≥ {TARGET:.0%}); refused (beyond the shape), succeeded anyway "
+            "noise), slid to the edge, pinched and lifted (`slide-edge`): allowed by the rule, "
+            "lifted, then put on the other slot (`place-edge`) "
+            f"(target ≥ {TARGET:.0%}); refused (beyond the shape), lifted anyway "
             f"(target ≤ {FORBIDDEN_TARGET:.0%}).",
             "",
-            "| family | allowed: lifted | refused: lifted anyway | moments lifted (N m) "
-            "| moments failed (N m) |",
-            "|---|---|---|---|---|",
+            "| family | allowed: lifted | allowed: lifted and placed | refused: lifted anyway "
+            "| moments lifted (N m) | moments failed (N m) |",
+            "|---|---|---|---|---|---|",
         ]
         for fam in dict.fromkeys(c["family"] for c in data["physics"]):
             cs = [c for c in data["physics"] if c["family"] == fam]
@@ -160,14 +165,15 @@ def markdown(data: dict[str, Any]) -> str:
             span = lambda xs: f"{min(xs):.2f}–{max(xs):.2f}" if xs else "–"  # noqa: E731
             lines.append(
                 f"| {fam} | {_share(sum(c['ok'] for c in allowed), len(allowed))} | "
+                f"{_share(sum(c['placed'] for c in allowed), len(allowed))} | "
                 f"{_share(sum(c['ok'] for c in refused), len(refused))} | {span(ok)} | "
                 f"{span(bad)} |"
             )
-        fails = [c for c in data["physics"] if c["allowed"] and not c["ok"]]
+        fails = [c for c in data["physics"] if c["allowed"] and not c["placed"]]
         if fails:
-            lines += ["", "Allowed slides physics failed:", ""]
-            lines += [f"- {c['family']} {c['seed']} ({c['moment']:.2f} N m): {c['reason']}"
-                      for c in fails]  # fmt: skip
+            lines += ["", "Allowed slides and placements physics failed:", ""]
+            lines += [f"- {c['family']} {c['seed']} ({c['moment']:.2f} N m): "
+                      f"{c['reason'] or c.get('place_reason', '')}" for c in fails]  # fmt: skip
     lines.append("")
     return "\n".join(lines)
 
