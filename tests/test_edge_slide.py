@@ -142,3 +142,41 @@ def test_a_board_the_rule_refuses_for_its_moment_slips_in_the_pads():
     slid, _ = _run("paddle-board", 1, (SLIDE,))
     assert not slid.success
     assert "not liftable" in (slid.reason or "")
+
+
+@pytest.mark.parametrize("grounding", ["symbolic", pytest.param("physics", marks=physics)])
+def test_the_env_takes_the_edge_actions_in_the_extended_domain(tmp_path: Any, grounding: str):
+    """A bread board of a scene file (the env's ``board`` row) reaches the other slot through
+    the env's action strings, as planned (slide-edge, place-edge)."""
+    import tomli_w
+
+    from utamp_gym.env.kitchen import UTampKitchenEnv
+
+    table = type_table(family("chopping-board"), draw(family("chopping-board"), "v1", 1))
+    scene = {
+        "name": "edge-board", "types": {"bread-board": table},
+        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
+        "slots": [
+            {"name": "slot1", "position": [0.5, -0.18], "min": [0.2, -0.5], "max": [0.8, 0.08]},
+            {"name": "slot2", "position": [0.5, 0.3], "min": [0.2, 0.08], "max": [0.8, 0.6]},
+        ],
+        "objects": [{"name": "board", "type": "bread-board", "on": "slot1"}],
+        "goal_base": "board", "goal": {"atoms": ["(oc under board slot2)"]},
+    }  # fmt: skip
+    path = tmp_path / "edge-board.toml"
+    path.write_text(tomli_w.dumps(scene))
+    env = UTampKitchenEnv(
+        grounding=grounding, scene=str(path), domain="utamp2x", affordances="rules"
+    )
+    try:
+        env.reset(seed=0)
+        plan = [SLIDE.replace("obj ", "board ").replace("obj-", "board-"),
+                PLACE.replace("obj ", "board ").replace("obj-", "board-")]  # fmt: skip
+        assert set(plan) <= set(env.universe.actions)
+        rewards = []
+        for action in plan:
+            _, reward, terminated, _, _ = env.step(env.universe.action_index[action])
+            rewards.append(reward)
+        assert rewards == [0.0, 1.0] and terminated
+    finally:
+        env.close()
