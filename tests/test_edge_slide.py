@@ -15,9 +15,9 @@ import pytest
 from utamp_gym.affordances.edge import (
     COM_MARGIN,
     EDGE_GRASP,
-    EDGE_TORQUE_LIMIT,
     OVERHANG,
     edge_pinch_refusal,
+    edge_torque_limit,
 )
 from utamp_gym.affordances.rules import derive_affordances, object_facts
 from utamp_gym.kitchenware import family, generate, type_table
@@ -72,14 +72,13 @@ def test_the_rule_decides_from_geometry_not_from_a_name():
     assert edge_pinch_refusal(generate("plate", "v1", 0)).rule == "edge-slab"
 
 
-def test_the_moment_about_the_pinch_bounds_the_lift():
-    refused = [
-        r
-        for s in range(40)
-        if (r := edge_pinch_refusal(generate("paddle-board", "v1", s))) is not None
-    ]
-    assert refused and all(r.rule == "torque" for r in refused)
-    assert all(r.values["moment"] > EDGE_TORQUE_LIMIT for r in refused)
+def test_the_moment_about_the_pinch_bounds_the_lift_by_the_boards_thickness():
+    boards = [generate("paddle-board", "v1", s) for s in range(40)]
+    refused = [(t, r) for t in boards if (r := edge_pinch_refusal(t)) is not None]
+    assert refused and all(r.rule == "torque" for _, r in refused)
+    assert all(r.values["moment"] > edge_torque_limit(t.bbox.size[2]) for t, r in refused)
+    # the pads' friction couple grows with the thickness they close across
+    assert edge_torque_limit(0.01) < edge_torque_limit(0.02) < edge_torque_limit(0.03)
 
 
 def test_the_centre_of_mass_must_stay_on_the_table_while_the_board_overhangs():

@@ -20,7 +20,7 @@ mass alone, never from a family or a type name:
 * it fits the drag line: its half-width leaves `BASE_CLEARANCE` to the base's axis at the
   farthest line `EDGE_Y`;
 * lifting it: at most `EDGE_LIFT_LIMIT`, and the moment of its weight about the pinch within
-  `EDGE_TORQUE_LIMIT`.
+  what the pads' friction couple across its thickness bears (`edge_torque_limit`).
 
 The facts: ``canEdgePinch`` (the grasp body/back/on/under, lifting included) and
 ``canSlideEdge`` from each fixed flat top it rests on (`edge_slide_facts`). What the skill
@@ -34,7 +34,13 @@ from collections.abc import Iterable
 
 from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT
 from utamp_gym.affordances.facts import Fact
-from utamp_gym.affordances.hand import GRIPPER_OPENING, OPEN_CLEARANCE, PAD_WIDTH, G
+from utamp_gym.affordances.hand import (
+    GRIPPER_OPENING,
+    OPEN_CLEARANCE,
+    PAD_HEIGHT,
+    PAD_WIDTH,
+    G,
+)
 from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.affordances.why import REFUSED, Refusal
 from utamp_gym.scene.catalogue import ObjectType
@@ -57,9 +63,12 @@ COM_MARGIN = 0.02  # m the centre of mass stays inside the table's edge
 PAD_FRICTION, TABLE_FRICTION = 1.5, 0.5  # the simulator's finger pads, table and objects
 PRESS_FORCE = 40.0  # N the pressing fingertips bear down with at least (60-130 N measured)
 EDGE_LIFT_LIMIT = EXTENDED_LIFT_LIMIT  # kg
-#: N m about the pinch (chopping boards held 3.0 N m; a 2.2 cm paddle board's handle slipped
-#: at 2.6): calibrated by `benchmarks/edge_slide.py`
-EDGE_TORQUE_LIMIT = 2.4
+GRIP_FORCE = 70.0  # N each pad squeezes with (`utamp_gym.robot.panda_mjcf.GRIPPER_FORCE`)
+#: the pads on the board's top and bottom resist its turning (`edge_torque_limit`) by their
+#: squeeze shifting to their ends (`GRIP_FORCE` x half the pad's length along the board) and by
+#: the couple of their friction across its thickness, of which this share holds: calibrated
+#: on every board of procedural v1 slid to the edge (`benchmarks/edge_slide.py`)
+EDGE_COUPLE_SHARE = 0.65
 
 
 def _no(rule: str, why: bool, **values: object) -> Refusal:
@@ -112,10 +121,17 @@ def edge_pinch_refusal(t: ObjectType, why: bool = True) -> Refusal | None:
     pinch_y = float(solid[0].box.center_xy[1])
     lever = math.hypot(cx - (x0 + PAD_IN), cy - pinch_y)
     moment = t.mass * G * lever
-    if moment > EDGE_TORQUE_LIMIT:
+    limit = edge_torque_limit(thick)
+    if moment > limit:
         return _no("torque", why, member=solid[0].name, mass=t.mass, lever=lever,
-                   moment=moment, limit=EDGE_TORQUE_LIMIT)  # fmt: skip
+                   moment=moment, limit=limit)  # fmt: skip
     return None
+
+
+def edge_torque_limit(thickness: float) -> float:
+    """N m about an edge pinch a board `thickness` m thick bears: ``F (L / 2 + s mu h)``, F
+    the squeeze, L the pads' length, mu their friction, s `EDGE_COUPLE_SHARE`."""
+    return GRIP_FORCE * (PAD_HEIGHT / 2 + EDGE_COUPLE_SHARE * PAD_FRICTION * thickness)
 
 
 def edge_facts(t: ObjectType) -> set[Fact]:
@@ -145,12 +161,13 @@ def edge_slide_facts(types: Iterable[ObjectType], facts: Iterable[Fact]) -> set[
 
 __all__ = [
     "BASE_CLEARANCE",
+    "EDGE_COUPLE_SHARE",
     "EDGE_GRASP",
-    "EDGE_TORQUE_LIMIT",
     "EDGE_Y",
     "OVERHANG",
     "PAD_IN",
     "edge_facts",
     "edge_pinch_refusal",
     "edge_slide_facts",
+    "edge_torque_limit",
 ]

@@ -24,6 +24,7 @@ the scene's yaw) and fingers ``on``/``under``; after it the hand holds the board
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 
 import numpy as np
@@ -57,8 +58,9 @@ PRESS = 0.006  # m the fingertips are commanded below the board's top while drag
 OVERHANG_TOL = 0.008  # m: an overhang this far off after the drags fails the action
 PAD_HALF = 0.00925  # m: half the pads' length along the approach
 PAD_CLEAR = 0.003  # m the pads stay short of the table's edge
-RELEASE_DROP = 0.02  # m the open hand goes down before backing off a board it let go
-RELEASE_BACKOFF = (0.06, 0.045)  # m it backs off by, in turn: the pads clear the board's end
+RELEASE_DROP = (0.01, 0.005, 0.0)  # m the open hand goes down before backing off, in turn
+#: m it then backs off by, in turn: the pads (`PAD_IN` + `PAD_HALF` in) clear the board's end
+RELEASE_BACKOFF = (0.05, 0.04, 0.035)
 PINCH_BACKOFF = (0.06, 0.04, 0.03)  # m the horizontal approach starts back from the pinch
 DRAG = (0.12, 0.3)  # m/s, m/s^2
 DRAG_ROUNDS = 2
@@ -309,8 +311,10 @@ def place_edge(st: SimState, act: MacroAction) -> None:
     tcp = arm.tcp()
     if tcp[0, 3] > near_edge(st) - PAD_HALF:
         raise GroundingError(f"{obj} is not held over the table's edge")
-    bottom = float(world_aabb(t.bbox, tcp @ held.belief)[0][2])
-    down = arm.line(arm.q(), tcp, np.array([0.0, 0.0, PLACE_DROP - bottom]), lambda _q: True,
+    # the pinched end down to the table (the far end, drooping, lands first and the board
+    # turns level in the pads): the lower finger then leaves its underside as the hand opens
+    level = float(t.bbox.size[2]) / 2 + PLACE_DROP
+    down = arm.line(arm.q(), tcp, np.array([0.0, 0.0, level - tcp[2, 3]]), lambda _q: True,
                     what=f"lowering {obj} onto the table's edge")  # fmt: skip
     arm.move_line(down, *APPROACH)
     arm.open_gripper(MAX_OPENING)
@@ -331,17 +335,18 @@ def place_edge(st: SimState, act: MacroAction) -> None:
 
 
 def _let_go(st: SimState, obj: str) -> None:
-    """With the fingers open around the board's overhang: lower the hand `RELEASE_DROP` (the
-    lower finger leaves the board's underside, the upper stays above its top), then back it
-    off along -x until the pads clear the board's end (`RELEASE_BACKOFF`)."""
+    """With the fingers open around the board's overhang: lower the hand by one of
+    `RELEASE_DROP` (the lower finger clear of the board's underside, the upper still above
+    its top), then back it off along -x by one of `RELEASE_BACKOFF` (the pads clear of the
+    board's end), the first pair the arm reaches."""
     arm = st.arm
     near = arm.sync(arm.near, gap=arm.gap())
     tried = []
     with ignoring(near, st.world.geom_ids[obj]):
-        drop = arm.line(arm.q(), arm.tcp(), np.array([0.0, 0.0, -RELEASE_DROP]), near.is_valid,
-                        what="lowering the open hand")  # fmt: skip
-        for dist in RELEASE_BACKOFF:
+        for drop_by, dist in itertools.product(RELEASE_DROP, RELEASE_BACKOFF):
             try:
+                drop = arm.line(arm.q(), arm.tcp(), np.array([0.0, 0.0, -drop_by]),
+                                near.is_valid, what="lowering the open hand")  # fmt: skip
                 back = arm.line(drop.end, arm.kin.fk(drop.end), np.array([-dist, 0.0, 0.0]),
                                 near.is_valid, what="backing off the board")  # fmt: skip
                 break
