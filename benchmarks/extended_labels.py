@@ -6,10 +6,11 @@
 Every scene of the splits whose goal procedural-v1 labels unachievable (the rules under the
 paper's domain, ``utamp2``) is planned with Fast Downward twice: with ``utamp2-rules`` (the
 label must hold: unsolvable) and with ``utamp2x-rules`` (the extended domain's rim pinches,
-`utamp_gym.affordances.rim`). Reported per split: how many become achievable, the families
-of the objects the extended rules newly let the hand lift in those scenes, and how their
-utamp2x plans fare executed open loop in MuJoCo (``--seeds`` runs each, the default pose
-noise). The labels themselves are not changed. Writes ``<out>.json`` and ``<out>.md``.
+`utamp_gym.affordances.rim`, and boards slid to the table's edge, `utamp_gym.affordances.edge`).
+Reported per split: how many become achievable, the families of the objects the extended
+rules newly let the hand lift in those scenes, and how their utamp2x plans fare executed open
+loop in MuJoCo (``--seeds`` runs each, the default pose noise). The labels themselves are not
+changed. Writes ``<out>.json`` and ``<out>.md``.
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ from utamp_gym.suites.procedural.spec import SPLITS
 
 
 def _lifts(t: Any, extended: bool) -> bool:
-    return any(f[0] == "canLift" for f in object_facts(t, extended))
+    """A ``canLift`` fact, or in the extended domain a board's edge pinch (``canEdgePinch``)."""
+    return any(f[0] in ("canLift", "canEdgePinch") for f in object_facts(t, extended))
 
 
 def measure(split: str, seeds: int) -> dict[str, Any]:
@@ -83,7 +85,8 @@ def main() -> None:
         "",
         "procedural-v1 scenes labelled unachievable (the rules under the paper's domain), "
         "planned with Fast Downward under `utamp2-rules` (the label must still hold) and "
-        "`utamp2x-rules` (the extended domain's rim pinches and handle moments). The labels "
+        "`utamp2x-rules` (the extended domain's rim pinches, handle moments and boards slid to "
+        "the table's edge). The labels "
         "are unchanged. A scene stays unachievable when some object cannot be lifted or when "
         "the objects cannot be stacked in one tower (what carries what).",
         "",

@@ -10,11 +10,17 @@ under the paper's domain (``utamp2``) and the extended one (``utamp2x``: rim pin
 rules lift (`PAYLOAD` x `LIFT_FRACTION`). ``--base`` measures the paper's domain again on an
 earlier commit, checked out as a detached worktree for the run ("before").
 
+The extended domain lifts flat boards also by sliding them to the table's edge and pinching
+them there (``canEdgePinch``, `utamp_gym.affordances.edge`): "utamp2x + edge" counts them;
+`benchmarks/edge_slide.py` measures that action in physics.
+
 Physics (``--physics N``, 0: none): each of the first N instances alone on the table (one
 object, two slots) in MuJoCo, without pose noise. Every grasp from above that the extended
-rules allow is picked and placed on the other slot (precision: both succeed); every other
-grasp from above the hand could close on (each member, each finger pair) is picked
-(recall: the share of forbidden picks physics lifts). Writes ``<out>.json`` and ``<out>.md``.
+rules allow is picked and placed on a slot the scene's rules grant it (the other slot, else
+back on its own: `symbolic.slots.admits`, whose reach geometry the placement shares; none:
+only picked) (precision: both succeed); every other grasp from above the hand could close on
+(each member, each finger pair) is picked (recall: the share of forbidden picks physics
+lifts). Writes ``<out>.json`` and ``<out>.md``.
 """
 
 from __future__ import annotations
@@ -37,6 +43,7 @@ from utamp_gym.kitchenware.params import draw
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.scene.model import Scene
+from utamp_gym.symbolic.slots import admits
 
 IN_PAYLOAD = PAYLOAD * LIFT_FRACTION  # kg
 TARGET, FORBIDDEN_TARGET = 0.98, 0.05
@@ -63,9 +70,13 @@ def rules_table(n: int) -> dict[str, dict[str, int]]:
             row["n"] += 1
             row["in_payload"] += inside
             for domain, ext in (("utamp2", False), ("utamp2x", True)):
-                lift = any(f[0] == "canLift" for f in object_facts(t, ext))
+                facts = object_facts(t, ext)
+                lift = any(f[0] == "canLift" for f in facts)
                 row[domain] += lift
                 row[f"{domain}_in_payload"] += lift and inside
+            edge = lift or any(f[0] == "canEdgePinch" for f in facts)  # utamp2x's facts
+            row["utamp2x_edge"] += edge
+            row["utamp2x_edge_in_payload"] += edge and inside
         out[fam] = dict(row)
     return out
 
@@ -114,8 +125,17 @@ def candidates(fam: str, seed: int) -> list[tuple[str, str, str, bool]]:
     return out
 
 
-def try_grasp(sim: Any, fam: str, seed: int, member: str, f1: str, f2: str, place: bool) -> str:
-    """ "" if the pick (and `place`: the placement on slot2) succeeded, else why not."""
+def place_slot(fam: str, seed: int) -> str:
+    """The slot the scene's rules grant the lone instance (`symbolic.slots.admits`, resting
+    on its ``under``): slot2, else slot1 (put back), else "" (none: it is only picked)."""
+    scene = lone_scene(fam, seed)
+    t = scene.type_of("obj")
+    return next((s.name for s in (scene.slot("slot2"), scene.slot("slot1"))
+                 if admits(scene, s, t, "under")), "")  # fmt: skip
+
+
+def try_grasp(sim: Any, fam: str, seed: int, member: str, f1: str, f2: str, place: str) -> str:
+    """ "" if the pick (and the placement on slot `place`, if any) succeeded, else why not."""
     import numpy as np
 
     try:
@@ -126,7 +146,7 @@ def try_grasp(sim: Any, fam: str, seed: int, member: str, f1: str, f2: str, plac
     res = sim.execute(f"(pick-support {grasp} slot1 under on)")
     if not res.success or not place:
         return "" if res.success else res.reason or "failed"
-    res = sim.execute(f"(place-support {grasp} under slot2 under on)")
+    res = sim.execute(f"(place-support {grasp} under {place} under on)")
     return "" if res.success else res.reason or "failed"
 
 
@@ -140,13 +160,16 @@ def physics_table(n: int) -> tuple[dict[str, dict[str, int]], list[dict[str, Any
         for fam in FAMILIES:
             row = defaultdict(int)
             for seed in range(n):
+                slot = place_slot(fam, seed)
                 for member, f1, f2, allowed in candidates(fam, seed):
-                    why = try_grasp(sim, fam, seed, member, f1, f2, place=allowed)
+                    why = try_grasp(sim, fam, seed, member, f1, f2, slot if allowed else "")
                     if why.startswith("scene:"):
                         row["scene_errors"] += 1
                         continue
                     key = "allowed" if allowed else "forbidden"
                     row[key] += 1
+                    row["placed_back"] += allowed and slot == "slot1"
+                    row["pick_only"] += allowed and not slot
                     row[f"{key}_ok"] += not why
                     if allowed and why:
                         cases.append({"family": fam, "seed": seed, "member": member,
@@ -172,10 +195,12 @@ def markdown(data: dict[str, Any]) -> str:
         f'(`object_facts` on `generate(family, "v1", seed)`). In payload: mass at most '
         f"{IN_PAYLOAD:.1f} kg, what the rules lift with a wrapping grasp. Before: the paper's "
         f"domain at commit `{data['base']}`; utamp2: the paper's domain on this commit; "
-        "utamp2x: the extended domain (rim pinches).",
+        "utamp2x: the extended domain (rim pinches); + edge: with boards slid to the table's "
+        "edge and pinched there (`slide-edge`, `docs/results/edge_slide.md`).",
         "",
-        "| family | in payload | before (utamp2) | utamp2 | utamp2x | utamp2x, all |",
-        "|---|---|---|---|---|---|",
+        "| family | in payload | before (utamp2) | utamp2 | utamp2x | utamp2x + edge "
+        "| utamp2x + edge, all |",
+        "|---|---|---|---|---|---|---|",
     ]
     for fam, r in data["rules"].items():
         b = data["before"].get(fam, {}) if data["before"] else {}
@@ -183,19 +208,24 @@ def markdown(data: dict[str, Any]) -> str:
         lines.append(
             f"| {fam} | {r['in_payload']}/{r['n']} | {before} | "
             f"{_share(r['utamp2_in_payload'], r['in_payload'])} | "
-            f"{_share(r['utamp2x_in_payload'], r['in_payload'])} | {_share(r['utamp2x'], r['n'])} |"
+            f"{_share(r['utamp2x_in_payload'], r['in_payload'])} | "
+            f"{_share(r['utamp2x_edge_in_payload'], r['in_payload'])} | "
+            f"{_share(r['utamp2x_edge'], r['n'])} |"
         )
     if data["physics"]:
         m = data["physics_instances"]
         lines += [
             "",
             f"Physics, each of the first {m} instances alone on the table (MuJoCo, no pose "
-            "noise): every grasp from above the extended rules allow, picked and placed "
+            "noise): every grasp from above the extended rules allow, picked and placed on the "
+            "other slot, or back on its own where the scene's rules grant only that (placed "
+            "back), or only picked where they grant neither (pick only) "
             f"(target ≥ {TARGET:.0%}); every other grasp from above, picked (physics lifting "
             f"it is a pick the rules miss; target ≤ {FORBIDDEN_TARGET:.0%}).",
             "",
-            "| family | allowed: picked and placed | forbidden: lifted anyway |",
-            "|---|---|---|",
+            "| family | allowed: picked and placed | of them placed back, pick only "
+            "| forbidden: lifted anyway |",
+            "|---|---|---|---|",
         ]
         tot = defaultdict(int)
         for fam, r in data["physics"].items():
@@ -203,10 +233,11 @@ def markdown(data: dict[str, Any]) -> str:
                 tot[k] += r.get(k, 0)
             lines.append(
                 f"| {fam} | {_share(r.get('allowed_ok', 0), r.get('allowed', 0))} | "
+                f"{r.get('placed_back', 0)}, {r.get('pick_only', 0)} | "
                 f"{_share(r.get('forbidden_ok', 0), r.get('forbidden', 0))} |"
             )
         lines.append(
-            f"| **all** | {_share(tot['allowed_ok'], tot['allowed'])} | "
+            f"| **all** | {_share(tot['allowed_ok'], tot['allowed'])} | | "
             f"{_share(tot['forbidden_ok'], tot['forbidden'])} |"
         )
         if data["failures"]:

@@ -125,11 +125,20 @@ def test_a_tray_held_at_an_end_handle_along_its_lever_keeps_the_paper_limit():
     assert ("canLift", tray.name, "handle-front") not in object_facts(tray, True)
 
 
-def test_the_extended_domain_is_the_paper_domain_by_another_name():
+def test_the_extended_domain_is_the_paper_domain_by_another_name_and_the_edge_actions():
+    """utamp2x is utamp2 renamed, with two more static predicates and the edge actions
+    appended (`tests/test_edge_slide.py`): the paper's three actions are unchanged."""
     assert "utamp2x" in DOMAINS
     paper, extended = domain_text("utamp2"), domain_text("utamp2x")
     body = extended[extended.index("(define") :]
-    assert body == paper[paper.index("(define") :].replace("(domain utamp2)", "(domain utamp2x)")
+    renamed = paper[paper.index("(define") :].replace("(domain utamp2)", "(domain utamp2x)")
+    preds_end = renamed.index("?o2-o1 - part))") + len("?o2-o1 - part)")
+    assert body.startswith(renamed[:preds_end])
+    head, _, rest = body[preds_end:].partition("\n  ; Grasp ?obj1")
+    assert "canEdgePinch" in head and "canSlideEdge" in head and ":action" not in head
+    paper_actions = renamed[renamed.index("\n  ; Grasp ?obj1") : renamed.rindex(")")].rstrip()
+    assert ("\n  ; Grasp ?obj1" + rest).startswith(paper_actions)
+    assert "(:action slide-edge" in rest and "(:action place-edge" in rest
 
 
 # ------------------------------------------------------------------ scenes

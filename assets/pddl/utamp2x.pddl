@@ -1,8 +1,10 @@
 ; U-TAMP-2x: U-TAMP-2 with the grasps a real Panda makes beyond the paper's (extended domain).
-; The same types, predicates and actions as utamp2.pddl; its problems carry the affordance
-; facts of the extended rules, which the paper's domain never sees: a bowl's, a pot's, a
-; tumbler's or a plate's wall pinched at the rim from above (utamp_gym.affordances.rim), and
-; a handle holding a heavier moment (utamp_gym.affordances.hand.EXTENDED_TORQUE_LIMIT).
+; The same types, predicates and actions as utamp2.pddl, and two more actions; its problems
+; carry the affordance facts of the extended rules, which the paper's domain never sees: a
+; bowl's, a pot's, a tumbler's or a plate's wall pinched at the rim from above
+; (utamp_gym.affordances.rim), a handle holding a heavier moment
+; (utamp_gym.affordances.hand.EXTENDED_TORQUE_LIMIT), and a flat board slid to the table's
+; edge and pinched there (slide-edge and place-edge, utamp_gym.affordances.edge).
 ; U-TAMP-2: Unified TAMP with inter-object affordances (Niaz, Piater, Agostini).
 ; Predicates of Table I; StableGrasp / StablePick / StablePlace / StableSlide of Table II.
 ; Objects are physical objects, their members (body, handle, edges), table slots,
@@ -28,7 +30,9 @@
     (canGraspFrom ?obj1 - obj ?o1-mem - obj ?o1m-hp - part ?o1m-hf1 - part ?o1m-hf2 - part)
     (isGraspFrom ?obj1 - obj ?o1-mem - obj ?o1m-hp - part ?o1m-hf1 - part ?o1m-hf2 - part)
     (canLift ?obj1 - obj ?o1-mem - obj)
-    (canSlide ?obj1 - obj ?obj2 - obj ?o1-o2 - part ?o2-o1 - part))
+    (canSlide ?obj1 - obj ?obj2 - obj ?o1-o2 - part ?o2-o1 - part)
+    (canEdgePinch ?obj1 - obj ?o1-mem - obj ?o1m-hp - part ?o1m-hf1 - part ?o1m-hf2 - part)
+    (canSlideEdge ?obj1 - obj ?obj2 - obj ?o1-o2 - part ?o2-o1 - part))
 
   ; Grasp ?obj1 by its member ?o1-mem (palm on ?o1-hp, fingers on ?o1-hf1/?o1-hf2)
   ; and lift it off its support ?obj2.
@@ -136,4 +140,58 @@
       (oc in workspace ?obj1)
       ; sliding brings every member of ?obj1 into the workspace with it
       (forall (?m - obj) (when (isMember ?obj1 ?m) (oc in workspace ?m)))))
+
+  ; Press the flat ?obj1 from above and drag it across its fixed support ?obj2 until it
+  ; overhangs the table's edge, pinch the overhang (palm on ?o1-hp, the fingers closing on
+  ; ?o1-hf1/?o1-hf2, its top and bottom) and lift it: the hand then holds it.
+  (:action slide-edge
+    :parameters (?obj1 - obj ?o1-mem - obj ?o1-hp - part ?o1-hf1 - part ?o1-hf2 - part
+                 ?o1-base - part ?o1-force - part ?obj2 - obj ?o1-o2 - part ?o2-o1 - part)
+    :precondition (and
+      (isMember ?obj1 ?o1-mem)
+      (oc in workspace ?o1-mem)
+      (base ?obj1 ?o1-base)
+      (canEdgePinch ?obj1 ?o1-mem ?o1-hp ?o1-hf1 ?o1-hf2)
+      (oc in hand air)
+      ; nothing stands on ?obj1; it rests on ?obj2, across which it can be dragged
+      (force ?obj1 ?o1-force)
+      (oc ?o1-force ?obj1 air)
+      (oc ?o1-o2 ?obj1 ?obj2)
+      (oc ?o2-o1 ?obj2 ?obj1)
+      (canSlideEdge ?obj1 ?obj2 ?o1-o2 ?o2-o1))
+    :effect (and
+      (not (oc in hand air)) (oc in hand ?obj1)
+      (isGraspFrom ?obj1 ?o1-mem ?o1-hp ?o1-hf1 ?o1-hf2)
+      (not (oc ?o1-o2 ?obj1 ?obj2)) (oc ?o1-o2 ?obj1 air)
+      (not (oc ?o2-o1 ?obj2 ?obj1)) (oc ?o2-o1 ?obj2 air)))
+
+  ; Put the edge-pinched ?obj1 down on the table's edge and drag it onto the fixed ?obj2
+  ; (a table slot), resting on its part ?o1-o2.
+  (:action place-edge
+    :parameters (?obj1 - obj ?o1-mem - obj ?o1-hp - part ?o1-hf1 - part ?o1-hf2 - part
+                 ?o1-base - part ?o1-force - part ?o1-o2 - part
+                 ?obj2 - obj ?o2-base - part ?o2-o1 - part)
+    :precondition (and
+      (oc in hand ?obj1)
+      (isMember ?obj1 ?o1-mem)
+      (isGraspFrom ?obj1 ?o1-mem ?o1-hp ?o1-hf1 ?o1-hf2)
+      (canEdgePinch ?obj1 ?o1-mem ?o1-hp ?o1-hf1 ?o1-hf2)
+      (force ?obj1 ?o1-force)
+      (isOpposite ?o1-o2 ?o1-force)
+      (oc ?o1-o2 ?obj1 air)
+      (base ?obj1 ?o1-base)
+      (isAdjacent ?o1-base ?o1-o2)
+      (oc in workspace ?obj2)
+      (base ?obj2 ?o2-base)
+      (isAdjacent ?o2-base ?o2-o1)
+      (oc ?o2-o1 ?obj2 air)
+      (force ?obj2 ?o2-o1)
+      (canSlideEdge ?obj1 ?obj2 ?o1-o2 ?o2-o1)
+      (isP2PSupportive ?o2-o1 ?obj2 ?o1-o2 ?obj1)
+      (not (isObjEqual ?obj1 ?obj2)))
+    :effect (and
+      (not (oc in hand ?obj1)) (oc in hand air)
+      (not (isGraspFrom ?obj1 ?o1-mem ?o1-hp ?o1-hf1 ?o1-hf2))
+      (not (oc ?o1-o2 ?obj1 air)) (oc ?o1-o2 ?obj1 ?obj2)
+      (not (oc ?o2-o1 ?obj2 air)) (oc ?o2-o1 ?obj2 ?obj1)))
 )

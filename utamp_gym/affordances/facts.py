@@ -8,6 +8,12 @@ A fact is a tuple whose first entry is the predicate of the paper's Table I:
 * ``("canGraspFrom", type, member, palm, finger1, finger2)``
 * ``("canLift", type, member)``
 * ``("canSlide", type1, type2, part1, part2)`` – type1 slides on its part1 across part2 of type2
+
+and, in the extended domain ``utamp2x`` only (`utamp_gym.affordances.edge`, `EXTENDED`):
+
+* ``("canEdgePinch", type, member, palm, finger1, finger2)`` – slid to the table's edge and
+  pinched there, it lifts
+* ``("canSlideEdge", type1, type2, part1, part2)`` – type1 is dragged to the edge across type2
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ PREDICATES = (
     "canLift",
     "canSlide",
 )
+EXTENDED = ("canEdgePinch", "canSlideEdge")  # the extended domain's
 
 
 def fact_types(fact: Fact) -> tuple[str, ...]:
@@ -38,7 +45,7 @@ def fact_types(fact: Fact) -> tuple[str, ...]:
     pred = fact[0]
     if pred == "isP2PSupportive":
         return (fact[2], fact[4])
-    if pred == "canSlide":
+    if pred in ("canSlide", "canSlideEdge"):
         return (fact[1], fact[2])
     return (fact[1],)
 

@@ -44,6 +44,7 @@ import math
 from collections.abc import Iterable
 
 from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, low_cover, lug_wall
+from utamp_gym.affordances.edge import edge_facts, edge_slide_facts
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.hand import (
     EXTENDED_TORQUE_LIMIT,
@@ -285,6 +286,8 @@ def object_facts(t: ObjectType, extended: bool = False, calibrated: bool = True)
         for member, palm, f1, f2 in rim_pinches(t, calibrated):
             facts.add(("canGraspFrom", t.name, member, palm, f1, f2))
             facts.add(("canLift", t.name, member))
+    if more:  # slid to the table's edge and pinched there (`utamp_gym.affordances.edge`)
+        facts |= edge_facts(t)
     return facts
 
 
@@ -316,4 +319,5 @@ def derive_affordances(
                     flat = t1.parts[p1].shape == "flat" and t2.parts[p2].shape == "flat"
                     if flat and ("isP2PSupportive", p2, t2.name, p1, t1.name) in facts:
                         facts.add(("canSlide", t1.name, t2.name, p1, p2))
+    facts |= edge_slide_facts(types, facts)
     return frozenset(facts)

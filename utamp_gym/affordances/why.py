@@ -84,6 +84,18 @@ TEMPLATES: dict[str, str] = {
         "the pads would meet it along a line and it would pivot between them"
     ),
     "rim-payload": "mass {mass:.2f} kg > {limit:.2f} kg, what a rim pinch lifts",
+    "edge-slab": "no slab to slide to the table's edge and pinch there: {what}",
+    "edge-thickness": "{thickness:cm} cm thick, outside {limits:cm2} cm an edge pinch closes on",
+    "edge-end": ("its back end ({member}) is no solid slab the pads close on over {depth:cm} cm"),
+    "edge-com": (
+        "overhanging the table's edge, its centre of mass would lie {inside:cm} cm inside "
+        "it (< {margin:cm} cm): it would tip off"
+    ),
+    "edge-drag": "mass {mass:.2f} kg > {limit:.1f} kg, what the pressing fingertips drag",
+    "edge-wide": (
+        "{half:cm} cm from its middle to its side: dragged {line:cm} cm from the robot's "
+        "axis it would come within {clearance:cm} cm of the base"
+    ),
     "ground-truth": "{fact} is not in the hand-written ground truth (the rules grant it)",
     "off-tower": "{supporter} cannot join the tower itself",
     "one-tower": "every object can join the tower on its own, but not all together: {rest}",

@@ -90,7 +90,7 @@ from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import PARTS, SIDES
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.scene_cache import SceneCache
-from utamp_gym.symbolic.universe import Universe, UniverseKey, ground_universe
+from utamp_gym.symbolic.universe import MOVES_LIKE, Universe, UniverseKey, ground_universe
 
 __all__ = [
     "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SPACES",
@@ -121,6 +121,7 @@ def _tables(key: UniverseKey) -> _Tables:
     ops, objs, members, grasps, supports, spaces_ = [], [], [], [], [], []
     for action in u.actions:
         name, *args = action[1:-1].split()
+        name = MOVES_LIKE.get(name, name)  # the extended domain's edge actions: a pick, a place
         obj = args[0]
         ops.append(("pick-support", "place-support", "slide-support").index(name))
         objs.append(sym(obj))

@@ -96,10 +96,10 @@ def rename_fact(
     pred = fact[0]
     if pred == "isP2PSupportive":
         return (pred, fact[1], types.get(fact[2], fact[2]), fact[3], types.get(fact[4], fact[4]))
-    if pred == "canSlide":
+    if pred in ("canSlide", "canSlideEdge"):
         return (pred, types.get(fact[1], fact[1]), types.get(fact[2], fact[2]), *fact[3:])
     t = fact[1]
-    if pred in ("canGraspFrom", "canLift"):
+    if pred in ("canGraspFrom", "canLift", "canEdgePinch"):
         member = members.get(t, {}).get(fact[2], "?" + fact[2])
         return (pred, types.get(t, t), member, *fact[3:])
     return (pred, types.get(t, t), *fact[2:])

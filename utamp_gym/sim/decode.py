@@ -32,8 +32,15 @@ TIP_CLEARANCE = 0.003  # m, fingertips stay this far above the surface the objec
 FINGER_CLEARANCE = 0.008  # m, pre-grasp opening beyond the member's width, per side
 MAX_OPENING = 0.08  # m, Panda hand fully open
 PLACE_DROP = 0.004  # m, a placed object is released this far above its support
-ACTIONS = ("pick-support", "place-support", "slide-support")
-ARITY = {"pick-support": 10, "place-support": 11, "slide-support": 13}
+ACTIONS = ("pick-support", "place-support", "slide-support", "slide-edge", "place-edge")
+#: slide-edge and place-edge (the extended domain ``utamp2x``): a pick's and a place's symbols
+ARITY = {
+    "pick-support": 10,
+    "place-support": 11,
+    "slide-support": 13,
+    "slide-edge": 10,
+    "place-edge": 11,
+}
 
 
 @dataclass(frozen=True)
@@ -90,9 +97,9 @@ def parse_action(action: str, scene: Scene) -> MacroAction:
     grasp = GraspSymbols(obj, member, args[2], args[3], args[4])
     if axis_of(grasp.palm) == axis_of(grasp.finger1):
         raise GroundingError(f"'{action}': palm part and finger part lie on the same axis")
-    if kind == "pick-support":
+    if kind in ("pick-support", "slide-edge"):
         return MacroAction(kind, grasp, support=args[7], text=action)
-    if kind == "place-support":
+    if kind in ("place-support", "place-edge"):
         return MacroAction(kind, grasp, support=args[8], support_part=args[10], text=action)
     return MacroAction(kind, grasp, support=args[6], space=args[9], text=action)
 

@@ -28,6 +28,7 @@ from utamp_gym.sim.decode import (
     footprint_centre,
     slide_vector,
 )
+from utamp_gym.sim.edge import place_edge, slide_edge
 from utamp_gym.sim.grasp_phases import (
     APPROACH,
     TEST_LIFT,
@@ -228,7 +229,13 @@ def slide(st: SimState, act: MacroAction) -> None:
 
 
 SKILLS: Mapping[str, Callable[[SimState, MacroAction], None]] = MappingProxyType(
-    {"pick-support": pick, "place-support": place, "slide-support": slide}
+    {
+        "pick-support": pick,
+        "place-support": place,
+        "slide-support": slide,
+        "slide-edge": slide_edge,  # the extended domain's (`utamp_gym.sim.edge`)
+        "place-edge": place_edge,
+    }
 )
 
 

@@ -200,7 +200,11 @@ def instantiate_affordances(scene: Scene, affordances: Iterable[Fact]) -> set[st
             for inst in by_type.get(f[1], []):
                 if f[2] in scene.type_of(inst).members:
                     out.add(_atom(pred, inst, member_symbol(inst, f[2])))
-        elif pred == "canSlide":
+        elif pred == "canEdgePinch":  # the extended domain's (`affordances.edge`)
+            t, member, hp, hf1, hf2 = f[1:]
+            for inst in by_type.get(t, []):
+                out.add(_atom(pred, inst, member_symbol(inst, member), hp, hf1, hf2))
+        elif pred in ("canSlide", "canSlideEdge"):
             t1, t2, p1, p2 = f[1:]
             for i1 in by_type.get(t1, []):
                 for i2 in by_type.get(t2, []):

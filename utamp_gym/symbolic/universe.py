@@ -59,7 +59,14 @@ ROLES: Mapping[str, tuple[str, str]] = MappingProxyType(
         "pick-support": ("?obj1", "?obj2"),
         "place-support": ("?obj1", "?obj2"),
         "slide-support": ("?obj1", "?space"),
+        "slide-edge": ("?obj1", "?obj2"),
+        "place-edge": ("?obj1", "?obj2"),
     }
+)
+#: the extended domain's actions (``utamp2x``) move objects as these paper actions do: a
+#: board slid to the table's edge ends up in the hand, then on a slot
+MOVES_LIKE: Mapping[str, str] = MappingProxyType(
+    {"slide-edge": "pick-support", "place-edge": "place-support"}
 )
 _AFFORDANCE_PREDS = frozenset(p.lower() for p in AFFORDANCE_PREDICATES)
 #: which preconditions a universe's actions are grounded (and masked) with
@@ -131,7 +138,7 @@ class Universe:
     check_flat: np.ndarray  # extended-bit indices of every fluent literal (module docstring)
     static_pre: np.ndarray  # static positive preconditions, (n_actions, static words)
     static_neg: np.ndarray  # static negative preconditions that some scene can violate
-    roles: tuple[tuple[str, str, str], ...]  # (action name, moved object, target) per action
+    roles: tuple[tuple[str, str, str], ...]  # (paper action it moves like, moved, target)
     action_objects: tuple[tuple[str, ...], ...]  # scene symbols among each action's arguments
     action_index: Mapping[str, int]
     fluent_index: Mapping[str, int]
@@ -352,7 +359,7 @@ def _ground(key: UniverseKey) -> Universe:
         names.append(f"({op.name})")
         params = dict(zip((v for v, _ in act.parameters), args, strict=True))
         moved, target = ROLES.get(name, ("", ""))
-        roles.append((name, params.get(moved, ""), params.get(target, "")))
+        roles.append((MOVES_LIKE.get(name, name), params.get(moved, ""), params.get(target, "")))
         arg_objects.append(tuple(dict.fromkeys(a for a in args if a in symbols)))
         add_bits.append(sum(1 << f_index[str(a)] for a in set(add)))
         del_bits.append(sum(1 << f_index[str(a)] for a in set(dele) if str(a) in f_index))
