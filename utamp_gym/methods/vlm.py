@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.affordances.rules import derive_affordances
@@ -61,6 +61,21 @@ def _system_text(scene: Scene) -> str:
 def _detection_messages(system: str, png: bytes) -> list[Message]:
     user = [{"type": "text", "text": prompt("attributes_request")}, image_part(png)]
     return [{"role": "system", "content": system}, {"role": "user", "content": user}]
+
+
+class PlannerTexts(NamedTuple):
+    """The text the ``vlm-planner`` sends for a scene (besides the image and the VLM's own
+    detection answer): its system message, the detection question and the goal."""
+
+    system: str
+    request: str
+    goal: str
+
+
+def planner_texts(scene: Scene) -> PlannerTexts:
+    """What `run_vlm_planner` sends for `scene` (the planning benchmark measures it)."""
+    system = _system_text(scene) + "\n\n" + prompt("planner_system")
+    return PlannerTexts(system, prompt("attributes_request"), goal_text(scene))
 
 
 def _field(d: Mapping[str, Any], key: str, where: str) -> Any:
@@ -147,12 +162,12 @@ def run_vlm_planner(
     """SayCan proxy: detection question, then the plan, mapped to U-TAMP-2 actions."""
     png = image if image is not None else render_scene_png(scene, seed)
     start = time.perf_counter()
-    system = _system_text(scene) + "\n\n" + prompt("planner_system")
-    messages = _detection_messages(system, png)
+    texts = planner_texts(scene)
+    messages = _detection_messages(texts.system, png)
     first = client.chat(messages)
     messages += [
         {"role": "assistant", "content": first},
-        {"role": "user", "content": goal_text(scene)},
+        {"role": "user", "content": texts.goal},
     ]
     second = client.chat(messages)
     elapsed = time.perf_counter() - start
