@@ -100,8 +100,10 @@ def _prompt_row(scene: Any, plans: list[tuple[str, ...]], method: str) -> dict[s
     spec = method_spec(method)
     texts = planner_texts(scene)
     sent = "\n".join(texts)
-    row: dict[str, Any] = {"scene": scene.name, "chars": len(sent), "words": len(sent.split()),
-                           "goal_chars": len(texts.goal), "actions": None, "valid": None}  # fmt: skip
+    row: dict[str, Any] = {
+        "scene": scene.name, "chars": len(sent), "words": len(sent.split()),
+        "goal_chars": len(texts.goal), "actions": None, "valid": None,
+    }  # fmt: skip
     if plans:
         plan = min(plans, key=len)
         facts, _ = affordances_for(scene, spec.affordances, None, domain=spec.domain)
