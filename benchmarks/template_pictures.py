@@ -89,7 +89,7 @@ def _section(template: str, s: Any, run: dict[str, Any], rel: str, tried: int) -
     return [
         f"### {template}",
         "",
-        f"`{scene.name}`{pick}: *\"{said}\"*",
+        f'`{scene.name}`{pick}: *"{said}"*',
         "",
         f"![{template}: initial scene]({rel}/{template}-before.png) "
         f"![{template}: after the plan]({rel}/{template}-after.png)",
