@@ -91,7 +91,10 @@ def test_every_v2_block_comes_from_a_rule_not_a_missing_fact() -> None:
             assert "ground-truth" not in {b.refusal.rule for b in e.blocking}, s.scene.name
             assert set(e.blocked_atoms) <= set(s.scene.goal.literals)
             explained += bool(e.blocking)
-    assert explained >= 30  # of 40 (the rest: no order of moves, not one object's rule)
+            if "goal-order" in {b.refusal.rule for b in e.blocking}:  # only when no move's
+                assert {b.stage for b in e.blocking} == {"order"}
+                assert all(b.refusal.values["why"] for b in e.blocking)
+    assert explained == 40  # every unachievable goal of the four test splits
 
 
 def test_extended_pick_refusals_decide_as_the_extended_facts() -> None:
@@ -123,3 +126,13 @@ def test_extended_pick_refusals_decide_as_the_extended_facts() -> None:
 
 def test_a_v2_scene_resolves_with_its_goal() -> None:
     assert resolve_scene(BOARD).goal is not None
+
+
+def test_a_goal_no_order_of_moves_reaches_names_its_literal(capsys) -> None:
+    """The food box must go onto the tray, under the bottle, and every table region is taken:
+    each move is possible, no order of them reaches the literal."""
+    text, data = _explain(capsys, "procedural-v2/test-count/0019")
+    (block,) = data["explanation"]["blocking"]
+    assert block["atom"] == "(oc under obj4 base)" and block["stage"] == "order"
+    assert block["rule"] == "goal-order" and block["values"]["why"] == "not even alone"
+    assert "no order of moves reaches (oc under obj4 base): not even alone [goal-order]" in text

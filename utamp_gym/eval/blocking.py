@@ -21,7 +21,10 @@ a region or taken off something; everything standing on a surface to clear or on
 of such a move), and each such object is asked whether it can be picked up and put down
 where the goal allows (on its target; on the table if the goal leaves it a region; else on
 an object the goal allows that carries it), with the refusing rules as for the tower. Block
-atoms are then the goal's literals (``(not (oc under obj3 slot1))`` included).
+atoms are then the goal's literals (``(not (oc under obj3 slot1))`` included). When every
+such move is possible on its own, the order or the room of the moves blocks the goal (rule
+``goal-order``): the literals Fast Downward finds unreachable even alone, else each without
+which the rest is reachable (`_goal_order`).
 
 In the extended domain (``utamp2x``, procedural-v2's labelling domain) a pick-up is asked of
 the extended rules (`rules.pick_refusal` with ``extended``) and, for a member taken from
@@ -45,7 +48,7 @@ from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene, SceneObject
 from utamp_gym.symbolic.problem import goal_atoms
-from utamp_gym.tasks.goal import Goal, split_literal
+from utamp_gym.tasks.goal import HAND_EMPTY, Goal, split_literal
 
 #: rules of the grasp's later tests first: the closest the object came to being picked up
 _PICK_ORDER = ("ground-truth", "torque", "payload", "finger-room", "hand-room", "pinch")
@@ -64,7 +67,8 @@ class Block(NamedTuple):
 
     `stage` is ``pick`` (the object cannot be picked up by the grasp `subject` names),
     ``stand`` (it cannot be put down on the part it stands on), ``place`` (the object in the
-    tower that `subject` names does not carry it) or ``tower`` (no order stacks everything).
+    tower that `subject` names does not carry it), ``tower`` (no order stacks everything) or
+    ``order`` (a goal's literal no order of possible moves reaches, `_goal_order`).
     """
 
     atom: str
@@ -224,8 +228,10 @@ def blocking_goals(
     extended = domain in EXTENDED_DOMAINS
     if scene.goal is not None and scene.goal.template != "tower":
         blocks = goal_blocks(scene, facts, scene.goal, extended)
-        if oracle is None or not blocks:
+        if oracle is None:
             return blocks, None
+        if not blocks:  # every move is possible on its own: the order or the room blocks
+            blocks = _goal_order(scene, facts, oracle)
         blocked = {split_literal(b.atom)[1] for b in blocks}
         return blocks, oracle(facts, [g for g in oracle.goal if g not in blocked])
     joined = tower(scene, facts)
@@ -395,4 +401,37 @@ def goal_blocks(
         for subject, refusal in _put_blocks(scene, facts, m):
             stage = "stand" if subject.startswith(label) else "place"
             blocks.append(Block(m.literal, o.name, o.type, stage, subject, refusal))
+    return tuple(blocks)
+
+
+def _goal_order(
+    scene: Scene, facts: frozenset[Fact], oracle: SolvabilityOracle
+) -> tuple[Block, ...]:
+    """The literals of a goal no order of moves reaches although each object it moves can be
+    picked up and put down where it allows (rule ``goal-order``): those unreachable even
+    alone (with the hand empty), else each without which the rest is reachable, else all."""
+    assert scene.goal is not None
+    slots = {sl.name for sl in scene.slots}
+    literals = [lit for lit in scene.goal.literals if lit != HAND_EMPTY]
+    hand = [HAND_EMPTY] if HAND_EMPTY in oracle.goal else []
+
+    def atom_of(lit: str) -> str:
+        return split_literal(lit)[1]
+
+    alone = [lit for lit in literals if not oracle(facts, [*hand, atom_of(lit)])]
+    why = {lit: "not even alone" for lit in alone}
+    if not alone:
+        for lit in literals:
+            rest = [atom_of(k) for k in literals if k != lit]
+            if oracle(facts, [*hand, *rest]):
+                why[lit] = "without it, the rest of the goal is reachable"
+    if not why:
+        why = {lit: "leaving out any one literal does not make the rest reachable"
+               for lit in literals}  # fmt: skip
+    blocks = []
+    for lit, reason in why.items():
+        _, _, x, y = atom_of(lit).strip("()").split()
+        o = scene.object(y if x in slots else x)
+        refusal = Refusal("goal-order", {"literal": lit, "why": reason})
+        blocks.append(Block(lit, o.name, o.type, "order", _label(o), refusal))
     return tuple(blocks)
