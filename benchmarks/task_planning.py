@@ -8,8 +8,16 @@ under each ``--searches`` configuration, and prints per (configuration, template
 solved, median and p95 planning time (s), median / max plan length (actions), median / max
 nodes Fast Downward expanded; then the same for the hard suite alone, and the worst median
 planning time per template against the 1 s target. Each scene is planned cold (a new
-planner per scene and configuration). Writes ``<out>.md`` and ``<out>.json`` with the commit
-and the command.
+planner per scene and configuration).
+
+Then per template the ``vlm-planner`` prompt format, measured offline (no VLM is run): the
+characters and words of the text the method sends (`utamp_gym.methods.vlm.planner_texts`:
+system message, detection question and the goal written from the scene's `Goal`; the image
+and the VLM's own detection answer not counted), the goal message alone, the actions the
+answer must hold (the shortest reference plan of the configurations), and whether that plan
+written in the answer's format (`planner_prompt.answer_steps`) reads back with the method's
+own parser to a valid plan reaching the goal (`planner_prompt.replay_answer`). Writes
+``<out>.md`` and ``<out>.json`` with the commit and the command.
 
     python benchmarks/task_planning.py [--splits train test-tasks hard] [--step 10]
         [--searches astar-blind lama-first] [--out docs/results/task_planning]
@@ -22,6 +30,9 @@ import statistics
 from collections import defaultdict
 from typing import Any
 
+from utamp_gym.affordances.sources import affordances_for
+from utamp_gym.methods.planner_prompt import answer_steps, replay_answer
+from utamp_gym.methods.vlm import planner_texts
 from utamp_gym.planning.downward import PlanResult
 from utamp_gym.planning.fast_downward import SEARCH_CONFIGS
 from utamp_gym.planning.methods import method_spec, plan_scene
@@ -84,6 +95,48 @@ def _table(title: str, rows: dict[tuple[str, str], list[dict[str, Any]]]) -> lis
     return lines
 
 
+def _prompt_row(scene: Any, plans: list[tuple[str, ...]], method: str) -> dict[str, Any]:
+    """The vlm-planner prompt's measures on one scene (`plans`: its solved reference plans)."""
+    spec = method_spec(method)
+    texts = planner_texts(scene)
+    sent = "\n".join(texts)
+    row: dict[str, Any] = {
+        "scene": scene.name, "chars": len(sent), "words": len(sent.split()),
+        "goal_chars": len(texts.goal), "actions": None, "valid": None,
+    }  # fmt: skip
+    if plans:
+        plan = min(plans, key=len)
+        facts, _ = affordances_for(scene, spec.affordances, None, domain=spec.domain)
+        steps = answer_steps(scene, plan, spec.domain)
+        row |= {
+            "actions": len(plan),
+            "valid": replay_answer(scene, steps, facts, spec.domain).valid,
+        }
+    return row
+
+
+def _prompt_table(title: str, rows: dict[str, list[dict[str, Any]]]) -> list[str]:
+    lines = [
+        title,
+        "",
+        "| template | scenes | median chars | max chars | median words | median goal chars | "
+        "median actions | max actions | read back valid |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for template, rs in sorted(rows.items()):
+        chars = [r["chars"] for r in rs]
+        actions = [r["actions"] for r in rs if r["actions"] is not None]
+        checked = [r for r in rs if r["valid"] is not None]
+        lines.append(
+            f"| {template} | {len(rs)} | {statistics.median(chars):.0f} | {max(chars)} | "
+            f"{statistics.median(r['words'] for r in rs):.0f} | "
+            f"{statistics.median(r['goal_chars'] for r in rs):.0f} | "
+            f"{statistics.median(actions) if actions else '-'} | {max(actions, default='-')} | "
+            f"{sum(r['valid'] for r in checked)}/{len(checked)} |"
+        )
+    return lines
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--splits", nargs="+", choices=SPLITS, default=list(SPLITS))
@@ -102,11 +155,14 @@ def main() -> int:
     domain = method_spec(args.method).domain
     rows: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
     hard: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    prompts: dict[str, list[dict[str, Any]]] = defaultdict(list)
+    hard_prompts: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for split in args.splits:
         step = 1 if split == "hard" else args.step
         for scene, template, achievable in _sample(split, step, args.seeds):
             if not achievable:
                 continue
+            plans = []
             for search in args.searches:
                 planner = _Recording(domain, search=search, timeout=args.timeout)
                 out = plan_scene(scene, args.method, timeout=args.timeout, planner=planner)
@@ -116,6 +172,12 @@ def main() -> int:
                 rows[search, template].append(row)
                 if split == "hard":
                     hard[search, template].append(row)
+                if out.solved:
+                    plans.append(out.plan)
+            prompt_row = _prompt_row(scene, plans, args.method)
+            prompts[template].append(prompt_row)
+            if split == "hard":
+                hard_prompts[template].append(prompt_row)
     lines = _table(
         f"Planning per template ({args.method}; splits {', '.join(args.splits)}: achievable "
         f"goals of every {args.step}th scene, every hard scene)",
@@ -127,6 +189,15 @@ def main() -> int:
     verdict = "met" if worst <= TARGET_S else "NOT met"
     lines += ["", f"Worst median planning time over (search, template): {worst:.3f} s "
               f"(target <= {TARGET_S:.0f} s: {verdict})"]  # fmt: skip
+    lines += ["", *_prompt_table(
+        "The vlm-planner prompt format per template (measured offline: **no VLM was run**; "
+        "chars and words: the text the method sends, without the image and the VLM's own "
+        "detection answer; actions: the shortest reference plan above, which the answer must "
+        "hold; read back valid: that plan written in the answer's format and read back by the "
+        "method's own parser is a valid plan reaching the goal)", prompts)]  # fmt: skip
+    if hard_prompts:
+        lines += ["", *_prompt_table("The vlm-planner prompt format, hard suite alone",
+                                     hard_prompts)]  # fmt: skip
     text = "\n".join(lines) + "\n"
     print(text)
     prov = provenance()
@@ -134,6 +205,7 @@ def main() -> int:
     write_json(
         f"{args.out}.json",
         {"rows": {f"{s}/{t}": rs for (s, t), rs in sorted(rows.items())},
+         "vlm_planner_prompt": dict(sorted(prompts.items())),
          "worst_median_s": worst, "args": vars(args)},
     )  # fmt: skip
     return 0

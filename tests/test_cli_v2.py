@@ -75,3 +75,23 @@ def test_eval_defaults_to_the_label_method(split, tmp_path: Path, capsys) -> Non
         index = int(r["scene"].rpartition("/")[2])
         assert (r["solved"] == "true") == split_scene(split, index).achievable, r["scene"]
     assert capsys.readouterr().err == ""
+
+
+def test_scenes_list_json_is_one_document_and_jsonl_one_record_a_line(capsys) -> None:
+    """`--json` parses as one JSON document (a list, as `utamp plan --json` prints one
+    object); `--jsonl` holds the same records, one per line; both together are refused."""
+    suite = "procedural-v2/test-tasks"
+    assert main(["scenes", "list", "--suite", suite, "--json"]) == 0
+    records = json.loads(capsys.readouterr().out)
+    scenes = split_scenes("test-tasks")
+    assert isinstance(records, list) and len(records) == len(scenes)
+    for r, s in zip(records, scenes, strict=True):
+        assert r["name"] == s.scene.name and r["template"] == s.template
+        assert r["achievable"] is s.achievable and r["instruction"]
+    assert main(["scenes", "list", "--suite", suite, "--jsonl"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [json.loads(line) for line in lines] == records
+    with pytest.raises(SystemExit) as exit_:
+        main(["scenes", "list", "--suite", suite, "--json", "--jsonl"])
+    assert exit_.value.code == 2
+    assert "not allowed with argument --json" in capsys.readouterr().err

@@ -129,7 +129,7 @@ def test_scene_names_resolve_everywhere_a_scene_name_does(tmp_path) -> None:
 
 def test_scenes_list_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["scenes", "list", "--suite", "procedural-v1/test-families", "--json"]) == 0
-    records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    records = json.loads(capsys.readouterr().out)  # one JSON document: a list
     assert len(records) == len(pv.split_seeds("test-families"))
     for r in records:
         assert set(r) == {"name", "n_objects", "families", "template", "instruction", "achievable"}
@@ -142,8 +142,8 @@ def test_scenes_list_json(capsys: pytest.CaptureFixture[str]) -> None:
     )
     assert main(["scenes", "list", "--suite", "procedural-v1/train"]) == 0
     assert capsys.readouterr().out.splitlines() == all_scene_names("procedural-v1/train")
-    # the issue's own command: the training split as JSON
-    assert main(["scenes", "list", "--suite", "procedural-v1/train", "--json"]) == 0
+    # the issue's own command: the training split as JSON (lines: `--jsonl`, the same records)
+    assert main(["scenes", "list", "--suite", "procedural-v1/train", "--jsonl"]) == 0
     records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [r["name"] for r in records] == all_scene_names("procedural-v1/train")
     for i, r in enumerate(records):

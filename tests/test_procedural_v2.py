@@ -142,7 +142,7 @@ def test_utamp_plan_and_scenes_list_take_v2_scenes(capsys: pytest.CaptureFixture
     goal = get_scene(name).goal
     assert goal is not None and goal.template == split_scene(split, i).template
     assert main(["scenes", "list", "--suite", f"procedural-v2/{split}", "--json"]) == 0
-    records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    records = json.loads(capsys.readouterr().out)
     assert len(records) == len(split_seeds(split))
     assert {"template", "instruction", "achievable"} <= set(records[0])
     assert all(r["template"] in SPLIT_TEMPLATES[split] for r in records)

@@ -10,9 +10,10 @@ import pickle
 import numpy as np
 import pytest
 
+from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.errors import SceneError
 from utamp_gym.perception.abstraction import declared_state, perceive
-from utamp_gym.planning.methods import ground_truth_for, plan_scene
+from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.io import scene_from_dict, scene_to_dict, scene_to_toml
 from utamp_gym.scene.model import Scene, SceneObject
 from utamp_gym.suites import get_scene, resolve_scene, suite_scenes

@@ -1,4 +1,5 @@
-"""What ``utamp plan FILE --explain`` prints for the unsolvable scene files of ``tests/scenes``.
+"""What ``utamp plan FILE --explain`` prints for the unsolvable scene files of ``tests/scenes``
+and a procedural-v2 scene.
 
 Run in process on the current code (``utamp_gym.cli.main``); the fragment records the
 commit and the commands, so the page shows the program's own output, never typed text.
@@ -15,6 +16,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 #: scene files whose goal the ground truth itself cannot reach
 SCENES = ("heavy-pot", "oversized-colander", "handleless-board")
+#: ... and a procedural-v2 scene, explained in the extended domain (its default method)
+SUITE_SCENES = ("procedural-v2/test-tasks/0009",)
 
 
 def _commit() -> str:
@@ -38,8 +41,8 @@ def example() -> str:
     here = Path.cwd()
     os.chdir(ROOT)  # the commands name the files relative to the repository
     try:
-        for name in SCENES:
-            args = ["plan", f"tests/scenes/{name}.toml", "--explain"]
+        for scene in [*(f"tests/scenes/{n}.toml" for n in SCENES), *SUITE_SCENES]:
+            args = ["plan", scene, "--explain"]
             buf = io.StringIO()
             with redirect_stdout(buf):
                 main(args)

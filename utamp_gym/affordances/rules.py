@@ -230,14 +230,29 @@ def lift_refusal(
     return Refusal("payload", {**values, "payload": PAYLOAD})
 
 
-def pick_refusal(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> Refusal | None:
+def pick_refusal(
+    t: ObjectType, member: str, palm: str, f1: str, f2: str, extended: bool = False
+) -> Refusal | None:
     """Why `object_facts` grants no ``canGraspFrom`` with ``canLift`` for this grasp: the
-    gripper cannot close on it, the object is too heavy, or it turns out of the pads."""
-    return (
-        grasp_refusal(t, member, palm, f1, f2)
-        or lift_refusal(t, member)
-        or hold_refusal(t, member, palm)
+    gripper cannot close on it, the object is too heavy, or it turns out of the pads.
+    `extended`: by the extended domain's grasp rules (`object_facts` with `extended`, the
+    calibrated ones); a rim pinch of the member is asked separately (`rim_pinch_refusal`)."""
+    if not extended:
+        return (
+            grasp_refusal(t, member, palm, f1, f2)
+            or lift_refusal(t, member)
+            or hold_refusal(t, member, palm)
+        )
+    if not t.movable:
+        return Refusal("fixed", {"type": t.name})
+    refusal = (
+        _palm_refusal(t, member, palm, True, True)
+        or _fingers_refusal(t, member, palm, f1, f2, True, True)
+        or lift_refusal(t, member, True, True)
     )
+    if refusal is not None or _lug_holds(t, member, palm, f1, f2):
+        return refusal
+    return hold_refusal(t, member, palm, extended=True, finger=f1)
 
 
 def _lug_holds(t: ObjectType, member: str, palm: str, f1: str, f2: str) -> bool:

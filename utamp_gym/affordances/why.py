@@ -99,6 +99,10 @@ TEMPLATES: dict[str, str] = {
     "ground-truth": "{fact} is not in the hand-written ground truth (the rules grant it)",
     "off-tower": "{supporter} cannot join the tower itself",
     "one-tower": "every object can join the tower on its own, but not all together: {rest}",
+    "goal-order": (
+        "each object the goal moves can be picked up and put down where it allows, but no "
+        "order of moves reaches {literal}: {why}"
+    ),
 }
 
 

@@ -88,13 +88,15 @@ def _print_explanation(explanation: dict[str, Any]) -> None:
 
 
 def _explain(scene: Scene, outcome: PlanOutcome) -> dict[str, Any]:
-    """Why-not explanation of an unsolved outcome (U-TAMP-2 methods only)."""
+    """Why-not explanation of an unsolved outcome (methods with affordances: U-TAMP-2 and its
+    extended domain, explained in the method's own)."""
     # lazy: keeps `utamp --help` from loading utamp_gym.eval.explain
-    from utamp_gym.eval.explain import explain_unsolvable
+    from utamp_gym.eval.explain import EXPLAINED_DOMAINS, explain_unsolvable
 
-    if method_spec(outcome.method).domain != "utamp2":
-        return {"found": False, "message": "explanations need U-TAMP-2 affordances (not utamp1)"}
-    return explain_unsolvable(scene, outcome.facts).to_json()
+    domain = method_spec(outcome.method).domain
+    if domain not in EXPLAINED_DOMAINS:
+        return {"found": False, "message": "explanations need affordances (utamp1 has none)"}
+    return explain_unsolvable(scene, outcome.facts, domain=domain).to_json()
 
 
 def add_parser(sub: Any) -> None:

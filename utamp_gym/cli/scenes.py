@@ -22,11 +22,16 @@ from utamp_gym.suites import LISTED_SUITES as SUITES
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     if args.scenes_cmd == "list":
-        if not args.suite and not args.json:  # packaged scenes (kitchen-demo), then suites
+        suites = (args.suite,) if args.suite else ALL_SUITES  # v2: the generated splits
+        if args.json:  # one JSON document: the list of every scene's record
+            records = [r for suite in suites for r in scene_summary(suite)]
+            print(json.dumps(records, indent=2))
+            return 0
+        if not args.suite and not args.jsonl:  # packaged scenes (kitchen-demo), then suites
             for name in packaged_scene_names():
                 print(name)
-        for suite in (args.suite,) if args.suite else ALL_SUITES:  # v2: the generated splits
-            if args.json:  # one JSON object per line and scene
+        for suite in suites:
+            if args.jsonl:  # one JSON object per line and scene (`| head` keeps whole ones)
                 for record in scene_summary(suite):
                     print(json.dumps(record))
             else:
@@ -45,11 +50,17 @@ def add_parser(sub: Any) -> None:
         "list", help="scene names, one per line: the packaged scenes, then every suite's"
     )
     lst.add_argument("--suite", choices=SUITES, help="only this suite's scenes")
-    lst.add_argument(
+    fmt = lst.add_mutually_exclusive_group()
+    fmt.add_argument(
         "--json",
         action="store_true",
-        help="one JSON object per scene and line: name, n_objects, families, template, "
-        "instruction, achievable",
+        help="one JSON document: a list with an object per scene (name, n_objects, families, "
+        "template, instruction, achievable)",
+    )
+    fmt.add_argument(
+        "--jsonl",
+        action="store_true",
+        help="the same objects as JSON lines: one per scene and line",
     )
     show = ssub.add_parser("show", help="a scene as TOML (usable as a scene file)")
     show.add_argument("name", help=SCENE_HELP)

@@ -21,7 +21,16 @@ a region or taken off something; everything standing on a surface to clear or on
 of such a move), and each such object is asked whether it can be picked up and put down
 where the goal allows (on its target; on the table if the goal leaves it a region; else on
 an object the goal allows that carries it), with the refusing rules as for the tower. Block
-atoms are then the goal's literals (``(not (oc under obj3 slot1))`` included).
+atoms are then the goal's literals (``(not (oc under obj3 slot1))`` included). When every
+such move is possible on its own, the order or the room of the moves blocks the goal (rule
+``goal-order``): the literals Fast Downward finds unreachable even alone, else each without
+which the rest is reachable (`_goal_order`).
+
+In the extended domain (``utamp2x``, procedural-v2's labelling domain) a pick-up is asked of
+the extended rules (`rules.pick_refusal` with ``extended``) and, for a member taken from
+above, of the rim pinch too (`utamp_gym.affordances.rim.rim_pinch_refusal`): both refusals
+are named (``cannot be picked up by ...`` first, then ``cannot be pinched at the rim by
+...``).
 """
 
 from __future__ import annotations
@@ -31,16 +40,20 @@ from typing import Any, NamedTuple
 
 from utamp_gym.affordances import rules
 from utamp_gym.affordances.facts import Fact, score
+from utamp_gym.affordances.rim import rim_pinch_refusal
+from utamp_gym.affordances.sources import EXTENDED_DOMAINS
 from utamp_gym.affordances.why import Refusal
 from utamp_gym.eval.solvability import SolvabilityOracle
 from utamp_gym.planning.methods import plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.model import STANDING_PART, UP_PART, Scene, SceneObject
 from utamp_gym.symbolic.problem import goal_atoms
-from utamp_gym.tasks.goal import Goal, split_literal
+from utamp_gym.tasks.goal import HAND_EMPTY, Goal, split_literal
 
 #: rules of the grasp's later tests first: the closest the object came to being picked up
 _PICK_ORDER = ("ground-truth", "torque", "payload", "finger-room", "hand-room", "pinch")
+#: ... and of a rim pinch's (the extended domain's), after every grasp's
+_PINCH_ORDER = ("rim-payload", "torque", "rim-finger-room", "hand-room", "rim-flare", "rim-width")
 NO_ONE_HELPS = "leaving out any one object does not let the others stack"
 
 
@@ -54,7 +67,8 @@ class Block(NamedTuple):
 
     `stage` is ``pick`` (the object cannot be picked up by the grasp `subject` names),
     ``stand`` (it cannot be put down on the part it stands on), ``place`` (the object in the
-    tower that `subject` names does not carry it) or ``tower`` (no order stacks everything).
+    tower that `subject` names does not carry it), ``tower`` (no order stacks everything) or
+    ``order`` (a goal's literal no order of possible moves reaches, `_goal_order`).
     """
 
     atom: str
@@ -120,29 +134,49 @@ def _or_truth(refusal: Refusal | None, missing: Iterable[Fact]) -> Refusal:
 
 
 def _pick_blocks(
-    facts: frozenset[Fact], t: ObjectType, o: SceneObject
+    facts: frozenset[Fact], t: ObjectType, o: SceneObject, extended: bool = False
 ) -> list[tuple[str, Refusal]]:
-    """(grasps, refusal) for each distinct refusal of the grasps from the part facing up."""
+    """(subject, refusal) for each distinct refusal of the grasps from the part facing up
+    (`extended`: the extended domain's rules, rim pinches included); the subject reads
+    ``cannot be picked up by GRASPS`` or ``cannot be pinched at the rim by GRASPS``."""
     palm = UP_PART[o.orientation]
-    grasps: dict[str, list[str]] = {}
-    refusals: dict[str, Refusal] = {}
+    grasps: dict[tuple[str, str], list[str]] = {}
+    refusals: dict[tuple[str, str], Refusal] = {}
     for member in t.members:
         for f1, f2 in rules.FINGER_PAIRS:
             grasp = ("canGraspFrom", t.name, member, palm, f1, f2)
             missing = [f for f in (grasp, ("canLift", t.name, member)) if f not in facts]
-            refusal = _or_truth(rules.pick_refusal(t, member, palm, f1, f2), missing)
-            # the same test with the same numbers (the mass, for every handle) is said once
-            refusals.setdefault(refusal.detail, refusal)
-            grasps.setdefault(refusal.detail, []).append(f"{member} ({f1}/{f2})")
-    rank = {r: i for i, r in enumerate(_PICK_ORDER)}
-    out = [(", ".join(grasps[d]), r) for d, r in refusals.items()]
-    return sorted(out, key=lambda sr: rank.get(sr[1].rule, len(rank)))
+            said = [("picked up by", rules.pick_refusal(t, member, palm, f1, f2, extended))]
+            if extended and palm == "on" and t.members[member].kind in ("edge", "body"):
+                said.append(("pinched at the rim by", rim_pinch_refusal(t, member, palm, f1, f2)))
+            if any(r is None for _, r in said):  # the rules grant it: the facts lack it
+                said = [("picked up by", None)]
+            for how, r in said:
+                refusal = _or_truth(r, missing)
+                # the same test with the same numbers (the mass, for every handle) is said once
+                key = (how, refusal.detail)
+                refusals.setdefault(key, refusal)
+                grasps.setdefault(key, []).append(f"{member} ({f1}/{f2})")
+    ranks = {"picked up by": _PICK_ORDER, "pinched at the rim by": _PINCH_ORDER}
+
+    def rank(how: str, rule: str) -> tuple[bool, int]:
+        order = ranks[how]
+        return how != "picked up by", order.index(rule) if rule in order else len(order)
+
+    keys = sorted(refusals, key=lambda k: rank(k[0], refusals[k].rule))
+    return [(f"{how} {', '.join(grasps[how, d])}", refusals[how, d]) for how, d in keys]
 
 
 def object_blocks(
-    scene: Scene, facts: frozenset[Fact], name: str, joined: set[str], atom: str
+    scene: Scene,
+    facts: frozenset[Fact],
+    name: str,
+    joined: set[str],
+    atom: str,
+    extended: bool = False,
 ) -> list[Block]:
-    """Why object `name` cannot join the tower `joined` (its goal atom `atom`)."""
+    """Why object `name` cannot join the tower `joined` (its goal atom `atom`; `extended`:
+    asked of the extended domain's rules)."""
     o = scene.object(name)
     t = scene.catalogue[o.type]
     label = _label(o)
@@ -152,8 +186,8 @@ def object_blocks(
         blocks.append(Block(atom, name, o.type, stage, subject, refusal))
 
     if not _pickable(facts, o):
-        for grasps, refusal in _pick_blocks(facts, t, o):
-            block("pick", f"{label} cannot be picked up by {grasps}", refusal)
+        for grasps, refusal in _pick_blocks(facts, t, o, extended):
+            block("pick", f"{label} cannot be {grasps}", refusal)
     stand = STANDING_PART[o.orientation]
     supportable = ("isSupportable", o.type, stand)
     if supportable not in facts:
@@ -179,15 +213,25 @@ def object_blocks(
 
 
 def blocking_goals(
-    scene: Scene, facts: Iterable[Fact], oracle: SolvabilityOracle | None = None
+    scene: Scene,
+    facts: Iterable[Fact],
+    oracle: SolvabilityOracle | None = None,
+    domain: str = "utamp2",
 ) -> tuple[tuple[Block, ...], bool | None]:
     """The blocks of an unsolvable `scene` under `facts`, and whether the rest of the goal
-    is solvable without their atoms (None: not checked, no `oracle`)."""
+    is solvable without their atoms (None: not checked, no `oracle`). The refusals are the
+    rules of `domain` (``utamp2x``: the extended grasps and rim pinches too; the
+    `oracle`'s own domain when given)."""
     facts = frozenset(facts)
+    if oracle is not None:
+        domain = oracle.domain
+    extended = domain in EXTENDED_DOMAINS
     if scene.goal is not None and scene.goal.template != "tower":
-        blocks = goal_blocks(scene, facts, scene.goal)
-        if oracle is None or not blocks:
+        blocks = goal_blocks(scene, facts, scene.goal, extended)
+        if oracle is None:
             return blocks, None
+        if not blocks:  # every move is possible on its own: the order or the room blocks
+            blocks = _goal_order(scene, facts, oracle)
         blocked = {split_literal(b.atom)[1] for b in blocks}
         return blocks, oracle(facts, [g for g in oracle.goal if g not in blocked])
     joined = tower(scene, facts)
@@ -196,7 +240,7 @@ def blocking_goals(
     for o in scene.objects:
         if o.name not in joined:
             atom = slot_atom[scene.slot_of(o.name)]
-            blocks += object_blocks(scene, facts, o.name, joined, atom)
+            blocks += object_blocks(scene, facts, o.name, joined, atom, extended)
     if oracle is None:
         return tuple(blocks), None
     goal = oracle.goal
@@ -204,7 +248,7 @@ def blocking_goals(
         blocked = {b.atom for b in blocks}
         return tuple(blocks), oracle(facts, [g for g in goal if g not in blocked])
     # every object joins the tower on its own: no order stacks them all
-    return _one_tower(scene, facts, slot_atom, oracle.timeout), None
+    return _one_tower(scene, facts, slot_atom, oracle.timeout, domain), None
 
 
 def _without(scene: Scene, name: str) -> Scene:
@@ -219,7 +263,11 @@ def _without(scene: Scene, name: str) -> Scene:
 
 
 def _one_tower(
-    scene: Scene, facts: frozenset[Fact], slot_atom: dict[str, str], timeout: float
+    scene: Scene,
+    facts: frozenset[Fact],
+    slot_atom: dict[str, str],
+    timeout: float,
+    domain: str = "utamp2",
 ) -> tuple[Block, ...]:
     """Objects without which the others stack under `facts` (all that must move if there
     is none)."""
@@ -229,7 +277,7 @@ def _one_tower(
     def stacks(rest: Scene) -> bool:
         if all(not slot_atom[rest.slot_of(o.name)] for o in rest.objects):
             return True  # only the base's stack is left: the goal holds already
-        return plan_scene(rest, timeout=timeout, affordances=given).solved
+        return plan_scene(rest, f"{domain}-gt", timeout=timeout, affordances=given).solved
 
     spoilers = [o for o in movable if stacks(_without(scene, o.name))]
     blocks = []
@@ -334,20 +382,56 @@ def _put_blocks(scene: Scene, facts: frozenset[Fact], m: _Move) -> list[tuple[st
     return out
 
 
-def goal_blocks(scene: Scene, facts: Iterable[Fact], goal: Goal) -> tuple[Block, ...]:
+def goal_blocks(
+    scene: Scene, facts: Iterable[Fact], goal: Goal, extended: bool = False
+) -> tuple[Block, ...]:
     """Why the goal's literals cannot be reached under `facts`: per literal the scene does
     not satisfy, each object it makes move that cannot be picked up (stage ``pick``) or put
-    down where the goal allows (``stand``: on the table; ``place``: on an object)."""
+    down where the goal allows (``stand``: on the table; ``place``: on an object).
+    `extended`: the pick-ups are asked of the extended domain's rules (rim pinches too)."""
     facts = frozenset(facts)
     blocks: list[Block] = []
     for m in _moves(scene, goal):
         o = scene.object(m.object)
         t, label = scene.catalogue[o.type], _label(o)
         if not _pickable(facts, o):
-            for grasps, refusal in _pick_blocks(facts, t, o):
-                subject = f"{label} cannot be picked up by {grasps}"
+            for grasps, refusal in _pick_blocks(facts, t, o, extended):
+                subject = f"{label} cannot be {grasps}"
                 blocks.append(Block(m.literal, o.name, o.type, "pick", subject, refusal))
         for subject, refusal in _put_blocks(scene, facts, m):
             stage = "stand" if subject.startswith(label) else "place"
             blocks.append(Block(m.literal, o.name, o.type, stage, subject, refusal))
+    return tuple(blocks)
+
+
+def _goal_order(
+    scene: Scene, facts: frozenset[Fact], oracle: SolvabilityOracle
+) -> tuple[Block, ...]:
+    """The literals of a goal no order of moves reaches although each object it moves can be
+    picked up and put down where it allows (rule ``goal-order``): those unreachable even
+    alone (with the hand empty), else each without which the rest is reachable, else all."""
+    assert scene.goal is not None
+    slots = {sl.name for sl in scene.slots}
+    literals = [lit for lit in scene.goal.literals if lit != HAND_EMPTY]
+    hand = [HAND_EMPTY] if HAND_EMPTY in oracle.goal else []
+
+    def atom_of(lit: str) -> str:
+        return split_literal(lit)[1]
+
+    alone = [lit for lit in literals if not oracle(facts, [*hand, atom_of(lit)])]
+    why = {lit: "not even alone" for lit in alone}
+    if not alone:
+        for lit in literals:
+            rest = [atom_of(k) for k in literals if k != lit]
+            if oracle(facts, [*hand, *rest]):
+                why[lit] = "without it, the rest of the goal is reachable"
+    if not why:
+        why = {lit: "leaving out any one literal does not make the rest reachable"
+               for lit in literals}  # fmt: skip
+    blocks = []
+    for lit, reason in why.items():
+        _, _, x, y = atom_of(lit).strip("()").split()
+        o = scene.object(y if x in slots else x)
+        refusal = Refusal("goal-order", {"literal": lit, "why": reason})
+        blocks.append(Block(lit, o.name, o.type, "order", _label(o), refusal))
     return tuple(blocks)

@@ -37,6 +37,8 @@ from utamp_gym.eval.solvability import SolvabilityOracle
 from utamp_gym.planning.methods import method_spec
 from utamp_gym.scene.model import Scene
 
+#: the domains with affordances (U-TAMP-1 has none to correct)
+EXPLAINED_DOMAINS = ("utamp2", "utamp2x")
 NEGATIVELY_USED = ("canLift",)  # affordance predicates under `not` in utamp2.pddl
 Change = tuple[str, Fact]  # ("+", fact) to add, ("-", fact) to remove
 NO_CORRECTION = "no set of ground-truth affordance corrections makes the scene solvable"
@@ -144,18 +146,22 @@ def explain_unsolvable(
     max_size: int = 2,
     timeout: float = 5.0,
     budget_s: float = 20.0,
+    domain: str = "utamp2",
 ) -> Explanation:
     """A smallest set of corrections (missing and spurious facts) making `scene` solvable.
 
     `max_size` bounds the corrections tried beyond the required ones; `timeout` is per
-    planner call and `budget_s` bounds the whole search.
+    planner call and `budget_s` bounds the whole search. `domain`: the one planned in
+    (``utamp2x``: its ground truth has the extended grasps, and the rules that refuse are
+    the extended domain's).
     """
     start = time.perf_counter()
     det = frozenset(detected)
-    gt = frozenset(ground_truth) if ground_truth is not None else ground_truth_for(scene)
+    gt = frozenset(ground_truth) if ground_truth is not None else ground_truth_for(scene, domain)
     changes: list[Change] = [("+", f) for f in sorted(gt - det)]
     changes += [("-", f) for f in sorted(det - gt) if f[0] in NEGATIVELY_USED]
-    check = _Checker(SolvabilityOracle(scene, det | gt, timeout=timeout), budget_s)
+    oracle = SolvabilityOracle(scene, det | gt, timeout=timeout, domain=domain)
+    check = _Checker(oracle, budget_s)
 
     def result(
         found: bool,
@@ -216,14 +222,22 @@ def explain_scene(
     timeout: float = 5.0,
     budget_s: float = 20.0,
 ) -> Explanation | None:
-    """Explain `method`'s detected affordances for `scene` (None for U-TAMP-1: no affordances).
+    """Explain `method`'s detected affordances for `scene` (None for U-TAMP-1: no affordances;
+    in the method's domain, `explain_unsolvable`).
 
     The facts are drawn exactly as `plan_scene(scene, method, seed=seed, noise=noise)` draws
     them, so this explains that call's outcome.
     """
     spec = method_spec(method)
-    if spec.domain != "utamp2":
+    if spec.domain not in EXPLAINED_DOMAINS:
         return None
     rng = detection_rng(seed, scene.name)
-    facts, _ = affordances_for(scene, spec.affordances, rng, noise)
-    return explain_unsolvable(scene, facts, max_size=max_size, timeout=timeout, budget_s=budget_s)
+    facts, _ = affordances_for(scene, spec.affordances, rng, noise, spec.domain)
+    return explain_unsolvable(
+        scene,
+        facts,
+        max_size=max_size,
+        timeout=timeout,
+        budget_s=budget_s,
+        domain=spec.domain,
+    )

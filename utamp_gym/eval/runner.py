@@ -26,7 +26,7 @@ from utamp_gym.affordances.sources import DEFAULT_NOISE, detection_rng, scene_ty
 from utamp_gym.agents.runs import execute_plan, open_loop_env
 from utamp_gym.errors import EndpointError, UnknownNameError
 from utamp_gym.eval.closed_loop import run_closed_loop
-from utamp_gym.eval.explain import explain_unsolvable
+from utamp_gym.eval.explain import EXPLAINED_DOMAINS, explain_unsolvable
 from utamp_gym.eval.records import DEFAULT_PERCEPTION, PLAN_SEPARATOR, ResultRow, RunIdentity
 from utamp_gym.eval.stages import ATTRIBUTES, failure_stage
 from utamp_gym.methods.perceived import attribute_accuracy, mean_accuracy, plan_perceived
@@ -93,6 +93,7 @@ class _Planned:
     scores: Scores | None
     facts: frozenset[Fact] | None  # detected U-TAMP-2 affordances, for explanations
     accuracy: Mapping[str, float] | None = None  # per attribute (detected attributes)
+    domain: str = "utamp2"  # the domain planned in (the facts' explanation's)
 
 
 def _suite_of(name: str) -> str:
@@ -126,10 +127,11 @@ def _plan(scene: Scene, task: EvalTask, look: Any = None) -> _Planned:
         )
     noise = DEFAULT_NOISE if task.noise is None else task.noise
     o = plan_scene(scene, task.method, seed=task.seed, timeout=task.timeout, noise=noise)
-    facts = o.facts if method_spec(task.method).domain == "utamp2" else None
+    domain = method_spec(task.method).domain
+    facts = o.facts if domain in EXPLAINED_DOMAINS else None
     scores = o.affordance_scores if task.method != "utamp1" else None
     accuracy = _noisy_accuracy(scene, task.seed, noise) if task.method == "utamp2-noisy" else None
-    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts, accuracy)
+    return _Planned(o.solved, o.plan, o.planning_time_s, o.reason, scores, facts, accuracy, domain)
 
 
 def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
@@ -248,7 +250,8 @@ def _run_open_loop(task: EvalTask, scene: Scene, start: float, env: Any) -> Resu
     else:
         failure = f"not solved: {planned.reason}"
         if task.explain and planned.facts is not None:
-            failure += "; " + explain_unsolvable(scene, planned.facts).message
+            why = explain_unsolvable(scene, planned.facts, domain=planned.domain)
+            failure += "; " + why.message
     s = planned.scores
     return _row(
         task,

@@ -59,26 +59,34 @@ def _positive_domain(domain: Domain) -> Domain:
 
 
 class SolvabilityOracle:
-    """``oracle(facts)``: is `scene` solvable in U-TAMP-2 with these type-level facts?
+    """``oracle(facts)``: is `scene` solvable in `domain` (U-TAMP-2 or its extended
+    ``utamp2x``) with these type-level facts?
 
     Every `facts` passed in must be a subset of `union` (the facts grounded once).
     """
 
-    def __init__(self, scene: Scene, union: Iterable[Fact], *, timeout: float = 5.0):
-        self.scene, self.timeout = scene, timeout
+    def __init__(
+        self,
+        scene: Scene,
+        union: Iterable[Fact],
+        *,
+        timeout: float = 5.0,
+        domain: str = "utamp2",
+    ):
+        self.scene, self.timeout, self.domain = scene, timeout, domain
         self.union = frozenset(union)
-        domain = _positive_domain(parse_domain(domain_text("utamp2"), source="utamp2.pddl"))
-        problem = parse_problem(build_problem(scene, self.union, "utamp2").text, source=scene.name)
-        negated = {p[len(NOT) :] for p in domain.predicates if p.startswith(NOT)}
-        everything = [*problem.objects, *(c for c, t in domain.constants.items() if t == "obj")]
+        pddl = _positive_domain(parse_domain(domain_text(domain), source=f"{domain}.pddl"))
+        problem = parse_problem(build_problem(scene, self.union, domain).text, source=scene.name)
+        negated = {p[len(NOT) :] for p in pddl.predicates if p.startswith(NOT)}
+        everything = [*problem.objects, *(c for c, t in pddl.constants.items() if t == "obj")]
         extra = {Atom(NOT + p, (a, b)) for p in negated for a in everything for b in everything}
         self.problem: Problem = problem._replace(init=problem.init | extra)
-        ops, _, _ = reachable_ops(domain, self.problem)
+        ops, _, _ = reachable_ops(pddl, self.problem)
         wanted = AFFORDANCE_PREDICATES | {NOT + p for p in negated}
         self.ops: list[tuple[GroundOp, tuple[Atom, ...]]] = []
         for op in ops:
             name, *args = op.name.split()
-            pre, _, _ = domain.actions[name].instantiate(args)
+            pre, _, _ = pddl.actions[name].instantiate(args)
             self.ops.append((op, tuple(lit.atom for lit in pre if lit.atom.predicate in wanted)))
         self.checks = 0
 

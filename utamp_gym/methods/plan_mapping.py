@@ -6,7 +6,8 @@ parts, bases, forces, contact parts) are chosen by the mapper. Steps are mapped 
 order while the symbolic state is tracked: every non-affordance precondition (the
 hand, contacts, workspace, orientation) must hold, otherwise the step cannot be mapped
 and the mapping stops there. Among the bindings that satisfy those, the mapper takes
-one that violates the fewest ground-truth affordance preconditions (a valid one when
+one that violates the fewest ground-truth affordance preconditions (of the domain mapped
+in: U-TAMP-2, or the extended ``utamp2x`` on procedural-v2) (a valid one when
 there is one), so validating the mapped plan afterwards names the affordance the VLM
 got wrong. Names: detected kinds (``glass-mug``) or scene names (``mug``); ``table``
 for the table top (a free slot is chosen), ``space`` for any free space.
@@ -60,12 +61,11 @@ def split_step(step: object) -> list[str]:
 class PlanMapper:
     """Maps simplified steps of one scene against its ground-truth U-TAMP-2 problem."""
 
-    def __init__(self, scene: Scene):
+    def __init__(self, scene: Scene, domain: str = "utamp2"):
         self.scene = scene
-        self.domain: Domain = parse_domain(domain_text("utamp2"), source="utamp2.pddl")
-        problem = parse_problem(
-            build_problem(scene, ground_truth_for(scene), "utamp2").text, source=scene.name
-        )
+        self.domain: Domain = parse_domain(domain_text(domain), source=f"{domain}.pddl")
+        truth = ground_truth_for(scene, domain)
+        problem = parse_problem(build_problem(scene, truth, domain).text, source=scene.name)
         self.state: set[Atom] = set(problem.init)
         self.objects = sorted(
             [*problem.objects, *(c for c, t in self.domain.constants.items() if t == "obj")]
@@ -161,9 +161,10 @@ class PlanMapper:
         return best[0][1] if best else None
 
 
-def map_plan(scene: Scene, steps: Sequence[object]) -> MappedPlan:
-    """Map `steps` in order; stops at the first step that cannot be mapped."""
-    mapper = PlanMapper(scene)
+def map_plan(scene: Scene, steps: Sequence[object], domain: str = "utamp2") -> MappedPlan:
+    """Map `steps` in order; stops at the first step that cannot be mapped. `domain`: whose
+    ground truth ranks the bindings (``utamp2x`` on procedural-v2, its labels' domain)."""
+    mapper = PlanMapper(scene, domain)
     actions: list[str] = []
     for k, step in enumerate(steps, 1):
         try:

@@ -14,9 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from importlib import resources
-from string import Template
-from typing import Any
+from typing import Any, NamedTuple
 
 from utamp_gym.affordances.facts import Fact, Scores, score
 from utamp_gym.affordances.rules import derive_affordances
@@ -24,6 +22,7 @@ from utamp_gym.affordances.sources import ground_truth_for
 from utamp_gym.errors import EndpointError, PlanningTimeout
 from utamp_gym.methods.image import render_scene_png
 from utamp_gym.methods.plan_mapping import map_plan, split_step
+from utamp_gym.methods.planner_prompt import answer_domain, goal_text, prompt
 from utamp_gym.methods.vlm_client import Message, VlmClient, extract_json, image_part
 from utamp_gym.planning.fast_downward import solve
 from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES, ObjectType
@@ -34,12 +33,6 @@ from utamp_gym.symbolic.problem import build_problem, domain_text
 
 VLM_METHODS = ("utamp2-vlm", "vlm-planner")
 KINDS = tuple(t for _, t in (*MOVABLES, TRAY))
-
-
-def prompt(name: str, **values: str) -> str:
-    """A packaged prompt (``utamp_gym/methods/prompts/<name>.txt``) with ``$values`` filled in."""
-    text = resources.files("utamp_gym.methods").joinpath("prompts", f"{name}.txt").read_text()
-    return Template(text).substitute(values)
 
 
 @dataclass(frozen=True)
@@ -68,6 +61,21 @@ def _system_text(scene: Scene) -> str:
 def _detection_messages(system: str, png: bytes) -> list[Message]:
     user = [{"type": "text", "text": prompt("attributes_request")}, image_part(png)]
     return [{"role": "system", "content": system}, {"role": "user", "content": user}]
+
+
+class PlannerTexts(NamedTuple):
+    """The text the ``vlm-planner`` sends for a scene (besides the image and the VLM's own
+    detection answer): its system message, the detection question and the goal."""
+
+    system: str
+    request: str
+    goal: str
+
+
+def planner_texts(scene: Scene) -> PlannerTexts:
+    """What `run_vlm_planner` sends for `scene` (the planning benchmark measures it)."""
+    system = _system_text(scene) + "\n\n" + prompt("planner_system")
+    return PlannerTexts(system, prompt("attributes_request"), goal_text(scene))
 
 
 def _field(d: Mapping[str, Any], key: str, where: str) -> Any:
@@ -143,19 +151,6 @@ def run_utamp2_vlm(
     return VlmOutcome(solved, plan, elapsed, reason, scores, facts, (answer,))
 
 
-def _goal_text(scene: Scene) -> str:
-    base = scene.type_of(scene.tower_base).name
-    note, spaces = "", ""
-    if scene.spaces:
-        names = ", ".join(s.name for s in scene.spaces)
-        note = (
-            f" The {base} is partly outside the robot's reachable workspace; the free "
-            f"space {names} next to it is inside the workspace."
-        )
-        spaces = f", and {names} for the free space"
-    return prompt("planner_goal", base=base, workspace_note=note, space_note=spaces)
-
-
 def run_vlm_planner(
     scene: Scene,
     client: VlmClient,
@@ -167,12 +162,12 @@ def run_vlm_planner(
     """SayCan proxy: detection question, then the plan, mapped to U-TAMP-2 actions."""
     png = image if image is not None else render_scene_png(scene, seed)
     start = time.perf_counter()
-    system = _system_text(scene) + "\n\n" + prompt("planner_system")
-    messages = _detection_messages(system, png)
+    texts = planner_texts(scene)
+    messages = _detection_messages(texts.system, png)
     first = client.chat(messages)
     messages += [
         {"role": "assistant", "content": first},
-        {"role": "user", "content": _goal_text(scene)},
+        {"role": "user", "content": texts.goal},
     ]
     second = client.chat(messages)
     elapsed = time.perf_counter() - start
@@ -181,7 +176,7 @@ def run_vlm_planner(
         raise EndpointError("answer: 'plan' is not a non-empty list of actions")
     if any(not split_step(s) for s in steps):
         raise EndpointError("answer: 'plan' contains an empty action")
-    mapped = map_plan(scene, steps)
+    mapped = map_plan(scene, steps, answer_domain(scene))
     reason = None if mapped.complete else f"plan not mappable: {mapped.error}"
     return VlmOutcome(mapped.complete, mapped.actions, elapsed, reason, answers=(first, second))
 
