@@ -118,7 +118,10 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       `utamp_gym.affordances.rim`); ``affordances``: "gt" | "rules" | "noisy" (re-detected
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5; 2–6 for procedural splits) restricts the scenes, ``scene`` fixes
-      one (suite, packaged or file name); ``reset(options={"scene": name})`` picks the scene
+      one (suite, packaged or file name, or a `utamp_gym.scene.model.Scene` built in code:
+      no file is written; unless it is the packaged scene of its name it has an action
+      universe and per-scene caches of its own, `Scene.key`, whatever its name);
+      ``reset(options={"scene": name})`` picks the scene
       of one episode, ``reset(options={"world_seed": s})`` seeds its simulated world (the
       simulator's generator, and a second stream of it for injected faults; default: both
       from the env's RNG; the open-loop runner, `utamp_gym.agents.runs`, uses it);
@@ -300,7 +303,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         scene, world_seed = chosen_scene(self.scenes, options, self.np_random)
         self._episode = episode = Episode.start(scene, self._goals)
         atoms = self._initial_atoms(scene, self.np_random, self._goals.override(scene))
-        self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
+        self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.key)
         self._grounding.reset(scene, atoms.static, self.np_random, world_seed)
         goal, progress = self._grounding.progress(
             episode.goal, episode.base, self.options.reward_shaping

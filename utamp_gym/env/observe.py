@@ -39,7 +39,7 @@ class ScenePresence:
         self._cache: SceneCache[np.ndarray] = SceneCache()  # resets are frequent
 
     def reset(self, scene: Scene) -> None:
-        self._rows = self._cache.get(scene.name, lambda: self._of(scene))
+        self._rows = self._cache.get(scene.key, lambda: self._of(scene))
 
     def _of(self, scene: Scene) -> np.ndarray:
         names = set(scene.object_names)

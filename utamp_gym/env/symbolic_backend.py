@@ -143,7 +143,7 @@ class SymbolicBackend(UniverseByKey):
                 "a look in symbolic grounding renders the episode's world: reset the env "
                 "with options={'world_seed': SEED} first"
             )
-        shown = (self._scene.name, self._world.bit_generator.state)
+        shown = (self._scene.key, self._world.bit_generator.state)
         if self._simulator is None:
             self._simulator = backend_factory(DEFAULT_BACKEND)()
         if self._shown != shown:
