@@ -55,13 +55,16 @@ TIMING_KEYS = ("ik_s", "plan_s", "sim_s", "wall_s", "sim_time_s", "perceive_s", 
 def macro_info(macro: MacroResult | None) -> dict[str, Any]:
     """``info["macro_result"]``: a `MacroResult` as a fixed dict (not executed: None)."""
     if macro is None:
-        return {"executed": False, "success": False, "reason": "", "retries": ""}
+        return _NOT_EXECUTED.copy()
     return {
         "executed": True,
         "success": bool(macro.success),
         "reason": macro.reason or "",
         "retries": "; ".join(macro.retries),
     }
+
+
+_NOT_EXECUTED = {"executed": False, "success": False, "reason": "", "retries": ""}
 
 
 def timings_info(timings: Mapping[str, float] | None) -> dict[str, float]:
@@ -118,8 +121,8 @@ class EpisodeInfo:
             "action_mask": mask,
             "failure_reason": failure or "",
             "timings": {} if timings is None else timings_info(timings),
-            "macro_result": macro_info(macro),
-            "unexpected_atoms": join_atoms(unexpected),
+            "macro_result": _NOT_EXECUTED.copy() if macro is None else macro_info(macro),
+            "unexpected_atoms": join_atoms(unexpected) if unexpected else "",
             "anomalies": (
                 anomalies_info(self.objects, anomalies) if anomalies else self._calm.copy()
             ),

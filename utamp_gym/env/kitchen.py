@@ -316,7 +316,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         return self._observation(), self._info(episode, goal, None, None, NOT_RUN, {})
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
-        episode, state = self._episode, self._state
+        episode, state, grounding = self._episode, self._state, self._grounding
         if episode is None:
             action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
             raise RuntimeError("call reset() before step()")
@@ -330,13 +330,14 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         elif not state.allowed(a):  # the mask (with masks="affordances": applicable)
             failure = state.failure(a)
         else:  # the grounding runs it: the backend executes (or the outcome model decides)
-            stepped = self._grounding.step(a, self.np_random)
+            stepped = grounding.step(a, self.np_random)
             failure = stepped.failure
-        goal, progress = self._grounding.progress(episode.goal, episode.base, self._shaping)
+        goal, progress = grounding.progress(episode.goal, episode.base, self._shaping)
         reward, terminated = self._task.outcome(
             goal=goal, failed=failure is not None, progress=progress
         )
-        anomalies = self._anomalies()
+        perception = grounding.perception  # None (symbolic grounding): no anomalies
+        anomalies = {} if perception is None else dict(perception.anomalies)
         terminated = terminated or state.dead_end() or bool(anomalies)
         info = self._info(episode, goal, a, failure, stepped, anomalies)
         self._rendering.step()

@@ -84,6 +84,7 @@ class Observer(UniverseByKey):
         if opts.goal_observation:  # a new env id's spaces (env.object_goal)
             space.spaces.update(goal_entry_spaces(objects, universe))
         self.space = space
+        self._plain = objects is None and not opts.goal_observation and not opts.camera
 
     def reset(self, scene: Scene, atoms: EpisodeAtoms) -> None:
         """Start an episode of `scene` whose initial atoms (and goal) are `atoms`."""
@@ -94,6 +95,13 @@ class Observer(UniverseByKey):
     def __call__(self) -> Obs:
         """The observation now (fresh arrays)."""
         state, grounding = self._state, self._grounding
+        if self._plain:  # the grounded entries only: the common case, first
+            return {
+                "symbolic": state.vector(),
+                "object_poses": grounding.pose_rows(),
+                "present": self._present.rows(),
+                "robot": grounding.robot(),
+            }
         if self._objects is not None:
             rows = dict(zip(self._rows, grounding.pose_rows(), strict=True))
             obs = self._objects.observation(state.vector(), state.static_atoms, rows)
