@@ -28,6 +28,8 @@ if TYPE_CHECKING:
     from utamp_gym.env.options import EnvOptions
 
 Obs = dict[str, np.ndarray]
+#: fluent states whose ``symbolic`` vector an `Observer` keeps (then it starts afresh)
+VECTORS_KEPT = 4096
 
 
 class ScenePresence:
@@ -57,7 +59,11 @@ def grounded_space(opts: EnvOptions, universe: Universe) -> spaces.Dict:
 
 class Observer(UniverseByKey):
     """The observation space of one env's options, and its observations (module docstring):
-    `reset` at every episode start (after the object slots are drawn), then ``observer()``."""
+    `reset` at every episode start (after the object slots are drawn), then ``observer()``.
+
+    The ``symbolic`` vector is a pure function of the symbolic state's bits, and episodes
+    revisit states (an undone pick, the same tower built again): the vectors of the last
+    `VECTORS_KEPT` states met are kept, and each observation gets a copy."""
 
     def __init__(
         self,
@@ -75,6 +81,7 @@ class Observer(UniverseByKey):
         self._image_size = opts.image_size if opts.camera else None
         self._goal_observation = opts.goal_observation
         self._goal: dict[str, np.ndarray] = {}  # the episode's goal entries
+        self._vectors: dict[int, np.ndarray] = {}  # state bits -> its symbolic vector
         space = grounded_space(opts, universe)
         if objects is not None:  # fixed spaces over object slots (env.objects)
             image = space.spaces.get("image")
@@ -97,17 +104,17 @@ class Observer(UniverseByKey):
         state, grounding = self._state, self._grounding
         if self._plain:  # the grounded entries only: the common case, first
             return {
-                "symbolic": state.vector(),
+                "symbolic": self._vector(),
                 "object_poses": grounding.pose_rows(),
                 "present": self._present.rows(),
                 "robot": grounding.robot(),
             }
         if self._objects is not None:
             rows = dict(zip(self._rows, grounding.pose_rows(), strict=True))
-            obs = self._objects.observation(state.vector(), state.static_atoms, rows)
+            obs = self._objects.observation(self._vector(), state.static_atoms, rows)
         else:
             obs = {
-                "symbolic": state.vector(),
+                "symbolic": self._vector(),
                 "object_poses": grounding.pose_rows(),
                 "present": self._present.rows(),
                 "robot": grounding.robot(),
@@ -117,3 +124,13 @@ class Observer(UniverseByKey):
         if self._image_size is not None:
             obs["image"] = grounding.image(self._image_size)
         return obs
+
+    def _vector(self) -> np.ndarray:
+        """A fresh copy of the ``symbolic`` vector of the state now (class docstring)."""
+        bits = self._state.bits
+        vector = self._vectors.get(bits)
+        if vector is None:
+            if len(self._vectors) >= VECTORS_KEPT:
+                self._vectors.clear()
+            vector = self._vectors[bits] = self._state.vector()
+        return vector.copy()
