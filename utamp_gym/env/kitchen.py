@@ -244,11 +244,12 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._goals = EpisodeGoals(opts.task)
         self.scenes = self._goals.usable(opts.scenes())  # those the task has a goal in
         self.universe: Universe = ground_universe(opts.universe_key())
-        self.action_space = spaces.Discrete(self.universe.n_actions)
+        actions = spaces.Discrete(self.universe.n_actions)
         self._objects: ObjectInterface | None = None
         if opts.interface == "objects":  # fixed spaces over object slots (env.objects)
             self._objects = ObjectInterface(self.universe)
-            self.action_space = self._objects.action_space
+            actions = self._objects.action_space
+        self.action_space, self._n_actions = actions, int(actions.n)
         self._state = SymbolicState(self.universe, opts.masks)
         self._grounding = make_grounding(opts, self.universe, self._state)
         self._observation = Observer(
@@ -318,7 +319,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         episode, state, grounding = self._episode, self._state, self._grounding
         if episode is None:
-            action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
+            action_id(action, self._n_actions)
             raise RuntimeError("call reset() before step()")
         if self._objects is None:
             a, failure = action_id(action, self.universe.n_actions), None
@@ -359,7 +360,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         index that has no ground action in this scene."""
         if self._objects is None:
             return action_id(action, self.universe.n_actions), None
-        index = action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
+        index = action_id(action, self._n_actions)
         a = self._objects.resolve(index, self._state.mask(), self._state.applicable_mask())
         if a is None:
             return None, f"no such action in scene {self.scene.name}: " + (
