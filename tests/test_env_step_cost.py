@@ -2,7 +2,8 @@
 
 The mask comes from 64-bit words of literals (was: bits gathered and summed per op);
 `SymbolicState.dead_end` reads the first applicable action off `argmax` instead of `any()`;
-``info["anomalies"]`` without anomalies is a copy of one cached all-empty dict per scene;
+``info["anomalies"]`` without anomalies is a copy of one all-empty dict per episode; the
+observation's ``symbolic`` vector is a copy of one kept per state (`Observer`);
 `Scene.tower_base` and `Scene.object_names` are computed once per scene.
 """
 
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 
 import utamp_gym  # noqa: F401  (registers the env ids)
+from utamp_gym.env import observe
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.symbolic.state import SymbolicState
 
@@ -114,3 +116,29 @@ def test_mask_and_vector_as_before_along_random_walks(env_id: str, options: dict
             if terminated or truncated:
                 break
     assert steps > 60
+
+
+@pytest.mark.parametrize("kept", [2, 4096])
+def test_kept_symbolic_vectors_are_the_states_and_fresh_copies(
+    kept: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The observation's ``symbolic`` vector comes from the `Observer`'s kept vectors (by the
+    state's bits): along walks that revisit states (undone picks), and when the kept ones
+    overflow (`VECTORS_KEPT` 2), it is the state's, and changing it changes no later one."""
+    monkeypatch.setattr(observe, "VECTORS_KEPT", kept)
+    env = UTampKitchenEnv(suite="pick-place", grounding="symbolic")
+    rng = np.random.default_rng(4)
+    seen: dict[int, int] = {}
+    for seed in range(4):
+        obs, info = env.reset(seed=seed)
+        for _ in range(40):
+            state = env._state
+            assert (obs["symbolic"] == reference_vector(state)).all()
+            seen[state.bits] = seen.get(state.bits, 0) + 1
+            obs["symbolic"][:] = 7  # a caller's change stays in its copy
+            valid = np.flatnonzero(info["action_mask"])
+            obs, _, terminated, _, info = env.step(int(rng.choice(valid)))
+            if terminated:
+                break
+    assert max(seen.values()) > 2  # states were revisited
+    assert len(env._observation._vectors) <= kept

@@ -20,9 +20,10 @@ SCENE = "pick-place/000"  # a board on a tray: the tower's one support
 @pytest.fixture
 def loop():
     env = UTampKitchenEnv(suite="pick-place", scene=SCENE, grounding="symbolic", affordances="gt")
-    obs, info = env.reset(seed=run_seed(SCENE, 0))
+    world = run_seed(SCENE, 0)
+    obs, info = env.reset(seed=world, options={"world_seed": world})
     policy = PlannerPolicy(env, "utamp2-perceived")
-    ip = InteractivePerception(policy, env, run_seed(SCENE, 0))
+    ip = InteractivePerception(policy, env)
     ip(obs, info)  # the first decision: look, believe, plan
     yield ip, obs, info
     env.close()

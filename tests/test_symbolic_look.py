@@ -39,16 +39,37 @@ def test_the_symbolic_look_is_the_physics_world_of_the_same_seed() -> None:
         env.close()
 
 
-def test_the_symbolic_look_needs_the_world_seed_and_comes_first() -> None:
+def test_the_symbolic_look_needs_the_world_seed() -> None:
     env = UTampKitchenEnv(suite="pick-place", grounding="symbolic", scene=SCENE, masks="none")
     try:
         env.reset(seed=0)
         with pytest.raises(NoWorldToLook, match="world_seed"):
             env.unwrapped.backend.survey()
+        with pytest.raises(NoWorldToLook, match="world_seed"):
+            env.unwrapped.backend.cameras  # noqa: B018
+    finally:
+        env.close()
+
+
+def test_the_symbolic_look_shows_the_initial_world_after_acting() -> None:
+    """Nothing is simulated, and the attributes a look perceives do not change as objects
+    move: after actions the look still shows the episode's initial arrangement."""
+    env = UTampKitchenEnv(suite="pick-place", grounding="symbolic", scene=SCENE, masks="none")
+    try:
         env.reset(seed=0, options={"world_seed": 1})
-        step = plan_scene(resolve_scene(SCENE), "utamp2-gt").plan[0]
-        env.step(env.unwrapped.universe.index(step))
-        with pytest.raises(NoWorldToLook, match="before the first action"):
-            env.unwrapped.backend.survey()
+        backend = env.unwrapped.backend
+        before = backend.survey()
+        poses = dict(backend.object_poses())
+        plan = plan_scene(resolve_scene(SCENE), "utamp2-gt").plan
+        for step in plan[:2]:
+            _, _, _, _, info = env.step(env.unwrapped.universe.index(step))
+            assert info["failure_reason"] == ""
+        moved = backend.object_poses()
+        assert any(not np.array_equal(poses[n], moved[n]) for n in poses)  # it acted
+        after = backend.survey()
+        for a, b in zip(before.views, after.views, strict=True):
+            np.testing.assert_array_equal(a.depth, b.depth)
+            np.testing.assert_array_equal(a.instances, b.instances)
+        assert isinstance(backend, Surveying)
     finally:
         env.close()

@@ -17,10 +17,9 @@ headless video of the execution (MP4 via imageio-ffmpeg, or GIF).
 
 from __future__ import annotations
 
-import tempfile
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from contextlib import ExitStack, contextmanager
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,10 +30,9 @@ from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
 from utamp_gym.env.symbolic_backend import SymbolicBackend
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
-from utamp_gym.scene.io import scene_to_toml
 from utamp_gym.scene.model import Scene
 from utamp_gym.seeding import run_seed
-from utamp_gym.suites import SUITES, UnknownSceneError, resolve_scene
+from utamp_gym.suites import SUITES, resolve_scene
 from utamp_gym.tasks.goal import unmet
 
 VIDEO_SIZE = (480, 360)  # width, height
@@ -99,17 +97,20 @@ class Execution:
 
 
 def scene_env(
-    scene: str,
+    scene: str | Scene,
     *,
     grounding: str = "physics",
     backend: PhysicsBackend | None = None,
     **options: Any,
 ) -> UTampKitchenEnv:
-    """The env of one scene (`scene`: a suite name, a packaged name or a file path): its
-    suite's action universe and rows, or the scene's own; `backend` an existing simulator to
-    act in (the env then uses it instead of making one); `options` further env options."""
-    suite = scene.split("/", 1)[0] if scene.split("/", 1)[0] in SUITES else None
-    names = resolve_scene(scene).object_names  # a procedural scene: the universe of its own
+    """The env of one scene (`scene`: a suite name, a packaged name, a file path or a `Scene`
+    built in code, which the env takes as it is): its suite's action universe and rows, or the
+    scene's own; `backend` an existing simulator to act in (the env then uses it instead of
+    making one); `options` further env options."""
+    name = scene if isinstance(scene, str) else scene.name
+    suite = name.split("/", 1)[0] if name.split("/", 1)[0] in SUITES else None
+    built = resolve_scene(scene) if isinstance(scene, str) else scene
+    names = built.object_names  # a procedural scene: the universe of its own
     objects = DEFAULT_OBJECTS if set(names) <= set(DEFAULT_OBJECTS) else names
     if backend is not None:
         options["backend"] = lambda **_: backend
@@ -119,7 +120,7 @@ def scene_env(
 
 
 def open_loop_env(
-    scene: str,
+    scene: str | Scene,
     *,
     backend: PhysicsBackend | None = None,
     pose_noise: float = DEFAULT_POSE_NOISE,
@@ -139,27 +140,6 @@ def open_loop_env(
         scene, backend=backend, masks="none", disturbance=disturbance, record_timings=True,
         **physics,
     )  # fmt: skip
-
-
-@contextmanager
-def scene_ref(scene: Scene | str) -> Iterator[str]:
-    """A name the env resolves to `scene`: its own name when that names this very scene
-    (a suite or packaged scene), else a scene file written for the duration (a `Scene`
-    built in code, e.g. a test's single object)."""
-    if isinstance(scene, str):
-        yield scene
-        return
-    try:
-        known = resolve_scene(scene.name) == scene
-    except UnknownSceneError:
-        known = False
-    if known:
-        yield scene.name
-        return
-    with tempfile.TemporaryDirectory(prefix="utamp-scene-") as tmp:
-        path = Path(tmp) / f"{scene.name.replace('/', '-')}.toml"
-        path.write_text(scene_to_toml(scene))
-        yield str(path)
 
 
 def execute_plan(
@@ -189,11 +169,10 @@ def execute_plan(
     are then its own.
     """
     own = env is None and backend is None
-    stack = ExitStack()  # a scene built in code lives in a file for the call
     if env is None:
         env = open_loop_env(
-            stack.enter_context(scene_ref(scene)), backend=backend, pose_noise=pose_noise,
-            disturbance=disturbance, perception=perception, grounding=grounding,
+            scene, backend=backend, pose_noise=pose_noise, disturbance=disturbance,
+            perception=perception, grounding=grounding,
         )  # fmt: skip
     sim: Any = env.backend
     unknown = _first_unknown(env, plan)  # played up to it, and failed there
@@ -219,7 +198,6 @@ def execute_plan(
         sim.frame_sink = None
         if own:
             env.close()
-        stack.close()
     failed = next((s for s in steps if not s.success), None)
     failure = None
     if failed is not None:
@@ -253,16 +231,17 @@ def run_episode(
     ``utamp2-perceived`` looks at the scene first: use
     `utamp_gym.eval.perceived.run_perceived_episode`.
     """
-    ref = scene if isinstance(scene, str) else scene.name
     t0 = time.perf_counter()
-    outcome = plan_scene(resolve_scene(ref), method, seed=seed)
+    outcome = plan_scene(
+        resolve_scene(scene) if isinstance(scene, str) else scene, method, seed=seed
+    )
     return episode_result(
-        ref, outcome, outcome.plan, seed, video, t0, backend, pose_noise, disturbance, perception
+        scene, outcome, outcome.plan, seed, video, t0, backend, pose_noise, disturbance, perception
     )
 
 
 def episode_result(
-    scene: str,
+    scene: str | Scene,
     outcome: PlanOutcome,
     plan: Sequence[str],
     seed: int,

@@ -5,6 +5,8 @@ Import the modules directly; this package imports nothing and registers nothing
 
 * `registry` – env ids from the definition files in ``envs/`` and `register_envs()`;
 * `kitchen` – `UTampKitchenEnv` (its docstring documents spaces, reward and options);
+* `episode`, `observe`, `info` – what an episode is about (its scene and goal, fixed at
+  reset), the observation the agent gets, and the info dicts' fixed structure;
 * `task`, `render` – reward and spaces, the schematic renderer (the physics backend
   protocol is `utamp_gym.backend`; the symbolic world model the env steps in, universe,
   atoms, state, poses and outcome model, is `utamp_gym.symbolic`: ``env.universe``,

@@ -103,9 +103,9 @@ class EpisodeGoals:
         return kept
 
     def get(self, scene: Scene) -> Goal | None:
-        if scene.name not in self._goals:
-            self._goals[scene.name] = resolve_goal(scene, self.task)
-        return self._goals[scene.name]
+        if scene.key not in self._goals:
+            self._goals[scene.key] = resolve_goal(scene, self.task)
+        return self._goals[scene.key]
 
     def goal(self, scene: Scene) -> Goal:
         goal = self.get(scene)
@@ -118,9 +118,9 @@ class EpisodeGoals:
         return None if self.task is None else self.goal(scene)
 
     def instruction(self, scene: Scene) -> str:
-        if scene.name not in self._texts:
-            self._texts[scene.name] = goal_instruction(scene, self.goal(scene))
-        return self._texts[scene.name]
+        if scene.key not in self._texts:
+            self._texts[scene.key] = goal_instruction(scene, self.goal(scene))
+        return self._texts[scene.key]
 
 
 __all__ = ["TOWER", "EpisodeGoals", "Task", "check_task", "goal_instruction", "resolve_goal"]

@@ -29,7 +29,6 @@ from utamp_gym.env.physics import NOT_RUN, PhysicalGrounding, Stepped
 from utamp_gym.env.symbolic_backend import SymbolicBackend
 from utamp_gym.env.task import TOWER, progress
 from utamp_gym.scene.model import Scene
-from utamp_gym.symbolic.scene_cache import SceneCache
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe
 from utamp_gym.tasks.goal import Goal
@@ -37,25 +36,6 @@ from utamp_gym.tasks.goal import Goal
 if TYPE_CHECKING:
     from utamp_gym.env.options import EnvOptions
     from utamp_gym.perception.abstraction import Perception
-
-
-class ScenePresence:
-    """Which observation rows (`objects`) are objects of the episode's scene."""
-
-    def __init__(self, objects: Sequence[str]) -> None:
-        self._objects = tuple(objects)
-        self._rows = np.zeros(len(self._objects), np.int8)
-        self._cache: SceneCache[np.ndarray] = SceneCache()  # resets are frequent
-
-    def reset(self, scene: Scene) -> None:
-        self._rows = self._cache.get(scene.name, lambda: self._of(scene))
-
-    def _of(self, scene: Scene) -> np.ndarray:
-        names = set(scene.object_names)
-        return np.array([n in names for n in self._objects], np.int8)
-
-    def rows(self) -> np.ndarray:
-        return self._rows.copy()  # the cached array itself is never handed out
 
 
 class Grounding(Protocol):

@@ -41,7 +41,6 @@ without a symbol. The objects themselves are still there: `UTampKitchenEnv.macro
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -56,13 +55,16 @@ TIMING_KEYS = ("ik_s", "plan_s", "sim_s", "wall_s", "sim_time_s", "perceive_s", 
 def macro_info(macro: MacroResult | None) -> dict[str, Any]:
     """``info["macro_result"]``: a `MacroResult` as a fixed dict (not executed: None)."""
     if macro is None:
-        return {"executed": False, "success": False, "reason": "", "retries": ""}
+        return _NOT_EXECUTED.copy()
     return {
         "executed": True,
         "success": bool(macro.success),
         "reason": macro.reason or "",
         "retries": "; ".join(macro.retries),
     }
+
+
+_NOT_EXECUTED = {"executed": False, "success": False, "reason": "", "retries": ""}
 
 
 def timings_info(timings: Mapping[str, float] | None) -> dict[str, float]:
@@ -83,15 +85,53 @@ def split_atoms(text: str) -> list[str]:
 
 def anomalies_info(objects: Iterable[str], anomalies: Mapping[str, str]) -> dict[str, str]:
     """``info["anomalies"]``: every object of the scene -> its anomaly (``""``: none)."""
-    if not anomalies:  # every step of symbolic grounding
-        return _no_anomalies(tuple(objects)).copy()
     return {name: str(anomalies.get(name, "")) for name in objects}
 
 
-@lru_cache(maxsize=1024)
-def _no_anomalies(objects: tuple[str, ...]) -> dict[str, str]:
-    """``info["anomalies"]`` without any (copied by the caller: copying beats building)."""
-    return dict.fromkeys(objects, "")
+class EpisodeInfo:
+    """The info dicts of one episode: the entries fixed for the episode (``scene``, ``goal``,
+    ``instruction``, the all-empty ``anomalies``) are made once, at reset, and each step
+    fills in the rest (every entry a fresh object: a caller may change what it is given)."""
+
+    __slots__ = ("_calm", "goal", "instruction", "objects", "scene")
+
+    def __init__(
+        self, scene: str, objects: Iterable[str], goal: tuple[str, ...], instruction: str
+    ) -> None:
+        self.scene, self.objects = scene, tuple(objects)
+        self.goal, self.instruction = goal, instruction
+        self._calm = dict.fromkeys(self.objects, "")  # copied: copying beats building
+
+    def __call__(
+        self,
+        action: str | None,
+        mask: np.ndarray,
+        failure: str | None,
+        timings: Mapping[str, float] | None,
+        macro: MacroResult | None,
+        unexpected: Iterable[str],
+        anomalies: Mapping[str, str],
+        fault: str | None,
+        success: bool,
+    ) -> dict[str, Any]:
+        """One step's (or reset's) info in the fixed structure of the module docstring;
+        `timings` None leaves ``info["timings"]`` empty (not recorded)."""
+        return {
+            "action": action or "",
+            "action_mask": mask,
+            "failure_reason": failure or "",
+            "timings": {} if timings is None else timings_info(timings),
+            "macro_result": _NOT_EXECUTED.copy() if macro is None else macro_info(macro),
+            "unexpected_atoms": join_atoms(unexpected) if unexpected else "",
+            "anomalies": (
+                anomalies_info(self.objects, anomalies) if anomalies else self._calm.copy()
+            ),
+            "fault": fault or "",
+            "scene": self.scene,
+            "is_success": bool(success),
+            "goal": self.goal,
+            "instruction": self.instruction,
+        }
 
 
 def step_info(
@@ -110,19 +150,6 @@ def step_info(
     goal: tuple[str, ...],
     instruction: str,
 ) -> dict[str, Any]:
-    """One step's (or reset's) info in the fixed structure of the module docstring;
-    `timings` None leaves ``info["timings"]`` empty (not recorded)."""
-    return {
-        "action": action or "",
-        "action_mask": mask,
-        "failure_reason": failure or "",
-        "timings": {} if timings is None else timings_info(timings),
-        "macro_result": macro_info(macro),
-        "unexpected_atoms": join_atoms(unexpected),
-        "anomalies": anomalies_info(objects, anomalies),
-        "fault": fault or "",
-        "scene": scene,
-        "is_success": bool(success),
-        "goal": goal,
-        "instruction": instruction,
-    }
+    """One info on its own (`EpisodeInfo`, which the env keeps per episode, for one call)."""
+    episode = EpisodeInfo(scene, objects, goal, instruction)
+    return episode(action, mask, failure, timings, macro, unexpected, anomalies, fault, success)

@@ -21,30 +21,24 @@ from utamp_gym.backend import (
     MacroResult,
     PhysicsBackend,
 )
+from utamp_gym.env.episode import RESET_OPTIONS, Episode, chosen_scene
 from utamp_gym.env.goals import EpisodeGoals
-from utamp_gym.env.grounding import ScenePresence, make_grounding
-from utamp_gym.env.info import step_info
-from utamp_gym.env.object_goal import goal_entries, goal_entry_spaces
+from utamp_gym.env.grounding import make_grounding
 from utamp_gym.env.objects import ObjectInterface
+from utamp_gym.env.observe import Obs, Observer
 from utamp_gym.env.options import EnvOptions, action_id
 from utamp_gym.env.physics import NOT_RUN, Stepped
-from utamp_gym.env.task import KitchenTask, observation_space
+from utamp_gym.env.task import KitchenTask
 from utamp_gym.env.viewer import FRAME_RATE, Rendering
 from utamp_gym.env.views import KitchenViews
-from utamp_gym.errors import UnknownNameError
-from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.atoms import InitialAtoms
 from utamp_gym.symbolic.state import SymbolicState
 from utamp_gym.symbolic.universe import Universe, ground_universe
 from utamp_gym.tasks.goal import Goal
 
-#: what ``reset(options=...)`` accepts: the episode's scene, and the seed of its simulated
-#: world (physics: the simulator's generator, and a second stream of it for injected
-#: faults; default: drawn from the env's RNG, which then also draws the faults)
-RESET_OPTIONS = ("scene", "world_seed")
 #: observation rows of `object_poses` / `present`: the suites' catalogue objects
 DEFAULT_OBJECTS = ("tray", "salt", "mug", "board", "pan")
-Obs = dict[str, np.ndarray]
+__all__ = ["DEFAULT_OBJECTS", "RESET_OPTIONS", "Obs", "UTampKitchenEnv"]
 
 
 class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
@@ -124,7 +118,10 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       `utamp_gym.affordances.rim`); ``affordances``: "gt" | "rules" | "noisy" (re-detected
       every episode, each attribute wrong with probability ``noise``; utamp1 has none);
     * ``num_objects`` (2–5; 2–6 for procedural splits) restricts the scenes, ``scene`` fixes
-      one (suite, packaged or file name); ``reset(options={"scene": name})`` picks the scene
+      one (suite, packaged or file name, or a `utamp_gym.scene.model.Scene` built in code:
+      no file is written; unless it is the packaged scene of its name it has an action
+      universe and per-scene caches of its own, `Scene.key`, whatever its name);
+      ``reset(options={"scene": name})`` picks the scene
       of one episode, ``reset(options={"world_seed": s})`` seeds its simulated world (the
       simulator's generator, and a second stream of it for injected faults; default: both
       from the env's RNG; the open-loop runner, `utamp_gym.agents.runs`, uses it);
@@ -247,29 +244,26 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._goals = EpisodeGoals(opts.task)
         self.scenes = self._goals.usable(opts.scenes())  # those the task has a goal in
         self.universe: Universe = ground_universe(opts.universe_key())
-        self.action_space = spaces.Discrete(self.universe.n_actions)
-        self.observation_space = self._grounded_space()
+        actions = spaces.Discrete(self.universe.n_actions)
         self._objects: ObjectInterface | None = None
         if opts.interface == "objects":  # fixed spaces over object slots (env.objects)
             self._objects = ObjectInterface(self.universe)
-            self.action_space = self._objects.action_space
-            self.observation_space = self._objects.observation_space
-            if opts.camera:
-                self.observation_space["image"] = self._grounded_space()["image"]
-        if opts.goal_observation:  # a new env id's spaces (env.object_goal)
-            self.observation_space.spaces.update(goal_entry_spaces(self._objects, self.universe))
-        self._goal_obs: dict[str, np.ndarray] = {}
+            actions = self._objects.action_space
+        self.action_space, self._n_actions = actions, int(actions.n)
         self._state = SymbolicState(self.universe, opts.masks)
         self._grounding = make_grounding(opts, self.universe, self._state)
-        self._present = ScenePresence(opts.objects)
+        self._observation = Observer(
+            opts, self.universe, self._state, self._grounding, self._objects
+        )
+        self.observation_space = self._observation.space
+        self._shaping = opts.reward_shaping
         self._task = KitchenTask(
             shaping=opts.reward_shaping, terminate_on_failure=opts.terminate_on_failure
         )
         self._initial_atoms = InitialAtoms(
             self.universe.domain, opts.domain, opts.affordances, opts.noise
         )
-        self._scene: Scene | None = None
-        self._goal: Goal | None = None
+        self._episode: Episode | None = None  # set by reset
         self._last: tuple[MacroResult | None, tuple[str, ...]] = (None, ())
         self._rendering = Rendering(
             render_mode,
@@ -285,14 +279,16 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
     def goal(self) -> Goal:
         """The episode's goal (`utamp_gym.env.goals`: the option ``task``, default the
         scene's own goal, else the paper's tower)."""
-        if self._goal is None:
+        if self._episode is None:
             raise RuntimeError("call reset() before reading the goal")
-        return self._goal
+        return self._episode.goal
 
     @property
     def instruction(self) -> str:
         """The episode's goal in words (``info["instruction"]``)."""
-        return self._goals.instruction(self.scene)
+        if self._episode is None:
+            raise RuntimeError("no episode yet: call reset() first")
+        return self._episode.instruction
 
     def action_masks(self) -> np.ndarray:
         """Bool mask of the applicable actions (the sb3-contrib `MaskablePPO` convention)."""
@@ -305,51 +301,46 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Obs, dict[str, Any]]:
         super().reset(seed=seed)
-        options = dict(options or {})
-        name = options.pop("scene", None)
-        world_seed = options.pop("world_seed", None)
-        if options:
-            raise UnknownNameError("reset option", next(iter(options)), RESET_OPTIONS)
-        if name is None:
-            scene = self.scenes[int(self.np_random.integers(len(self.scenes)))]
-        else:
-            by_name = {s.name: s for s in self.scenes}
-            if name not in by_name:
-                raise UnknownNameError("scene of this env", str(name), by_name)
-            scene = by_name[name]
-        self._scene, self._goal = scene, self._goals.goal(scene)
+        scene, world_seed = chosen_scene(self.scenes, options, self.np_random)
+        self._episode = episode = Episode.start(scene, self._goals)
         atoms = self._initial_atoms(scene, self.np_random, self._goals.override(scene))
-        self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.name)
-        self._present.reset(scene)
+        self._state.reset(atoms, cache_key=None if self._initial_atoms.noisy else scene.key)
         self._grounding.reset(scene, atoms.static, self.np_random, world_seed)
-        goal, progress = self._progress(self.options.reward_shaping)
+        goal, progress = self._grounding.progress(
+            episode.goal, episode.base, self.options.reward_shaping
+        )
         self._task.initialize_episode(progress)
         self._rendering.reset()
         if self._objects is not None:  # drawn last: the other draws match the grounded env's
             self._objects.reset(scene, self.np_random)
-        if self.options.goal_observation:
-            self._goal_obs = goal_entries(self._objects, self.universe, atoms)
-        return self._observation(), self._info(goal, None, None, NOT_RUN)
+        self._observation.reset(scene, atoms)
+        return self._observation(), self._info(episode, goal, None, None, NOT_RUN, {})
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
-        if self._scene is None:
-            action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
+        episode, state, grounding = self._episode, self._state, self._grounding
+        if episode is None:
+            action_id(action, self._n_actions)
             raise RuntimeError("call reset() before step()")
-        a, failure = self._ground(action)
+        if self._objects is None:
+            a, failure = action_id(action, self.universe.n_actions), None
+        else:
+            a, failure = self._ground(action)
         stepped = NOT_RUN
         if a is None:  # an object-centric index without a ground action in this scene
             pass
-        elif not self._state.allowed(a):  # the mask (with masks="affordances": applicable)
-            failure = self._state.failure(a)
+        elif not state.allowed(a):  # the mask (with masks="affordances": applicable)
+            failure = state.failure(a)
         else:  # the grounding runs it: the backend executes (or the outcome model decides)
-            stepped = self._grounding.step(a, self.np_random)
+            stepped = grounding.step(a, self.np_random)
             failure = stepped.failure
-        goal, progress = self._progress(self.options.reward_shaping)
+        goal, progress = grounding.progress(episode.goal, episode.base, self._shaping)
         reward, terminated = self._task.outcome(
             goal=goal, failed=failure is not None, progress=progress
         )
-        terminated = terminated or self._state.dead_end() or bool(self._anomalies())
-        info = self._info(goal, a, failure, stepped)
+        perception = grounding.perception  # None (symbolic grounding): no anomalies
+        anomalies = {} if perception is None else dict(perception.anomalies)
+        terminated = terminated or state.dead_end() or bool(anomalies)
+        info = self._info(episode, goal, a, failure, stepped, anomalies)
         self._rendering.step()
         return self._observation(), reward, terminated, False, info
 
@@ -364,17 +355,12 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         self._grounding.close()
 
     # ------------------------------------------------------------------ internals
-    def _grounded_space(self) -> spaces.Dict:
-        opts = self.options
-        image = opts.image_size if opts.camera else None
-        return observation_space(len(self.universe.fluent_atoms), len(opts.objects), image)
-
     def _ground(self, action: Any) -> tuple[int | None, str | None]:
         """(universe id, None) of an action; with the objects interface (None, why) for an
         index that has no ground action in this scene."""
         if self._objects is None:
             return action_id(action, self.universe.n_actions), None
-        index = action_id(action, int(self.action_space.n))  # type: ignore[attr-defined]
+        index = action_id(action, self._n_actions)
         a = self._objects.resolve(index, self._state.mask(), self._state.applicable_mask())
         if a is None:
             return None, f"no such action in scene {self.scene.name}: " + (
@@ -382,58 +368,35 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             )
         return a, None
 
-    def _progress(self, need_progress: bool) -> tuple[bool, int]:
-        """(goal reached, reward shaping's progress towards it; 0 unless `need_progress`),
-        measured once."""
-        return self._grounding.progress(self.goal, self.scene.tower_base, need_progress)
-
-    def _observation(self) -> Obs:
-        poses, robot = self._grounding.pose_rows(), self._grounding.robot()
-        if self._objects is not None:
-            rows = dict(zip(self.options.objects, poses, strict=True))
-            obs = self._objects.observation(self._state.vector(), self._state.static_atoms, rows)
-        else:
-            obs = {
-                "symbolic": self._state.vector(),
-                "object_poses": poses,
-                "present": self._present.rows(),
-                "robot": robot,
-            }
-        obs.update({k: v.copy() for k, v in self._goal_obs.items()})
-        if self.options.camera:
-            obs["image"] = self._image(self.options.image_size)
-        return obs
-
     def _render_frame(self) -> np.ndarray:
         """What ``render()`` shows: the camera (physics) or the labelled schematic."""
         return self._grounding.frame(self.options.render_size)
 
-    def _image(self, size: tuple[int, int]) -> np.ndarray:
-        return self._grounding.image(size)
-
     def _info(
         self,
+        episode: Episode,
         goal: bool,
         a: int | None,
         failure: str | None,
         stepped: Stepped,
+        anomalies: dict[str, str],
     ) -> dict[str, Any]:
-        macro = stepped.macro
-        self._last = (macro, stepped.unexpected)
-        return step_info(
-            action=None if a is None else self.universe.actions[a],
-            mask=self.action_masks(),
-            failure=failure,
-            timings=stepped.timings if self._grounding.recorded else None,
-            macro=macro,
-            unexpected=self._last[1],
-            objects=self._scene.object_names,  # type: ignore[union-attr]  # set by reset
-            anomalies=self._anomalies(),
-            fault=stepped.fault,
-            scene=self._scene.name,  # type: ignore[union-attr]
-            success=goal,
-            goal=self._goal.literals,  # type: ignore[union-attr]
-            instruction=self._goals.instruction(self._scene),  # type: ignore[arg-type]
+        if stepped is NOT_RUN:  # every symbolic step that did not fail: nothing to report
+            self._last = (None, ())
+            macro, unexpected, fault = None, (), None
+        else:
+            macro, unexpected, fault = stepped.macro, stepped.unexpected, stepped.fault
+            self._last = (macro, unexpected)
+        return episode.info(
+            None if a is None else self.universe.actions[a],
+            self.action_masks(),
+            failure,
+            stepped.timings if self._grounding.recorded else None,
+            macro,
+            unexpected,
+            anomalies,
+            fault,
+            goal,
         )
 
     # ------------------------------------------------------------------ pickling

@@ -330,7 +330,7 @@ class ObjectInterface:
             return _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
 
         if self.types is declared_type:  # declared types are fixed per scene
-            cached = self._maps.get(scene.name, scene_map)
+            cached = self._maps.get(scene.key, scene_map)
         else:
             cached = scene_map()
         self._index, self._atom_pos = cached.place(order)

@@ -22,8 +22,8 @@ from utamp_gym.backend import (
 )
 from utamp_gym.env.goals import Task, check_task
 from utamp_gym.env.object_space import INTERFACES
-from utamp_gym.errors import UnknownNameError
-from utamp_gym.scene.model import Scene
+from utamp_gym.errors import UnknownNameError, UtampError
+from utamp_gym.scene.model import BuiltScene, Scene
 from utamp_gym.suites import (
     ALL_SUITES,
     GOAL_SUITES,
@@ -63,6 +63,14 @@ def _unit(name: str, value: Any, high: float = 1.0) -> float:
     return float(value)
 
 
+def packaged(scene: Scene) -> bool:
+    """Whether `scene` is the suite or packaged scene its name names (field by field)."""
+    try:
+        return resolve_scene(scene.name) == scene
+    except (UtampError, OSError):  # no such name (or no readable file of it)
+        return False
+
+
 def _size(name: str, value: Any) -> tuple[int, int]:
     """(height, width) in pixels; an int means a square."""
     pair = (value, value) if isinstance(value, int) and not isinstance(value, bool) else value
@@ -87,7 +95,7 @@ class EnvOptions:
     affordances: str = "gt"
     noise: float = DEFAULT_NOISE
     num_objects: int | None = None
-    scene: str | None = None
+    scene: str | Scene | None = None
     terminate_on_failure: bool = False
     reward_shaping: bool = False
     render_mode: str | None = None
@@ -160,8 +168,10 @@ class EnvOptions:
                 f"num_objects must be an integer in {MIN_OBJECTS}..{len(names)} or None, "
                 f"got {self.num_objects!r}"
             )
-        if self.scene is not None and not isinstance(self.scene, str):
-            raise ValueError(f"scene must be a scene name or path, got {self.scene!r}")
+        if self.scene is not None and not isinstance(self.scene, str | Scene):
+            raise ValueError(f"scene must be a scene name, a path or a Scene, got {self.scene!r}")
+        if isinstance(self.scene, Scene) and packaged(self.scene):  # its name says it all
+            object.__setattr__(self, "scene", self.scene.name)
         _bool("terminate_on_failure", self.terminate_on_failure)
         _bool("reward_shaping", self.reward_shaping)
         _bool("camera", self.camera)
@@ -182,17 +192,26 @@ class EnvOptions:
         procedural split, every split of its version (one action space for all of them).
 
         It ignores `num_objects` and a fixed suite `scene`, so those options keep the action
-        and observation spaces of the env id (useful for curricula).
+        and observation spaces of the env id (useful for curricula). A `Scene` built in code
+        (one that is not the packaged scene of its name) is never the suite's: it joins the
+        universe by its content (`BuiltScene`), whatever its name.
         """
+        scene = self.scene
         if self.suite in PROCEDURAL_SUITES:  # every split shares one action space
             suite: str | None = PROCEDURAL
-            in_suite = self.scene is None or self.scene.startswith(f"{PROCEDURAL}/")
+            in_suite = scene is None or (
+                isinstance(scene, str) and scene.startswith(f"{PROCEDURAL}/")
+            )
         else:
             suite = self.suite
-            in_suite = self.suite is not None and self.scene in {
-                s.name for s in suite_scenes(self.suite)
-            }
-        extra = (self.scene,) if self.scene is not None and not in_suite else ()
+            in_suite = (
+                self.suite is not None
+                and isinstance(scene, str)
+                and scene in {s.name for s in suite_scenes(self.suite)}
+            )
+        extra: tuple[str | BuiltScene, ...] = ()
+        if scene is not None and not in_suite:
+            extra = (BuiltScene(scene) if isinstance(scene, Scene) else scene,)
         if self.masks != "affordances":  # "geometric" and "none" share one action space
             return UniverseKey(self.domain, "none", suite, extra, "geometric")
         affordances = "none" if self.domain == "utamp1" else self.affordances
@@ -201,10 +220,11 @@ class EnvOptions:
     def scenes(self) -> tuple[Scene, ...]:
         """The scenes episodes are sampled from (one if `scene` is set)."""
         if self.scene is not None:
-            chosen: tuple[Scene, ...] = (resolve_scene(self.scene),)
-            if self.num_objects is not None and chosen[0].n_objects != self.num_objects:
+            one = self.scene if isinstance(self.scene, Scene) else resolve_scene(self.scene)
+            chosen: tuple[Scene, ...] = (one,)
+            if self.num_objects is not None and one.n_objects != self.num_objects:
                 raise ValueError(
-                    f"scene '{self.scene}' has {chosen[0].n_objects} objects, "
+                    f"scene '{one.name}' has {chosen[0].n_objects} objects, "
                     f"but num_objects={self.num_objects}"
                 )
         else:

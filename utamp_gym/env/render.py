@@ -48,7 +48,7 @@ class SchematicRenderer:
 
     def reset(self, scene: Scene) -> None:
         """Draw `scene` from now on (prepared lazily: most episodes are never rendered)."""
-        if self._scene is None or self._scene.name != scene.name:
+        if self._scene is None or self._scene.key != scene.key:
             self._scene, self._ready = scene, False
 
     def _prepare(self) -> None:

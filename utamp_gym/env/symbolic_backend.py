@@ -13,6 +13,12 @@ perceived: the symbolic state is the truth), and `Surveying`: the cameras' look
 (``utamp2-perceived``) renders the episode's initial world through the MuJoCo backend, reset
 with the episode's world seed (``reset(options={"world_seed": s})``), so it sees the poses and
 colours the physics env of that seed starts from; MuJoCo is loaded only for a look.
+
+The symbolic backend's views always show that initial arrangement, also after the episode
+has acted: nothing is simulated, and what a look perceives (the objects' attributes) does not
+change as they move, so a later look (interactive perception's extra looks) perceives the same
+attributes. Only a backend without the episode's world (reset without a world seed) cannot
+look: `NoWorldToLook`.
 """
 
 from __future__ import annotations
@@ -36,7 +42,7 @@ from utamp_gym.symbolic.universe import Universe, UniverseByKey
 
 
 class NoWorldToLook(UtampError, RuntimeError):
-    """A look in symbolic grounding without the episode's world seed, or after it acted."""
+    """A look in symbolic grounding without the episode's world seed."""
 
 
 class SymbolicBackend(UniverseByKey):
@@ -58,7 +64,6 @@ class SymbolicBackend(UniverseByKey):
         self._home = home_joints()
         self._scene: Scene | None = None
         self._world: np.random.Generator | None = None  # the world's generator, undrawn
-        self._acted = False
         self._simulator: PhysicsBackend | None = None  # made for the first look
         self._shown: tuple[str, Any] | None = None  # the world it is reset to
 
@@ -66,7 +71,7 @@ class SymbolicBackend(UniverseByKey):
     def reset(self, scene: Scene, rng: np.random.Generator | None = None) -> None:
         """Start an episode in `scene` (nothing is random: `rng` is not drawn from; a copy
         of it seeds the world a look renders, `survey`)."""
-        self._scene, self.held, self._acted = scene, None, False
+        self._scene, self.held = scene, None
         self._world = None if rng is None else copy.deepcopy(rng)
         self.poses.reset(scene)
         if self.outcome is not None:
@@ -83,7 +88,6 @@ class SymbolicBackend(UniverseByKey):
         """Run universe action `a`; why it failed (None: applied)."""
         failure = None if self.outcome is None else self.outcome.failure(self.state, a)
         if failure is None:
-            self._acted = True
             self.state.apply(a)
             kind, obj, target = self.universe.roles[a]
             self.poses.apply(kind, obj, target)
@@ -123,7 +127,8 @@ class SymbolicBackend(UniverseByKey):
 
     # ------------------------------------------------------------------ Surveying
     def survey(self) -> ViewBundle:
-        """The cameras' first look at the episode's world (module docstring)."""
+        """The cameras' look at the episode's initial world (module docstring: also after
+        the episode acted)."""
         return self._looking().survey()  # type: ignore[attr-defined, no-any-return]
 
     @property
@@ -132,18 +137,13 @@ class SymbolicBackend(UniverseByKey):
         return self._looking().cameras  # type: ignore[attr-defined]
 
     def _looking(self) -> PhysicsBackend:
-        """The MuJoCo backend reset to the episode's initial world."""
+        """The MuJoCo backend reset to the episode's initial world (it is never stepped)."""
         if self._scene is None or self._world is None:
             raise NoWorldToLook(
                 "a look in symbolic grounding renders the episode's world: reset the env "
                 "with options={'world_seed': SEED} first"
             )
-        if self._acted:
-            raise NoWorldToLook(
-                "a look in symbolic grounding shows the episode's initial world: take it "
-                "before the first action"
-            )
-        shown = (self._scene.name, self._world.bit_generator.state)
+        shown = (self._scene.key, self._world.bit_generator.state)
         if self._simulator is None:
             self._simulator = backend_factory(DEFAULT_BACKEND)()
         if self._shown != shown:

@@ -15,6 +15,7 @@ from utamp_gym.symbolic.atoms import parse_atom
 
 if TYPE_CHECKING:
     from utamp_gym.backend import MacroResult, PhysicsBackend
+    from utamp_gym.env.episode import Episode
     from utamp_gym.env.grounding import Grounding
     from utamp_gym.env.objects import ObjectInterface
     from utamp_gym.perception.abstraction import Perception
@@ -27,7 +28,7 @@ class KitchenViews:
     """Read-only views of a kitchen env (mixed into `UTampKitchenEnv`)."""
 
     universe: Universe
-    _scene: Scene | None
+    _episode: Episode | None
     _state: SymbolicState
     _objects: ObjectInterface | None
     _grounding: Grounding
@@ -36,9 +37,9 @@ class KitchenViews:
     @property
     def scene(self) -> Scene:
         """The scene of the current episode."""
-        if self._scene is None:
+        if self._episode is None:
             raise RuntimeError("no episode yet: call reset() first")
-        return self._scene
+        return self._episode.scene
 
     @property
     def action_strings(self) -> tuple[str, ...]:
@@ -59,7 +60,7 @@ class KitchenViews:
         if self._objects is None:
             return self.universe.actions[action_id(action, self.universe.n_actions)]
         index = action_id(action, N_ACTIONS)
-        if self._scene is None:
+        if self._episode is None:
             raise RuntimeError("call reset() before action_pddl(): the slots are drawn there")
         a = self._objects.resolve(index, self._state.mask(), self._state.applicable_mask())
         return "" if a is None else self.universe.actions[a]

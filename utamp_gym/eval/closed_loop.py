@@ -89,7 +89,7 @@ def run_closed_loop(
     interacting = None
     if spec.affordances == "perceived" and interactive:
         perceiver = load_perceiver(perceiver_spec)
-        acting = interacting = InteractivePerception(policy, env, world_seed, perceiver=perceiver)
+        acting = interacting = InteractivePerception(policy, env, perceiver=perceiver)
     elif spec.affordances == "perceived":  # look at the episode's world before the first step
         acting = _LookFirst(policy, env)
     # symbolic: the world a look renders is the one this seed makes in physics (the physics

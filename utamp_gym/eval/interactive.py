@@ -35,7 +35,6 @@ from utamp_gym.agents.planner import PlannerPolicy
 from utamp_gym.backend import Surveying
 from utamp_gym.contract.perceiver import Perceiver
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.env.symbolic_backend import NoWorldToLook
 from utamp_gym.errors import PlanningError
 from utamp_gym.methods.doubt import DOUBT_THRESHOLD, Doubt, cautious_types
 from utamp_gym.methods.perceived import (
@@ -43,7 +42,6 @@ from utamp_gym.methods.perceived import (
     PerceptionError,
     build_perceived_scene,
     perceive_live,
-    perceive_world,
 )
 from utamp_gym.scene.catalogue import ObjectType
 
@@ -63,19 +61,20 @@ _TOPPLES = (
 
 class InteractivePerception:
     """``policy(obs, info)``: `utamp2-perceived` acting with interactive perception (module
-    docstring). `world_seed` builds the world to look at when the env has no cameras."""
+    docstring). It looks through the env's backend (`Surveying`); in symbolic grounding
+    that is the look at the episode's initial world, so reset the env with its world seed
+    (``options={"world_seed": s}``)."""
 
     def __init__(
         self,
         policy: PlannerPolicy,
         env: UTampKitchenEnv,
-        world_seed: int,
         *,
         perceiver: Perceiver | None = None,
         doubt: float = DOUBT_THRESHOLD,
         max_looks: int = MAX_LOOKS,
     ) -> None:
-        self.policy, self.env, self.world_seed = policy, env, world_seed
+        self.policy, self.env = policy, env
         self.perceiver, self.doubt, self.max_looks = perceiver, doubt, max_looks
         self.n_weighings = self.n_looks = 0
         self.seen: PerceivedScene | None = None
@@ -106,14 +105,16 @@ class InteractivePerception:
 
     # ------------------------------------------------------------------ looking
     def _perceive(self) -> PerceivedScene:
-        backend, scene = self.env.backend, self.env.scene
+        """A survey through the env's backend (`Surveying`: MuJoCo's cameras, or in symbolic
+        grounding the look at the episode's initial world, `SymbolicBackend.survey`)."""
+        backend = self.env.backend
+        if not isinstance(backend, Surveying):  # (symbolic without a world: NoWorldToLook)
+            raise TypeError(
+                f"interactive perception looks through the backend's cameras; "
+                f"{type(backend).__name__} has none (utamp_gym.backend.Surveying)"
+            )
         try:
-            try:  # (the isinstance check reads `cameras`, which may raise NoWorldToLook)
-                if isinstance(backend, Surveying):
-                    return perceive_live(scene, backend, perceiver=self.perceiver)
-            except NoWorldToLook:  # symbolic grounding without the world seed or after the
-                pass  # first action: the attributes are the initial world's, from its seed
-            return perceive_world(scene, self.world_seed, perceiver=self.perceiver)
+            return perceive_live(self.env.scene, backend, perceiver=self.perceiver)
         except PerceptionError as exc:  # the episode ends: lost at the perception stage
             raise PlanningError(f"perception: {exc}") from None
 

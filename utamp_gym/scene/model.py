@@ -10,6 +10,7 @@ without one the goal is the paper's tower on `Scene.tower_base`.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 from typing import Any, NamedTuple
@@ -162,6 +163,14 @@ class Scene:
         return Scene(**{f: changes.pop(f, self.__dict__[f]) for f in Scene._FIELDS}, **changes)
 
     @cached_property
+    def key(self) -> str:
+        """What per-scene caches key the scene by: its name and a digest of its content (every
+        field), computed once. A scene built in code may share a packaged scene's name; it
+        never shares its key (unless every field is equal)."""
+        digest = hashlib.sha256(repr(self).encode()).hexdigest()[:16]
+        return f"{self.name}#{digest}"
+
+    @cached_property
     def tower_base(self) -> str:
         """The object the goal tower stands on: `goal_base`, else the scene's wooden tray
         (computed once: an env asks on every step)."""
@@ -285,11 +294,35 @@ class Scene:
         return self.workspace.contains(box, tol=1e-6)
 
 
+class BuiltScene:
+    """A scene built in code as a hashable reference (a `Scene` itself is unhashable): equal
+    and hashed by its content (`Scene.key`), so an action universe's key
+    (`utamp_gym.symbolic.universe.UniverseKey`) can hold it; it pickles with its scene."""
+
+    __slots__ = ("scene",)
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, BuiltScene) and other.scene.key == self.scene.key
+
+    def __hash__(self) -> int:
+        return hash(self.scene.key)
+
+    def __repr__(self) -> str:
+        return f"BuiltScene({self.scene.key!r})"
+
+    def __reduce__(self) -> tuple[type[BuiltScene], tuple[Scene]]:
+        return BuiltScene, (self.scene,)
+
+
 __all__ = [
     "ORIENTATIONS",
     "ORIENTATION_QUAT",
     "STANDING_PART",
     "UP_PART",
+    "BuiltScene",
     "Pose",
     "Scene",
     "SceneObject",

@@ -110,7 +110,7 @@ class EpisodeAtoms:
 
 
 class InitialAtoms:
-    """Initial atoms of scenes under one (domain, affordance source), cached per scene name.
+    """Initial atoms of scenes under one (domain, affordance source), cached per scene.
 
     Why a cache: `build_problem` takes about a millisecond, and resets should be cheap. With
     noisy affordances the affordance atoms are re-detected on every call (from `rng`); the
@@ -128,7 +128,7 @@ class InitialAtoms:
         self, scene: Scene, rng: np.random.Generator, goal: Goal | None = None
     ) -> EpisodeAtoms:
         """The episode's atoms; the goal is `goal`'s literals, else the scene's goal, else the
-        paper's tower (`problem_goal`). Cached per scene name: a caller passes the same
+        paper's tower (`problem_goal`). Cached per scene (`Scene.key`): a caller passes the same
         `goal` for a scene every time."""
 
         def derive() -> EpisodeAtoms:
@@ -141,7 +141,7 @@ class InitialAtoms:
             yes, no = goal_sides(problem_goal(scene, goal))
             return EpisodeAtoms(static, fluent, yes, no)
 
-        cached = self._cache.get(scene.name, derive)
+        cached = self._cache.get(scene.key, derive)
         if not self.noisy:
             return cached
         facts = affordances_for(scene, "noisy", rng, self.noise)[0]

@@ -138,7 +138,7 @@ class OutcomeModel:
             ok.setflags(write=False)
             return truth, ok
 
-        self._truth, self._ok = self._scenes.get(scene.name, derive)
+        self._truth, self._ok = self._scenes.get(scene.key, derive)
 
     def affordances_hold(self) -> np.ndarray:
         """Read-only bool array: per action, whether its affordance literals hold here."""

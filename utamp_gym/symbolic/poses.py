@@ -69,7 +69,7 @@ class SymbolicPoses:
 
     def reset(self, scene: Scene) -> None:
         """Start from the scene's initial poses and stacking."""
-        geometry = self._cache.get(scene.name, lambda: _Geometry.of(scene, self._row))
+        geometry = self._cache.get(scene.key, lambda: _Geometry.of(scene, self._row))
         self._geometry = geometry
         self._pose = geometry.pose.copy()
         self._present = geometry.present

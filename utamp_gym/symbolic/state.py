@@ -83,7 +83,7 @@ class SymbolicState(UniverseByKey):  # pickled with its universe by key
         """Start an episode: the scene's static atoms fix which ops can ever apply.
 
         The per-op literal table depends only on the static atoms, so it is cached under
-        `cache_key` (the scene name when those atoms are fixed per scene).
+        `cache_key` (the scene's `Scene.key` when those atoms are fixed per scene).
         """
         static = atoms.static
         if cache_key is None:

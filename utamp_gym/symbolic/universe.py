@@ -44,7 +44,7 @@ import numpy as np
 from utamp_gym.affordances.facts import PREDICATES as AFFORDANCE_PREDICATES
 from utamp_gym.errors import PddlError, UnknownNameError
 from utamp_gym.scene.geometry import PARTS
-from utamp_gym.scene.model import Scene
+from utamp_gym.scene.model import BuiltScene, Scene
 from utamp_gym.suites import resolve_scene, universe_scenes
 from utamp_gym.symbolic import universe_store
 from utamp_gym.symbolic.atoms import goal_sides, parse_atom, scene_atoms, universe_facts
@@ -79,8 +79,10 @@ class UniverseKey:
     the precondition set.
 
     `affordances` is ``"none"`` for U-TAMP-1 (no affordance predicates) and for geometric
-    preconditions (they mention none); `scenes` are names that `resolve_scene` understands
-    (suite scenes are given by `suite`: a suite, or ``procedural-v1`` for all its splits);
+    preconditions (they mention none); `scenes` are names that `resolve_scene` understands,
+    or scenes built in code (`BuiltScene`, by content: such a scene never shares a key with
+    a packaged one of its name) (suite scenes are given by `suite`: a suite, or
+    ``procedural-v1`` for all its splits);
     `preconditions` is one of `PRECONDITIONS` (see the
     module docstring; ``"geometric"`` needs the utamp2 domain).
     """
@@ -88,7 +90,7 @@ class UniverseKey:
     domain: str
     affordances: str
     suite: str | None = None
-    scenes: tuple[str, ...] = ()
+    scenes: tuple[str | BuiltScene, ...] = ()
     preconditions: str = "affordances"
 
     def __post_init__(self) -> None:
@@ -107,7 +109,11 @@ class UniverseKey:
     def resolve(self) -> tuple[Scene, ...]:
         base = universe_scenes(self.suite) if self.suite is not None else ()
         known = {s.name for s in base}
-        return (*base, *(resolve_scene(r) for r in self.scenes if r not in known))
+        return (
+            *base,
+            *(r.scene if isinstance(r, BuiltScene) else resolve_scene(r)
+              for r in self.scenes if r not in known),
+        )  # fmt: skip
 
 
 def _pack(rows: Sequence[Sequence[int]], n_bits: int) -> np.ndarray:
