@@ -189,6 +189,10 @@ def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
     assert not imported & {"dataclasses", "inspect"}
     # nor tempfile (shutil, lzma, bz2, random): only an --out probe needs it
     assert not imported & {"tempfile", "shutil"}
+    # nor Fast Downward's own translator (`fast_downward.solve` only) nor the goal templates
+    # (a scene file's goal given by template only)
+    off_path = {"utamp_gym.planning.fast_downward", "utamp_gym.planning.fd_translate"}
+    assert not imported & (off_path | {"utamp_gym.tasks.templates", "utamp_gym.tasks.attributes"})
 
 
 def test_help_lists_every_subcommand_and_each_subcommand_help_is_complete(capsys) -> None:
