@@ -119,17 +119,17 @@ class StatePlanner:
         max_keys: int = 32,
         max_tasks_per_key: int = 4,
     ) -> None:
-        if isinstance(domain, str):
-            domain = cached_domain(domain_text(domain), f"{domain}.pddl")
-        if search not in SEARCH_CONFIGS:
-            raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
-        if max_keys < 1 or max_tasks_per_key < 1:
-            raise ValueError("max_keys and max_tasks_per_key must be at least 1")
-        self.domain, self.search = domain, search
-        self.timeout = check_timeout(timeout)
-        self.object_type = object_type
-        self._fluent = domain.fluent_predicates()
-        with paused_gc():
+        with paused_gc():  # the decoded domain and the grounder's joins: one pause, not two
+            if isinstance(domain, str):
+                domain = cached_domain(domain_text(domain), f"{domain}.pddl")
+            if search not in SEARCH_CONFIGS:
+                raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
+            if max_keys < 1 or max_tasks_per_key < 1:
+                raise ValueError("max_keys and max_tasks_per_key must be at least 1")
+            self.domain, self.search = domain, search
+            self.timeout = check_timeout(timeout)
+            self.object_type = object_type
+            self._fluent = domain.fluent_predicates()
             self._grounder = Grounder(domain)
         self._cache: OrderedDict[tuple[object, ...], _KeyTasks] = OrderedDict()
         self._max_keys, self._max_tasks = max_keys, max_tasks_per_key
