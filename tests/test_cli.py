@@ -189,6 +189,10 @@ def test_plan_imports_no_gym_torch_mujoco_or_numpy(tmp_path: Path) -> None:
     assert not imported & {"dataclasses", "inspect"}
     # nor tempfile (shutil, lzma, bz2, random): only an --out probe needs it
     assert not imported & {"tempfile", "shutil"}
+    # nor Fast Downward's own translator (`fast_downward.solve` only) nor the goal templates
+    # (a scene file's goal given by template only)
+    off_path = {"utamp_gym.planning.fast_downward", "utamp_gym.planning.fd_translate"}
+    assert not imported & (off_path | {"utamp_gym.tasks.templates", "utamp_gym.tasks.attributes"})
 
 
 def test_help_lists_every_subcommand_and_each_subcommand_help_is_complete(capsys) -> None:
@@ -230,6 +234,29 @@ def test_only_the_utamp_process_freezes_its_objects_before_exit(capsys) -> None:
         [sys.executable, "-c", code], env=user_env(), capture_output=True, text=True, check=True
     )
     assert run.stdout.splitlines()[-1] == "0 True"
+
+
+def test_only_a_light_utamp_process_turns_the_garbage_collector_off() -> None:
+    """`utamp plan` (a light command, as the process) runs without cyclic collections;
+    `main(argv)` in a longer-lived process and the heavy commands leave the collector on."""
+    import gc
+
+    assert main(["scenes", "list", "--suite", "sliding"]) == 0
+    assert gc.isenabled()
+    code = (
+        "import gc, sys; sys.argv = ['utamp', *sys.argv[1:]]; "
+        "import utamp_gym.cli as cli; seen = []; "
+        "run = cli._run; cli._run = lambda *a, **k: seen.append(gc.isenabled()) or run(*a, **k); "
+        "import atexit; atexit.register(lambda: print(seen, gc.isenabled(), file=sys.stderr)); "
+        "sys.exit(cli.main())"
+    )
+    for argv, enabled in ((["plan", "pick-place/017", "--json"], False),
+                          (["run", "--help"], True)):  # fmt: skip
+        run = subprocess.run(
+            [sys.executable, "-c", code, *argv], env=user_env(), capture_output=True, text=True
+        )
+        assert run.returncode == 0, run.stderr
+        assert run.stderr.splitlines()[-1] == f"[True] {enabled}", (argv, run.stderr)
 
 
 # ---------------------------------------------------------------- unwritable output paths

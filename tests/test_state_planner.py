@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import copy
+import gc
+import traceback
 
 import pytest
 import wide
@@ -186,3 +188,39 @@ def test_contradictory_goal_literals_are_never_dropped() -> None:
     assert not build_sas(ops, [a], [Literal(b), Literal(c)]).solvable
     assert not build_sas(ops, [a], [Literal(b), Literal(b, positive=False)]).solvable
     assert build_sas(ops, [a], [Literal(b), Literal(b)]).solvable  # a repeat is no conflict
+
+
+def test_the_collector_pauses_for_grounding_and_collects_while_the_search_runs(
+    gt: PlanOutcome, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No collection walks the ground task while it is built; the collection its objects
+    set off comes once the search process runs (inside `processes.run`, after the start),
+    not before the search starts; the collector is on again afterwards."""
+    grounded: list[bool] = []
+    real_task = StatePlanner._task
+
+    def task(self, *args, **kwargs):
+        grounded.append(gc.isenabled())
+        return real_task(self, *args, **kwargs)
+
+    def collected(phase: str, info: dict) -> None:
+        if phase == "start" and grounded:
+            stack = [f.name for f in traceback.extract_stack()]
+            where.append("run" in stack and "search_sas" in stack)
+
+    where: list[bool] = []
+    monkeypatch.setattr(StatePlanner, "_task", task)
+    planner = StatePlanner("utamp2")
+    gc.callbacks.append(collected)
+    try:
+        result = planner.plan(*task_args(gt))
+    finally:
+        gc.callbacks.remove(collected)
+    assert result.solved and grounded == [False] and gc.isenabled()
+    assert where and where[0], where  # the first collection after grounding: in the search
+    gc.disable()  # a caller's pause is left alone
+    try:
+        StatePlanner("utamp2").plan(*task_args(gt))
+        assert not gc.isenabled()
+    finally:
+        gc.enable()

@@ -12,7 +12,7 @@ from utamp_gym.cli import help_line
 from utamp_gym.cli.common import METHOD_HELP, SCENE_HELP, default_method, timeout_seconds
 from utamp_gym.deadline import Deadline
 from utamp_gym.outputs import output_dir
-from utamp_gym.planning.fast_downward import DEFAULT_SEARCH, SEARCH_CONFIGS
+from utamp_gym.planning.downward import DEFAULT_SEARCH, SEARCH_CONFIGS
 from utamp_gym.planning.methods import METHODS, method_spec, plan_scene
 from utamp_gym.suites import resolve_scene
 

@@ -14,6 +14,7 @@ import os
 import re
 import sys
 import time
+from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 from typing import NamedTuple
@@ -143,8 +144,16 @@ def _interpret(
     raise error(f"{what} failed with exit code {code}:{tail(stderr or stdout)}")
 
 
-def search_sas(sas: str, *, search: str, deadline: Deadline, start: float) -> PlanResult:
-    """Run the search binary on a SAS task until `deadline`; times count from `start`.
+def search_sas(
+    sas: str,
+    *,
+    search: str,
+    deadline: Deadline,
+    start: float,
+    started: Callable[[], object] | None = None,
+) -> PlanResult:
+    """Run the search binary on a SAS task until `deadline`; times count from `start`;
+    `started` is called once the binary runs (`processes.run`).
 
     Raises `PlanningTimeout` (phase ``search``) if the deadline passes first; the binary's
     process group is killed.
@@ -161,6 +170,7 @@ def search_sas(sas: str, *, search: str, deadline: Deadline, start: float) -> Pl
         what=what,
         limit=deadline.limit,
         plan_pipe=True,
+        started=started,
     )
     search_time = time.perf_counter() - search_start
     times = (time.perf_counter() - start, translate_time, search_time)

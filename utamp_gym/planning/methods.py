@@ -21,7 +21,7 @@ from utamp_gym.affordances.sources import DEFAULT_NOISE, affordances_for, detect
 from utamp_gym.deadline import Deadline
 from utamp_gym.errors import PlanningTimeout, UnknownNameError
 from utamp_gym.moved import forward
-from utamp_gym.planning.fast_downward import DEFAULT_SEARCH
+from utamp_gym.planning.downward import DEFAULT_SEARCH
 from utamp_gym.planning.state_planner import StatePlanner
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.problem import build_problem, domain_text

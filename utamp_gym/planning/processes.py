@@ -142,11 +142,13 @@ def run(
     limit: float,
     cwd: str | None = None,
     plan_pipe: bool = False,
+    started: Callable[[], object] | None = None,
 ) -> tuple[int, str, str, str | None]:
     """Run ``cmd`` in its own session, feeding `stdin`; kill its process group on time-out,
     error or interrupt. Returns (exit code, stdout, stderr, plan): with `plan_pipe`, the
     search binary writes its plan to a pipe (``--internal-plan-file /dev/fd/N``), so no
-    file is written at all; otherwise plan is None."""
+    file is written at all; otherwise plan is None. `started` is called once the process
+    runs, before waiting for it (work to do meanwhile)."""
     cmd, plan_r, plan_w, roomy = list(cmd), -1, -1, False
     if plan_pipe:
         plan_r, plan_w, roomy = _roomy_pipe()
@@ -184,6 +186,8 @@ def run(
                     if not roomy:
                         reader = threading.Thread(target=_drain, args=(plan_r, chunks), daemon=True)
                         reader.start()
+                if started is not None:
+                    started()
                 try:
                     out, err = _communicate(proc, stdin, timeout)
                 except subprocess.TimeoutExpired:

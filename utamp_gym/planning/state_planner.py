@@ -22,7 +22,7 @@ import contextlib
 import gc
 import time
 from collections import OrderedDict
-from collections.abc import Collection, Iterable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping
 from types import MappingProxyType
 from typing import NamedTuple
 
@@ -68,17 +68,25 @@ def action_name(action: str) -> str:
 
 
 @contextlib.contextmanager
-def paused_gc() -> Iterator[None]:
+def paused_gc() -> Iterator[Callable[[], None]]:
     """No cyclic garbage collection inside: grounding builds thousands of tuples and dicts
-    and no cycles, and each collection the allocations set off would walk them in vain."""
+    and no cycles, and each collection the allocations set off would walk them in vain.
+
+    Yields `resume`, which ends the pause early: the collection the pause's allocations set
+    off then comes at the next allocation (`StatePlanner.plan` resumes once the search
+    process has started, so that collection runs while the search does)."""
     if not gc.isenabled():
-        yield
+        yield _nothing
         return
     gc.disable()
     try:
-        yield
+        yield gc.enable
     finally:
         gc.enable()
+
+
+def _nothing() -> None:
+    """`paused_gc`'s `resume` when the collector was off already."""
 
 
 class CacheInfo(NamedTuple):
@@ -119,17 +127,17 @@ class StatePlanner:
         max_keys: int = 32,
         max_tasks_per_key: int = 4,
     ) -> None:
-        if isinstance(domain, str):
-            domain = cached_domain(domain_text(domain), f"{domain}.pddl")
-        if search not in SEARCH_CONFIGS:
-            raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
-        if max_keys < 1 or max_tasks_per_key < 1:
-            raise ValueError("max_keys and max_tasks_per_key must be at least 1")
-        self.domain, self.search = domain, search
-        self.timeout = check_timeout(timeout)
-        self.object_type = object_type
-        self._fluent = domain.fluent_predicates()
-        with paused_gc():
+        with paused_gc():  # the decoded domain and the grounder's joins: one pause, not two
+            if isinstance(domain, str):
+                domain = cached_domain(domain_text(domain), f"{domain}.pddl")
+            if search not in SEARCH_CONFIGS:
+                raise UnknownNameError("search configuration", search, SEARCH_CONFIGS)
+            if max_keys < 1 or max_tasks_per_key < 1:
+                raise ValueError("max_keys and max_tasks_per_key must be at least 1")
+            self.domain, self.search = domain, search
+            self.timeout = check_timeout(timeout)
+            self.object_type = object_type
+            self._fluent = domain.fluent_predicates()
             self._grounder = Grounder(domain)
         self._cache: OrderedDict[tuple[object, ...], _KeyTasks] = OrderedDict()
         self._max_keys, self._max_tasks = max_keys, max_tasks_per_key
@@ -171,7 +179,7 @@ class StatePlanner:
             if isinstance(objects, Mapping)
             else dict.fromkeys(objects, self.object_type)
         )
-        with paused_gc():
+        with paused_gc() as resume:
             key = (frozenset(objs.items()), frozenset(static_atoms), tuple(goal_atoms))
             state = frozenset(self._atoms(fluent_atoms, fluent=True))
             task, found = self._task(key, objs, state, deadline, source)
@@ -180,8 +188,11 @@ class StatePlanner:
                 return PlanResult(False, (), None, elapsed, elapsed, 0.0, UNREACHABLE, None)
             drop = {task.op_index[n] for n in map(action_name, exclude) if n in task.op_index}
             text = task.text(state, drop)
-        deadline.check("sas")
-        result = search_sas(text, search=self.search, deadline=deadline, start=start)
+            deadline.check("sas")
+            # the collection the grounding's objects set off runs while the search does
+            result = search_sas(
+                text, search=self.search, deadline=deadline, start=start, started=resume
+            )
         if result.solved and len(result.plan) > 1 and self.search in SATISFICING_SEARCHES:
             ops = {op.name: op for op in task.ops}
             plan = eliminate(result.plan, ops, state | found.static, found.goal)

@@ -2,8 +2,9 @@
 
 The scene-file functions (`load_scene`, `scene_from_dict`, `scene_to_dict`, `scene_to_toml`)
 are loaded on first use: `utamp_gym.scene.io` reads a scene's goal through `utamp_gym.tasks`,
-whose modules import the scene model (`utamp_gym.scene.model`), so importing them eagerly here
-would close the cycle scene -> scene.io -> tasks.templates -> tasks.attributes -> scene.
+whose templates import the scene model (`utamp_gym.scene.model`): scene -> scene.io ->
+tasks.templates -> tasks.attributes -> scene (scene.io imports the templates when it reads a
+goal given by template).
 """
 
 from typing import Any

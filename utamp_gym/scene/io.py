@@ -24,7 +24,6 @@ from utamp_gym.scene.catalogue import (
 from utamp_gym.scene.geometry import PARTS, Box
 from utamp_gym.scene.model import ORIENTATIONS, Scene, SceneObject, Slot, Space
 from utamp_gym.tasks.goal import CUSTOM, Goal, split_literal
-from utamp_gym.tasks.templates import TEMPLATES, make_goal
 
 #: the PDDL domains' constants (hand, air, workspace and the parts) and the table
 RESERVED = frozenset({"hand", "air", "workspace", "table", *PARTS})
@@ -154,6 +153,11 @@ def _goal(value: Any, scene: Scene, file: str) -> Goal:
         if atoms is None:
             raise SceneError("a custom goal needs atoms", file=file, field="goal.atoms")
         return Goal.make(CUSTOM, f.table(g.get("params", {}), file, "goal.params"), atoms)
+    # Only a goal given by template needs the templates (and their attribute tables): off
+    # `utamp plan`'s path for suite scenes.
+    # lazy: keeps `utamp plan` from loading utamp_gym.tasks.templates
+    from utamp_gym.tasks.templates import TEMPLATES, make_goal
+
     if not isinstance(name, str) or any(p not in TEMPLATES for p in name.split("+")):
         raise SceneError(
             f"unknown goal template {f.show(name)}; valid: {', '.join(TEMPLATES)} "

@@ -21,7 +21,6 @@ from utamp_gym.scene.model import Scene
 from utamp_gym.suites import generate as _enumerated
 from utamp_gym.suites.generate import get_scene as _get_enumerated
 from utamp_gym.suites.generate import suite_stats
-from utamp_gym.tasks.templates import tower_goal
 
 PROCEDURAL = "procedural-v1"
 #: the procedural splits, each a suite of its own (`utamp_gym.suites.procedural`)
@@ -211,8 +210,9 @@ def scene_summary(suite: str) -> list[dict[str, Any]]:
     ``template`` and ``instruction`` of its goal (the suites before procedural-v2: the
     paper's tower) and ``achievable`` (the rules' verdict on the goal; the enumerated suites
     keep only achievable scenes; procedural-v2: the planner's label)."""
-    # lazy: keeps `utamp plan` from loading utamp_gym.tasks.language
+    # lazy: keeps `utamp plan` from loading utamp_gym.tasks.language and .templates
     from utamp_gym.tasks.language import instruction
+    from utamp_gym.tasks.templates import tower_goal  # lazy: as above
 
     _check_suite(suite)
 
