@@ -271,12 +271,16 @@ def write(table: dict[str, Any], docs: Path) -> None:
             f"{d['left_out']} more left out: no plan). BC's steps are demonstration steps."
         )
         lines.append("")
+    seeds_wall = sum(p["wall_time_s"] for m in table["methods"].values()
+                     for p in m.get("per_seed", []))  # fmt: skip
     lines.append(
         "Curve flat: the last 20 % of a seed's evaluation curve on the training split gained "
-        "less than 0.02 (`utamp_gym.rl.callbacks.plateaued`). Training wall time of all rows: "
-        f"{table['training_wall_time_s']:.0f} s on a shared, loaded 2-core machine (runs niced;"
-        f" times indicative only); load average (1, 5, 15 min) {table['load_average']['start']}"
-        f" at the start and {table['load_average']['end']} at the end of the run."
+        "less than 0.02 (`utamp_gym.rl.callbacks.plateaued`). Training wall time summed over "
+        f"every seed of every row (evaluations during training included): {seeds_wall:.0f} s, "
+        "on a shared, loaded 2-core machine (runs niced; times indicative only); load average "
+        f"(1, 5, 15 min) {table['load_average']['start']} at the start and "
+        f"{table['load_average']['end']} at the end of the run that wrote this table (seeds "
+        "and evaluations made beforehand by `--train-only` runs are reused)."
     )
     prov = write_json(docs / "agents_v2.json", table, indent=2, default=str)
     write_markdown(docs / "agents_v2.md", "\n".join(lines) + "\n", prov)
