@@ -10,11 +10,9 @@ mask, whatever the scene.
 **Slots.** At every reset the scene's objects take a uniformly random set and order of slots
 (drawn from the env's RNG after everything else the reset draws, so scenes, noise and physics
 match the grounded interface's at equal seeds); empty slots are interleaved, so neither the
-order nor the position of the tray can be memorised. The slot count is `MAX_OBJECTS` (6) unless
-the env option ``slots`` asks for more (its default: enough for the env's largest scene, e.g. 8
-on procedural-v2's test-count); more slots make other spaces (`n_actions`, `n_entities`), and a
-scene with fewer objects leaves the rest empty (a policy trained with 8 slots acts on 3-object
-scenes). Table regions (the scene's table slots,
+order nor the position of the tray can be memorised. There are `MAX_OBJECTS` slots unless the
+env option ``slots`` gives more (other spaces: `n_actions`, `n_entities`; smaller scenes leave
+slots empty). Table regions (the scene's table slots,
 in scene order: they are places, not objects) take `MAX_REGIONS` region indices and free
 spaces `MAX_SPACES` space indices. An object's members are indexed body first, then in the
 type's declared order (`MAX_MEMBERS`).
