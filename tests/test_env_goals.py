@@ -16,7 +16,7 @@ from utamp_gym.agents.runs import execute_plan
 from utamp_gym.env.goals import resolve_goal
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.env.object_goal import GOAL_KEYS
-from utamp_gym.env.object_space import MAX_OBJECTS
+from utamp_gym.env.object_space import MAX_OBJECTS, N_ACTIONS, n_actions, n_entities
 from utamp_gym.env.registry import register_envs
 from utamp_gym.errors import UnknownNameError
 from utamp_gym.planning.methods import plan_scene
@@ -157,21 +157,48 @@ def test_procedural_v2_split_env_reads_each_scenes_goal() -> None:
     assert len(templates) >= 2 and "tower" not in templates  # held-out templates only
 
 
-def test_test_count_needs_rows_for_eight_objects() -> None:
+def test_test_count_grows_the_objects_interface_to_eight_slots() -> None:
+    """The objects interface fits the split: 8 slots (and pose rows) for test-count's 8-object
+    scenes, the default 6 where every scene fits; fewer slots than a scene is refused by
+    name; the grounded interface still needs the rows given."""
+    big = next(s.name for s in suite_scenes("procedural-v2/test-count") if s.n_objects == 8)
+    env = gym.make("UTampKitchenGoals-v0", split="procedural-v2/test-count", grounding="symbolic")
+    kitchen = env.unwrapped
+    assert kitchen.options.slots == 8  # type: ignore[attr-defined]
+    assert env.action_space == gym.spaces.Discrete(n_actions(8)) != gym.spaces.Discrete(N_ACTIONS)
+    obs, _ = env.reset(seed=0, options={"scene": big})
+    assert obs["present"].shape == (8,) and obs["present"].sum() == 8
+    assert obs["goal_contact"].shape == (n_entities(8), n_entities(8), 7)
+    assert env.observation_space.contains(obs)
+    assert sorted(kitchen.objects.slots.values()) == list(range(8))  # type: ignore[attr-defined]
+    assert gym.make("UTampKitchenGoals-v0", grounding="symbolic").unwrapped.options.slots == 6  # type: ignore[attr-defined]
+    with pytest.raises(ValueError, match="more than slots=6: use slots=8"):
+        gym.make("UTampKitchenGoals-v0", split="procedural-v2/test-count", slots=6)
+    with pytest.raises(ValueError, match=r"slots .* with interface='objects'"):
+        gym.make("UTampKitchenGoals-v0", interface="grounded", slots=8)
     with pytest.raises(ValueError, match="outside the env's observation rows"):
-        gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count")
+        gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count",
+                 interface="grounded")  # fmt: skip
     rows = ["base", *(f"obj{i}" for i in range(1, 8))]
-    big = next(s.name for s in suite_scenes("procedural-v2/test-count") if s.n_objects == 7)
-    with pytest.raises(ValueError, match="the objects interface has room for 6"):
-        env = gym.make("UTampKitchenProcedural-v0", split="procedural-v2/test-count", objects=rows,
-                       grounding="symbolic")  # fmt: skip
-        env.reset(options={"scene": big})
     env = gym.make(
         "UTampKitchenProcedural-v0", split="procedural-v2/test-count", objects=rows,
         grounding="symbolic", interface="grounded",
     )  # fmt: skip
     env.reset(options={"scene": big})
-    assert env.unwrapped.scene.n_objects == 7  # type: ignore[attr-defined]
+    assert env.unwrapped.scene.n_objects == 8  # type: ignore[attr-defined]
+
+
+def test_more_slots_leave_the_rest_empty_and_pad_smaller_scenes() -> None:
+    """A train scene in an 8-slot interface: its objects in 8 slots, the same relations."""
+    six = gym.make("UTampKitchenGoals-v0", grounding="symbolic")
+    eight = gym.make("UTampKitchenGoals-v0", grounding="symbolic", slots=8)
+    for seed in range(3):
+        o6, i6 = six.reset(seed=seed)
+        o8, i8 = eight.reset(seed=seed)
+        assert i6["goal"] == i8["goal"] and o8["present"].shape == (8,)
+        assert o6["present"].sum() == o8["present"].sum()
+        assert o6["goal_contact"].sum() == o8["goal_contact"].sum()
+        assert i6["action_mask"].sum() == i8["action_mask"].sum()
 
 
 def _entity(env: UTampKitchenEnv, name: str) -> int:

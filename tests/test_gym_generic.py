@@ -10,7 +10,8 @@ or deep-copied physics env steps exactly as the original, and ``info["is_success
 
 Physics runs on a two-object scene of each id (``num_objects=2``) to keep the suite quick.
 `VARIANTS` adds registered ids with options of their own (the procedural env on a
-procedural-v2 split, whose scenes carry their goals; its smallest scenes have 3 objects).
+procedural-v2 split, whose scenes carry their goals; its smallest scenes have 3 objects; the
+goals env on test-count's 8-object scenes, whose objects interface has 8 slots).
 """
 
 from __future__ import annotations
@@ -41,6 +42,17 @@ VARIANTS: dict[str, tuple[str, dict[str, Any], int]] = {
         "UTampKitchenProcedural-v0",
         {"split": "procedural-v2/test-tasks"},
         3,
+    ),
+    # the objects interface grown to 8 slots, on the split's 8-object scenes
+    "UTampKitchenGoals-v0[procedural-v2/test-count, 8 objects]": (
+        "UTampKitchenGoals-v0",
+        {
+            "split": "procedural-v2/test-count",
+            "num_objects": 8,
+            "domain": "utamp2x",
+            "affordances": "rules",
+        },
+        8,
     ),
 }
 #: registered ids whose smallest scenes have more than 2 objects (procedural-v2's have 3)
@@ -216,12 +228,18 @@ def test_vector_envs_async_and_sync_agree(env_id: str, grounding: str) -> None:
 
 
 # ---------------------------------------------------------------- copies and conventions
+def planner_of(env: gym.Env) -> str:
+    """The planning method of an env's own domain: utamp2x-rules for the extended domain
+    (procedural-v2's labels), else utamp2-gt."""
+    return "utamp2x-rules" if env.unwrapped.options.domain == "utamp2x" else "utamp2-gt"
+
+
 def long_scene(env_id: str, steps: int = 5) -> str:
     """The first scene of the id whose plan has at least `steps` macro actions (so two
     steps in, three more follow)."""
     env = make(env_id, "symbolic").unwrapped
     for scene in env.scenes:
-        outcome = plan_scene(scene, "utamp2-gt")
+        outcome = plan_scene(scene, planner_of(env))
         if outcome.solved and outcome.plan_length >= steps:
             return scene.name
     raise AssertionError(f"{env_id} has no scene with a plan of {steps} steps")
@@ -235,7 +253,7 @@ def test_pickled_and_deep_copied_physics_envs_step_as_the_original(env_id: str) 
     scene = long_scene(env_id)
     env = gym.make(real, scene=scene, disturbance=0.3, pose_noise=0.004, **options)
     obs, info = env.reset(seed=SEED)
-    policy = PlannerPolicy(env.unwrapped)
+    policy = PlannerPolicy(env.unwrapped, method=planner_of(env))
     for _ in range(2):
         obs, _, _, _, info = env.step(policy(obs, info))
         assert info["macro_result"]["executed"]  # the simulator ran
@@ -260,7 +278,8 @@ def test_pickled_and_deep_copied_physics_envs_step_as_the_original(env_id: str) 
 
 def _solvable_seeds(env: gym.Env, n: int) -> list[int]:
     """The first `n` reset seeds whose scene's goal the planner reaches (in the rules)."""
-    seeds = [seed for seed, *_ in itertools.islice(solvable_resets(env), n)]
+    resets = solvable_resets(env, method=planner_of(env))
+    seeds = [seed for seed, *_ in itertools.islice(resets, n)]
     assert len(seeds) == n, f"fewer than {n} solvable scenes in 50 seeds"
     return seeds
 
@@ -286,7 +305,7 @@ def test_is_success_on_every_step_and_last(env_id: str, grounding: str) -> None:
     env = make(env_id, grounding, max_episode_steps=12)
     ends = []
     for seed in _solvable_seeds(env, 2):  # a procedural split also holds unachievable goals
-        policy = PlannerPolicy(env.unwrapped)
+        policy = PlannerPolicy(env.unwrapped, method=planner_of(env))
         infos = _episode(env, policy, seed)
         assert all(type(i["is_success"]) is bool for i in infos)
         ends.append(infos[-1]["is_success"])

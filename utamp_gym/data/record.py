@@ -59,13 +59,20 @@ def suite_env(suite: str) -> tuple[str, dict[str, Any]]:
         if d.kwargs.get("suite") == suite:
             return d.id, {}
         split = d.kwargs.get("split")
-        if split is not None and suite.endswith(f"/{split}"):  # a procedural split's env
-            return d.id, {"split": suite.rsplit("/", 1)[1]}
-    if "/" in suite:  # another split of a procedural env
+        if split is not None and _split_suite(split) == suite:  # a procedural split's env
+            return d.id, {"split": split}
+    version = suite.split("/", 1)[0]
+    if "/" in suite:  # another split of a procedural env: the env of that version's splits
         for d in env_definitions():
-            if "split" in d.kwargs:
-                return d.id, {"split": suite.rsplit("/", 1)[1]}
+            split = d.kwargs.get("split")
+            if split is not None and _split_suite(split).split("/", 1)[0] == version:
+                return d.id, {"split": suite if "/" in split else suite.rsplit("/", 1)[1]}
     return "UTampKitchen-v0", suite_options(suites.suite_scenes(suite)[0].name)
+
+
+def _split_suite(split: str) -> str:
+    """The suite of an env's ``split`` option ("train": procedural-v1's; or a full name)."""
+    return split if "/" in split else f"{suites.PROCEDURAL}/{split}"
 
 
 def dataset_id(suite: str, track: str, method: str) -> str:

@@ -130,8 +130,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       action universe and the observation rows ``base, obj1 .. obj5``
       (``UTampKitchenProcedural-v0``). A procedural-v2 split ("procedural-v2/test-tasks",
       `utamp_gym.suites.procedural_v2`; each scene with its goal) has an action universe of
-      its own; its test-count scenes have up to 8 objects (rows ``base, obj1 .. obj7``, and
-      the grounded interface: the objects interface holds 6);
+      its own; its test-count scenes have up to 8 objects (the grounded interface needs the
+      rows ``base, obj1 .. obj7``; the objects interface grows its slots, option ``slots``);
     * ``task``: the episodes' goal (`utamp_gym.env.goals`): None (default: the scene's own,
       else the paper's tower), a template id or composition (``"clear"``,
       ``"put-on+in-region"``: the scene's goal of that template, else one drawn per scene
@@ -155,6 +155,8 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
       parametrised macro action, the same spaces for every scene: `utamp_gym.env.objects`;
       `action_strings` then names each index in slots, ``pick slot3 member0 grasp
       on/left/right``, and `action_pddl` (a) is the PDDL action stepping it runs now);
+      ``slots``: its object slots (default None: 6, or the most objects of a scene of the
+      env if more, e.g. 8 on procedural-v2's test-count; its pose rows grow to fit too);
     * physics only: ``backend`` ("module:Class" or a callable, built as
       ``backend(pose_noise=..., **backend_kwargs)``), ``record_timings`` (default False:
       wall-clock times in ``info["timings"]``), ``disturbance`` (fault probability per
@@ -224,6 +226,7 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
         interface: str = "grounded",
         task: str | Goal | None = None,
         goal_observation: bool = False,
+        slots: int | None = None,
     ) -> None:
         kwargs: dict[str, Any] = {
             "suite": suite, "objects": objects, "grounding": grounding, "domain": domain,
@@ -238,16 +241,18 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             "interface": interface,
             "task": task,
             "goal_observation": goal_observation,
+            "slots": slots,
         }  # fmt: skip
         self.options = opts = EnvOptions(**kwargs)  # validates every option
         self.render_mode = render_mode
         self._goals = EpisodeGoals(opts.task)
         self.scenes = self._goals.usable(opts.scenes())  # those the task has a goal in
+        self.options = opts = opts.fitted(self.scenes)  # objects interface: rows and slots
         self.universe: Universe = ground_universe(opts.universe_key())
         actions = spaces.Discrete(self.universe.n_actions)
         self._objects: ObjectInterface | None = None
         if opts.interface == "objects":  # fixed spaces over object slots (env.objects)
-            self._objects = ObjectInterface(self.universe)
+            self._objects = ObjectInterface(self.universe, slots=opts.slots or 0)
             actions = self._objects.action_space
         self.action_space, self._n_actions = actions, int(actions.n)
         self._state = SymbolicState(self.universe, opts.masks)

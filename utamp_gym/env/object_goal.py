@@ -28,7 +28,7 @@ from collections.abc import Mapping
 import numpy as np
 from gymnasium import spaces
 
-from utamp_gym.env.object_space import MAX_OBJECTS, MAX_REGIONS, MAX_SPACES
+from utamp_gym.env.object_space import MAX_OBJECTS, n_entities
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.scene.geometry import PARTS
 from utamp_gym.symbolic.atoms import EpisodeAtoms
@@ -38,9 +38,10 @@ from utamp_gym.symbolic.universe import Universe
 GOAL_KEYS = ("goal_contact", "goal_free", "goal_not_contact", "goal_not_free")
 
 
-def goal_spaces() -> dict[str, spaces.Space]:
-    """The goal entries' spaces (added to the objects interface's ``Dict``)."""
-    e, p = MAX_OBJECTS + MAX_REGIONS + MAX_SPACES, len(PARTS)
+def goal_spaces(k: int = MAX_OBJECTS) -> dict[str, spaces.Space]:
+    """The goal entries' spaces (added to the objects interface's ``Dict``; `k` object
+    slots)."""
+    e, p = n_entities(k), len(PARTS)
     contact, free = spaces.MultiBinary((e, e, p)), spaces.MultiBinary((e, p))
     return dict(zip(GOAL_KEYS, (contact, free, contact, free), strict=True))
 
@@ -83,7 +84,7 @@ def goal_entry_spaces(
     """The goal entries' spaces of an env with the objects interface `objects`, or (None)
     the grounded one over `universe`."""
     if objects is not None:
-        return goal_spaces()
+        return goal_spaces(objects.k)
     return symbolic_goal_spaces(len(universe.fluent_atoms))
 
 

@@ -4,7 +4,8 @@ What an index or an observation entry *means*, whatever the scene (`utamp_gym.en
 a scene's ground actions and atoms onto it): the limits (`MAX_OBJECTS`, `MAX_MEMBERS`,
 `MAX_REGIONS`, `MAX_SPACES`), the 24 `GRASPS`, `ObjectAction` and its `encode` / `decode` (and
 `action_text`, its readable name), the attribute vector of a type (`encode_type`) and the
-observation space.
+observation space. The object slots are `MAX_OBJECTS` unless an env asks for more (option
+``slots``): every function of a slot count takes it as ``k``.
 """
 
 from __future__ import annotations
@@ -23,7 +24,10 @@ from utamp_gym.scene.model import Scene
 
 #: the env option ``interface``: the suite's ground actions and atoms, or object slots
 INTERFACES = ("grounded", "objects")
-MAX_OBJECTS = 6  # K
+#: K: the default object slots (`UTampKitchenProcedural-v0`'s spaces); an env's option
+#: ``slots`` may give more (`ObjectInterface`), up to `MAX_SLOTS`
+MAX_OBJECTS = 6
+MAX_SLOTS = 16
 MAX_MEMBERS = 6  # M
 MAX_REGIONS = 8  # R: table slots
 MAX_SPACES = 2  # S: free spaces to slide into
@@ -64,58 +68,74 @@ class ObjectAction(NamedTuple):
     space: int | None = None  # slide: space index
 
 
-def encode(action: ObjectAction) -> int:
-    """The `Discrete` index of an `ObjectAction`; `ValueError` for a field out of range."""
+def n_entities(k: int = MAX_OBJECTS) -> int:
+    """Entities of an interface with `k` object slots: objects, table regions, free spaces."""
+    return k + _R + _S
+
+
+def n_actions(k: int = MAX_OBJECTS) -> int:
+    """Indices of the action space of an interface with `k` object slots (`N_ACTIONS` at
+    the default `MAX_OBJECTS`)."""
+    return k * _M * _G + k * (k + _R) + k * _M * _G * _S
+
+
+def encode(action: ObjectAction, k: int = MAX_OBJECTS) -> int:
+    """The `Discrete` index of an `ObjectAction` (`k` object slots); `ValueError` for a field
+    out of range."""
     op, i, m, g, j, s = action
-    ranges = {"pick": (_M, _G, None, None), "place": (None, None, _K + _R, None),
+    ranges = {"pick": (_M, _G, None, None), "place": (None, None, k + _R, None),
               "slide": (_M, _G, None, _S)}  # fmt: skip
-    if op not in ranges or not 0 <= i < _K:
+    if op not in ranges or not 0 <= i < k:
         raise ValueError(f"not an object action: {action!r}")
     for value, n in zip((m, g, j, s), ranges[op], strict=True):
         if (n is None) != (value is None) or (n is not None and not 0 <= value < n):  # type: ignore[operator]
             raise ValueError(f"field out of range in {action!r}")
+    place0 = k * _M * _G
     if op == "pick":
         return (i * _M + m) * _G + g  # type: ignore[operator]
     if op == "place":
-        return _PLACE0 + i * (_K + _R) + j  # type: ignore[operator]
-    return _SLIDE0 + ((i * _M + m) * _G + g) * _S + s  # type: ignore[operator]
+        return place0 + i * (k + _R) + j  # type: ignore[operator]
+    return place0 + k * (k + _R) + ((i * _M + m) * _G + g) * _S + s  # type: ignore[operator]
 
 
-def decode(index: int) -> ObjectAction:
-    """The `ObjectAction` of a `Discrete` index (the inverse of `encode`)."""
-    if not 0 <= index < N_ACTIONS:
-        raise ValueError(f"action {index} is out of range [0, {N_ACTIONS})")
-    if index < _PLACE0:
+def decode(index: int, k: int = MAX_OBJECTS) -> ObjectAction:
+    """The `ObjectAction` of a `Discrete` index (the inverse of `encode`; `k` object slots)."""
+    n = n_actions(k)
+    if not 0 <= index < n:
+        raise ValueError(f"action {index} is out of range [0, {n})")
+    place0 = k * _M * _G
+    slide0 = place0 + k * (k + _R)
+    if index < place0:
         (i, m), g = divmod(index // _G, _M), index % _G
         return ObjectAction("pick", i, m, g)
-    if index < _SLIDE0:
-        i, j = divmod(index - _PLACE0, _K + _R)
+    if index < slide0:
+        i, j = divmod(index - place0, k + _R)
         return ObjectAction("place", i, support=j)
-    rest, s = divmod(index - _SLIDE0, _S)
+    rest, s = divmod(index - slide0, _S)
     (i, m), g = divmod(rest // _G, _M), rest % _G
     return ObjectAction("slide", i, m, g, space=s)
 
 
-def action_text(index: int) -> str:
+def action_text(index: int, k: int = MAX_OBJECTS) -> str:
     """What index `index` does, in the interface's own vocabulary and the same in every scene:
     ``pick slot3 member1 grasp on/left/right``, ``place slot3 on slot1`` (an object slot) or
     ``place slot3 on region2`` (a table region), ``slide slot0 member0 grasp on/left/right to
-    space1``. The grasp is (palm, finger 1, finger 2), `GRASPS`."""
-    a = decode(index)
+    space1``. The grasp is (palm, finger 1, finger 2), `GRASPS`; `k`: the object slots."""
+    a = decode(index, k)
     text = f"{a.operator} slot{a.obj}"
     if a.member is not None:
         text += f" member{a.member} grasp {'/'.join(GRASPS[a.grasp or 0])}"
     if a.support is not None:
-        text += f" on slot{a.support}" if a.support < _K else f" on region{a.support - _K}"
+        text += f" on slot{a.support}" if a.support < k else f" on region{a.support - k}"
     if a.space is not None:
         text += f" to space{a.space}"
     return text
 
 
-@lru_cache(maxsize=1)
-def action_texts() -> tuple[str, ...]:
+@lru_cache(maxsize=4)
+def action_texts(k: int = MAX_OBJECTS) -> tuple[str, ...]:
     """`action_text` of every index, in index order (the objects env's ``action_strings``)."""
-    return tuple(action_text(i) for i in range(N_ACTIONS))
+    return tuple(action_text(i, k) for i in range(n_actions(k)))
 
 
 def declared_type(scene: Scene, name: str) -> ObjectType:
@@ -155,9 +175,9 @@ def encode_type(t: ObjectType) -> np.ndarray:
     return np.asarray(out, np.float32)
 
 
-def observation_space() -> spaces.Dict:
-    """The (fixed) observation space of the objects interface."""
-    k, e = MAX_OBJECTS, N_ENTITIES
+def observation_space(k: int = MAX_OBJECTS) -> spaces.Dict:
+    """The (fixed) observation space of the objects interface with `k` object slots."""
+    e = n_entities(k)
     box = lambda *shape: spaces.Box(-BOUND, BOUND, shape, np.float32)  # noqa: E731
     return spaces.Dict({
         "present": spaces.MultiBinary(k), "attributes": box(k, N_ATTRIBUTES),
@@ -168,6 +188,11 @@ def observation_space() -> spaces.Dict:
         "member_in_workspace": spaces.MultiBinary((k, MAX_MEMBERS)),
         "grasp": spaces.MultiBinary((k, MAX_MEMBERS, len(GRASPS))),
     })  # fmt: skip
+
+
+def slot_count(space: spaces.Dict) -> int:
+    """The object slots of an objects-interface observation space (its ``present`` entry)."""
+    return int(space["present"].shape[0])
 
 
 _FLUENT_KEYS = ("held", "contact", "free", "in_workspace", "member_in_workspace", "grasp")

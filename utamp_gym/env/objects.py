@@ -10,7 +10,9 @@ mask, whatever the scene.
 **Slots.** At every reset the scene's objects take a uniformly random set and order of slots
 (drawn from the env's RNG after everything else the reset draws, so scenes, noise and physics
 match the grounded interface's at equal seeds); empty slots are interleaved, so neither the
-order nor the position of the tray can be memorised. Table regions (the scene's table slots,
+order nor the position of the tray can be memorised. There are `MAX_OBJECTS` slots unless the
+env option ``slots`` gives more (other spaces: `n_actions`, `n_entities`; smaller scenes leave
+slots empty). Table regions (the scene's table slots,
 in scene order: they are places, not objects) take `MAX_REGIONS` region indices and free
 spaces `MAX_SPACES` space indices. An object's members are indexed body first, then in the
 type's declared order (`MAX_MEMBERS`).
@@ -60,16 +62,15 @@ from utamp_gym.env.object_space import (
     _GRASP_INDEX,
     _K,
     _M,
-    _PLACE0,
     _R,
     _S,
-    _SLIDE0,
     BOUND,
     GRASPS,
     INTERFACES,
     MAX_MEMBERS,
     MAX_OBJECTS,
     MAX_REGIONS,
+    MAX_SLOTS,
     MAX_SPACES,
     N_ACTIONS,
     N_ATTRIBUTES,
@@ -84,7 +85,10 @@ from utamp_gym.env.object_space import (
     encode,
     encode_type,
     member_order,
+    n_actions,
+    n_entities,
     observation_space,
+    slot_count,
 )
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import PARTS, SIDES
@@ -93,10 +97,11 @@ from utamp_gym.symbolic.scene_cache import SceneCache
 from utamp_gym.symbolic.universe import MOVES_LIKE, Universe, UniverseKey, ground_universe
 
 __all__ = [
-    "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SPACES",
-    "N_ACTIONS", "N_ATTRIBUTES", "N_ENTITIES", "OPERATORS", "ObjectAction", "ObjectInterface",
-    "TypeSource", "action_text", "action_texts", "declared_type", "decode", "encode",
-    "encode_type", "member_order", "observation_space",
+    "BOUND", "GRASPS", "INTERFACES", "MAX_MEMBERS", "MAX_OBJECTS", "MAX_REGIONS", "MAX_SLOTS",
+    "MAX_SPACES", "N_ACTIONS", "N_ATTRIBUTES", "N_ENTITIES", "OPERATORS", "ObjectAction",
+    "ObjectInterface", "TypeSource", "action_text", "action_texts", "declared_type", "decode",
+    "encode", "encode_type", "member_order", "n_actions", "n_entities", "observation_space",
+    "slot_count",
 ]  # fmt: skip
 
 
@@ -161,9 +166,12 @@ class _SceneMap(NamedTuple):
     extra: np.ndarray  # part index, member index or grasp index, by kind
     extra2: np.ndarray  # grasp atoms: the grasp index
     offsets: Mapping[str, int]
+    k: int  # object slots
 
     @staticmethod
-    def of(t: _Tables, scene: Scene, source: TypeSource, offsets: Mapping[str, int]) -> _SceneMap:
+    def of(
+        t: _Tables, scene: Scene, source: TypeSource, offsets: Mapping[str, int], slots: int = _K
+    ) -> _SceneMap:
         names = scene.object_names
         types = {n: source(scene, n) for n in names}
         for n, typ in types.items():
@@ -184,10 +192,10 @@ class _SceneMap(NamedTuple):
                     member[sid[f"{n}-{m}"]], owner[sid[f"{n}-{m}"]] = k, i
         for r, region in enumerate(scene.slots):
             if region.name in sid:
-                fixed[sid[region.name]] = _K + r
+                fixed[sid[region.name]] = slots + r
         for s, space in enumerate(scene.spaces):
             if space.name in sid:
-                fixed[sid[space.name]] = _K + _R + s
+                fixed[sid[space.name]] = slots + _R + s
         slot_of = {  # per moved object of the scene: member name -> member index
             o: {m: k for k, m in enumerate(member_order(typ)) if m in typ.members}
             for o in set(t.obj.tolist())
@@ -199,7 +207,7 @@ class _SceneMap(NamedTuple):
         midx[moved] = [
             slot_of[o].get(t.member[i], -1) for i, o in zip(moved.tolist(), owners, strict=True)
         ]
-        space = np.where(fixed[t.space] >= _K + _R, fixed[t.space] - _K - _R, -1)
+        space = np.where(fixed[t.space] >= slots + _R, fixed[t.space] - slots - _R, -1)
         part = {p: i for i, p in enumerate(PARTS)}
         n_atoms = len(t.atoms)
         kind, a_obj, a_fixed = np.full(n_atoms, -1), np.full(n_atoms, -1), np.full(n_atoms, -1)
@@ -229,7 +237,7 @@ class _SceneMap(NamedTuple):
         return _SceneMap(
             types, attributes, t.op, loc[t.obj], midx, t.grasp, loc[t.support],
             fixed[t.support], space, kind, a_obj, a_fixed, b_obj, b_fixed, extra, extra2,
-            offsets,
+            offsets, slots,
         )  # fmt: skip
 
     def place(self, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -238,9 +246,12 @@ class _SceneMap(NamedTuple):
         at = np.append(np.asarray(slots), -1)  # at[-1] = -1: "not in the scene" stays -1
         slot, m, g = at[self.obj], self.member, self.grasp
         support = np.where(self.support_obj >= 0, at[self.support_obj], self.support_fixed)
+        k = self.k
+        place0 = k * _M * _G
+        slide0 = place0 + k * (k + _R)
         pick = (slot * _M + m) * _G + g
-        place = _PLACE0 + slot * (_K + _R) + support
-        slide = _SLIDE0 + ((slot * _M + m) * _G + g) * _S + self.space
+        place = place0 + slot * (k + _R) + support
+        slide = slide0 + ((slot * _M + m) * _G + g) * _S + self.space
         member_ok = (m >= 0) & (m < _M)
         valid = (
             (slot >= 0)
@@ -248,7 +259,7 @@ class _SceneMap(NamedTuple):
             & np.choose(self.op, [member_ok, support >= 0, member_ok & (self.space >= 0)])
         )
         index = np.where(valid, np.choose(self.op, [pick, place, slide]), -1)
-        off, e, n_p = self.offsets, N_ENTITIES, len(PARTS)
+        off, e, n_p = self.offsets, n_entities(k), len(PARTS)
         ea = np.where(self.a_obj >= 0, at[self.a_obj], self.a_fixed)
         eb = np.where(self.b_obj >= 0, at[self.b_obj], self.b_fixed)
         x, kind = self.extra, self.kind
@@ -269,7 +280,7 @@ class _SceneMap(NamedTuple):
 
 
 @lru_cache(maxsize=16)
-def _shared_maps(key: UniverseKey) -> SceneCache[_SceneMap]:
+def _shared_maps(key: UniverseKey, k: int = _K) -> SceneCache[_SceneMap]:
     """The scene maps of one universe under declared types, shared by every interface of a
     process (the 8 envs of a training vector derive each scene once, not once each); a map is
     never modified after it is made."""
@@ -278,12 +289,18 @@ def _shared_maps(key: UniverseKey) -> SceneCache[_SceneMap]:
 
 class ObjectInterface:
     """Translates between a kitchen env's ground universe and the fixed object-centric spaces
-    for one episode at a time (`reset`); see the module docstring."""
+    for one episode at a time (`reset`) with `slots` object slots (default `MAX_OBJECTS`:
+    more make other spaces); see the module docstring."""
 
-    def __init__(self, universe: Universe, types: TypeSource = declared_type) -> None:
-        self.universe, self.types = universe, types
-        self.observation_space = observation_space()
-        self.action_space = spaces.Discrete(N_ACTIONS)
+    def __init__(
+        self, universe: Universe, types: TypeSource = declared_type, slots: int = _K
+    ) -> None:
+        if isinstance(slots, bool) or not isinstance(slots, int) or not 1 <= slots <= MAX_SLOTS:
+            raise ValueError(f"slots must be an integer in 1..{MAX_SLOTS}, got {slots!r}")
+        self.universe, self.types, self.k = universe, types, slots
+        self.n_actions = n_actions(slots)
+        self.observation_space = observation_space(slots)
+        self.action_space = spaces.Discrete(self.n_actions)
         self._shapes = {k: self.observation_space[k].shape for k in _FLUENT_KEYS}
         sizes = [int(np.prod(s)) for s in self._shapes.values()]
         self._offsets = dict(zip(_FLUENT_KEYS, np.cumsum([0, *sizes[:-1]]).tolist(), strict=True))
@@ -294,7 +311,7 @@ class ObjectInterface:
         }
         self.slots: dict[str, int] = {}  # object name -> slot, this episode
         self._static: dict[str, np.ndarray] = {}
-        self._maps = _shared_maps(universe.key)  # what does not depend on the slots
+        self._maps = _shared_maps(universe.key, slots)  # what does not depend on the slots
         self._up: tuple[frozenset[str], np.ndarray] | None = None
 
     def __getstate__(self) -> dict[str, object]:
@@ -306,14 +323,14 @@ class ObjectInterface:
     def __setstate__(self, state: dict[str, object]) -> None:
         key: UniverseKey = state["universe"]  # type: ignore[assignment]
         state["universe"] = ground_universe(key)
-        state["_maps"] = _shared_maps(key)
+        state["_maps"] = _shared_maps(key, state.get("k", _K))  # type: ignore[arg-type]
         self.__dict__.update(state)
 
     # ------------------------------------------------------------------ episode
     def reset(self, scene: Scene, rng: np.random.Generator) -> None:
         """Assign the scene's objects to random slots and map the universe onto them."""
         names = scene.object_names
-        limits = {"objects": (len(names), _K, "MAX_OBJECTS"),
+        limits = {"objects": (len(names), self.k, "MAX_OBJECTS, or the env option slots"),
                   "table slots": (len(scene.slots), _R, "MAX_REGIONS"),
                   "free spaces": (len(scene.spaces), _S, "MAX_SPACES")}  # fmt: skip
         for what, (n, cap, const) in limits.items():
@@ -322,12 +339,14 @@ class ObjectInterface:
                     f"scene '{scene.name}' has {n} {what}; the objects interface has room for "
                     f"{cap} (utamp_gym.env.objects.{const})"
                 )
-        order = rng.permutation(_K)[: len(names)]
+        order = rng.permutation(self.k)[: len(names)]
         self.scene, self.slots = scene, {n: int(s) for n, s in zip(names, order, strict=True)}
         self._up = None  # the up-facing sides of the episode's static atoms (`observation`)
 
         def scene_map() -> _SceneMap:
-            return _SceneMap.of(_tables(self.universe.key), scene, self.types, self._offsets)
+            return _SceneMap.of(
+                _tables(self.universe.key), scene, self.types, self._offsets, self.k
+            )
 
         if self.types is declared_type:  # declared types are fixed per scene
             cached = self._maps.get(scene.key, scene_map)
@@ -336,12 +355,12 @@ class ObjectInterface:
         self._index, self._atom_pos = cached.place(order)
         order_ = np.argsort(self._index, kind="stable")
         self._sorted = order_[self._index[order_] >= 0]
-        self._starts = np.searchsorted(self._index[self._sorted], np.arange(N_ACTIONS + 1))
+        self._starts = np.searchsorted(self._index[self._sorted], np.arange(self.n_actions + 1))
         self._static_obs(scene, cached.attributes, order)
 
     def _static_obs(self, scene: Scene, attributes: np.ndarray, slots: np.ndarray) -> None:
-        attrs = np.zeros((_K, N_ATTRIBUTES), np.float32)
-        present = np.zeros(_K, np.int8)
+        attrs = np.zeros((self.k, N_ATTRIBUTES), np.float32)
+        present = np.zeros(self.k, np.int8)
         attrs[slots], present[slots] = attributes, 1
         regions = np.zeros((_R, 5), np.float32)
         for r, region in enumerate(scene.slots):
@@ -356,7 +375,7 @@ class ObjectInterface:
     # ------------------------------------------------------------------ per step
     def mask(self, ground_mask: np.ndarray) -> np.ndarray:
         """The object-centric mask: an index is shown if one of its ground actions is."""
-        out = np.zeros(N_ACTIONS, bool)
+        out = np.zeros(self.n_actions, bool)
         shown = self._index[ground_mask]
         out[shown[shown >= 0]] = True
         return out
@@ -384,11 +403,11 @@ class ObjectInterface:
         """`action_text` of an index with this episode's names in brackets (failure reasons):
         ``pick slot0 (mug) member1 (handle) grasp ...``, ``place slot0 (mug) on region1
         (slot2)``; an empty slot is ``(empty)``."""
-        a = decode(index)
+        a = decode(index, self.k)
         where = {s: n for n, s in self.slots.items()}
         scene = self.scene
         out = []
-        for word in action_text(index).split(" "):
+        for word in action_text(index, self.k).split(" "):
             name = None
             if word.startswith("slot"):
                 name = where.get(int(word[4:]), "empty")
@@ -425,7 +444,7 @@ class ObjectInterface:
         for k, (start, end, shape) in self._fluent_slices.items():
             obs[k] = flat[start:end].reshape(shape)
         if self._up is None or self._up[0] is not static_atoms:  # new episode or perception
-            up = np.zeros((_K, len(SIDES)), np.int8)
+            up = np.zeros((self.k, len(SIDES)), np.int8)
             for atom in static_atoms:
                 if atom.startswith("(force "):
                     _, name, side = atom[1:-1].split()
@@ -433,7 +452,7 @@ class ObjectInterface:
                         up[self.slots[name], SIDES.index(side)] = 1
             self._up = (static_atoms, up)
         obs["up"] = self._up[1].copy()
-        p = np.zeros((_K, 7), np.float32)
+        p = np.zeros((self.k, 7), np.float32)
         for name, slot in self.slots.items():
             if name in poses:
                 p[slot] = poses[name]

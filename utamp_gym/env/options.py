@@ -7,7 +7,7 @@ grounded or simulated, and the env, the universe cache key and the docs read the
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -21,7 +21,7 @@ from utamp_gym.backend import (
     PERCEPTION_MODES,
 )
 from utamp_gym.env.goals import Task, check_task
-from utamp_gym.env.object_space import INTERFACES
+from utamp_gym.env.object_space import INTERFACES, MAX_OBJECTS, MAX_SLOTS
 from utamp_gym.errors import UnknownNameError, UtampError
 from utamp_gym.scene.model import BuiltScene, Scene
 from utamp_gym.suites import (
@@ -113,6 +113,7 @@ class EnvOptions:
     interface: str = "grounded"
     task: Task = None
     goal_observation: bool = False
+    slots: int | None = None
 
     def __post_init__(self) -> None:
         if self.split is not None:  # "train", "procedural-v1/train" or "procedural-v2/train"
@@ -159,14 +160,25 @@ class EnvOptions:
             self, "pose_noise", _unit("pose_noise (m)", self.pose_noise, MAX_POSE_NOISE)
         )
         _choice("perception", self.perception, PERCEPTION_MODES)
+        most = MAX_SLOTS if self.interface == "objects" else len(names)  # objects: rows grow
         if self.num_objects is not None and (
             isinstance(self.num_objects, bool)
             or not isinstance(self.num_objects, int)
-            or not MIN_OBJECTS <= self.num_objects <= len(names)
+            or not MIN_OBJECTS <= self.num_objects <= most
         ):
             raise ValueError(
-                f"num_objects must be an integer in {MIN_OBJECTS}..{len(names)} or None, "
+                f"num_objects must be an integer in {MIN_OBJECTS}..{most} or None, "
                 f"got {self.num_objects!r}"
+            )
+        if self.slots is not None and (
+            self.interface != "objects"
+            or isinstance(self.slots, bool)
+            or not isinstance(self.slots, int)
+            or not MIN_OBJECTS <= self.slots <= MAX_SLOTS
+        ):
+            raise ValueError(
+                f"slots (the objects interface's object slots) must be None or an integer in "
+                f"{MIN_OBJECTS}..{MAX_SLOTS} with interface='objects', got {self.slots!r}"
             )
         if self.scene is not None and not isinstance(self.scene, str | Scene):
             raise ValueError(f"scene must be a scene name, a path or a Scene, got {self.scene!r}")
@@ -241,12 +253,31 @@ class EnvOptions:
                 )
         for s in chosen:
             extra = [n for n in s.object_names if n not in self.objects]
-            if extra:
+            if extra and self.interface != "objects":  # its rows grow to fit (`fitted`)
                 raise ValueError(
                     f"scene '{s.name}' has objects {extra} outside the env's observation rows "
                     f"{list(self.objects)}"
                 )
         return chosen
+
+    def fitted(self, scenes: Sequence[Scene]) -> EnvOptions:
+        """These options for the env's `scenes`: with the objects interface, whose spaces do
+        not show the pose rows, the rows grow by the scenes' other object names, and
+        ``slots`` None becomes `MAX_OBJECTS` or the most objects of a scene if more (a
+        larger ``slots`` than a scene has leaves slots empty; a smaller one is refused)."""
+        if self.interface != "objects":
+            return self
+        names = dict.fromkeys(self.objects)
+        names.update(dict.fromkeys(n for s in scenes for n in s.object_names))
+        most = max((s.n_objects for s in scenes), default=0)
+        if self.slots is not None and most > self.slots:
+            big = next(s for s in scenes if s.n_objects == most)
+            raise ValueError(
+                f"scene '{big.name}' has {most} objects, more than slots={self.slots}: use "
+                f"slots={most} or more (or None: as many as the largest scene)"
+            )
+        slots = self.slots if self.slots is not None else max(MAX_OBJECTS, most)
+        return replace(self, objects=tuple(names), slots=slots)
 
 
 def action_id(action: Any, n: int) -> int:

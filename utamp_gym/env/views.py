@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from utamp_gym.env.object_space import N_ACTIONS, action_texts
+from utamp_gym.env.object_space import action_texts
 from utamp_gym.env.options import action_id
 from utamp_gym.symbolic.atoms import parse_atom
 
@@ -49,7 +49,7 @@ class KitchenViews:
         `utamp_gym.env.object_space.action_text`); the PDDL action an index runs depends on
         the episode: `action_pddl`, and ``info["action"]`` after the step."""
         if self._objects is not None:
-            return action_texts()
+            return action_texts(self._objects.k)
         return self.universe.actions
 
     def action_pddl(self, action: int) -> str:
@@ -59,7 +59,7 @@ class KitchenViews:
         index without a ground action in this scene (its step fails: ``no such action``)."""
         if self._objects is None:
             return self.universe.actions[action_id(action, self.universe.n_actions)]
-        index = action_id(action, N_ACTIONS)
+        index = action_id(action, self._objects.n_actions)
         if self._episode is None:
             raise RuntimeError("call reset() before action_pddl(): the slots are drawn there")
         a = self._objects.resolve(index, self._state.mask(), self._state.applicable_mask())

@@ -117,7 +117,8 @@ def train_bc(config: Any, out: Path, *, progress: bool = False) -> Any:
     start = time.perf_counter()
     hyper = {**BC_DEFAULTS, **config.hyperparams}
     env_kw = {"grounding": config.grounding, "num_objects": config.num_objects,
-              "masks": config.masks, "interface": config.interface}  # fmt: skip
+              "masks": config.masks, "interface": config.interface,
+              **config.env_options}  # fmt: skip
     env = make_env(config.env_id, obs_keys=None, **env_kw)
     meta = model_meta(config, env)
     model = MaskablePPO(SlotPolicy, env, seed=config.seed, device="cpu")

@@ -10,8 +10,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.env.object_goal import GOAL_KEYS
 from utamp_gym.env.options import INTERFACES, MASKS
-from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, OBJECT_OBS_KEYS, default_interface
+from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, OBJECT_OBS_KEYS, default_interface, env_option
 from utamp_gym.rl.policy import ALGOS
 
 #: the slot policy's width in `utamp train` (`utamp_gym.rl.slots.D_MODEL`, 64, is the width of
@@ -31,6 +32,9 @@ def slot_policy_kwargs() -> dict[str, Any]:
 
 
 GROUNDINGS = ("symbolic", "physics")
+#: env options `TrainConfig` sets through fields of its own, not `TrainConfig.env_options`
+_SET_BY_CONFIG = frozenset({"grounding", "num_objects", "masks", "interface", "reward_shaping",
+                            "terminate_on_failure"})  # fmt: skip
 #: PPO epochs per rollout of the slot policy: the update is most of its training time, and 3
 #: epochs learn within the interval of 10 per env step (benchmarks/train_speed_learning.py)
 OBJECTS_EPOCHS = 3
@@ -50,7 +54,11 @@ class TrainConfig:
     behaviour-cloned policy); `stop_at_plateau` (a success gain, e.g. 0.02) stops training at
     the first evaluation where the last 20 % of the curve gained less
     (`utamp_gym.rl.callbacks.plateaued`); `time_limit_s` stops it at the first evaluation after
-    that much training time (a budget on a shared machine; the steps reached are recorded).
+    that much training time (a budget on a shared machine; the steps reached are recorded);
+    `env_options` are more ``gym.make`` options of the training and evaluation envs, saved
+    with the model (e.g. ``{"slots": 8}``: an objects interface for procedural-v2's 8-object
+    scenes). On an env with the goal in its observation (``goal_observation``, e.g.
+    ``UTampKitchenGoals-v0``) the objects interface's entries include the goal's.
     """
 
     env_id: str = "UTampKitchen-v0"
@@ -75,6 +83,7 @@ class TrainConfig:
     interface: str = ""
     init_from: str = ""
     demos: str = ""
+    env_options: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.interface:
@@ -89,7 +98,14 @@ class TrainConfig:
                     f"(utamp_gym.rl.slots), not {self.algo!r}"
                 )
             if tuple(self.obs_keys) == DEFAULT_OBS_KEYS:  # the objects interface's entries
-                object.__setattr__(self, "obs_keys", OBJECT_OBS_KEYS)
+                goal = env_option(self.env_id, "goal_observation", self.env_options)
+                object.__setattr__(self, "obs_keys", OBJECT_OBS_KEYS + (GOAL_KEYS if goal else ()))
+        if not isinstance(self.env_options, dict) or set(self.env_options) & _SET_BY_CONFIG:
+            raise ValueError(
+                f"env_options must be a dict of gym.make options other than "
+                f"{', '.join(sorted(_SET_BY_CONFIG))} (fields of their own), "
+                f"got {self.env_options!r}"
+            )
         if self.algo not in TRAIN_ALGOS:
             raise ValueError(f"unknown algo {self.algo!r}; valid: {', '.join(TRAIN_ALGOS)}")
         if (self.algo == "bc") != bool(self.demos):

@@ -42,6 +42,14 @@ def default_interface(env_id: str, algo: str = "maskable-ppo") -> str:
     return str(own or "grounded")
 
 
+def env_option(env_id: str, name: str, options: dict[str, Any] | None = None) -> Any:
+    """The value option `name` has on ``gym.make(env_id, **options)``: `options`' own, else
+    the env file's default (None if neither sets it)."""
+    if options and name in options:
+        return options[name]
+    return next((d.kwargs.get(name) for d in env_definitions() if d.id == env_id), None)
+
+
 def make_env(
     env_id: str = "UTampKitchen-v0",
     *,

@@ -19,7 +19,9 @@ from utamp_gym.rl.saved import ModelMeta, write_meta
 def model_meta(config: TrainConfig, env: Any) -> ModelMeta:
     """The `ModelMeta` of a run, read from its (unfiltered) evaluation env."""
     kitchen = env.unwrapped
-    options: dict[str, Any] = {"masks": config.masks, "interface": config.interface}
+    options: dict[str, Any] = {
+        "masks": config.masks, "interface": config.interface, **config.env_options
+    }  # fmt: skip
     return ModelMeta(
         env_id=config.env_id,
         suite=str(kitchen.options.suite),
@@ -43,7 +45,7 @@ def eval_episodes_of(config: TrainConfig) -> list[tuple[str, int]]:
     # every observation entry: the env's default interface may have no ``symbolic`` entry;
     # the run's masks, so that the env reuses the run's (cached) action universe
     env = make_env(config.env_id, grounding="symbolic", num_objects=config.num_objects,
-                   obs_keys=None, masks=config.masks)  # fmt: skip
+                   obs_keys=None, masks=config.masks, **config.env_options)  # fmt: skip
     names = [s.name for s in env.unwrapped.scenes]  # type: ignore[attr-defined]
     env.close()
     base = config.seed + EVAL_SEED_OFFSET
@@ -70,6 +72,10 @@ def report(config: TrainConfig, hyper: dict[str, Any], result: TrainResult) -> d
     }
 
 
+#: `TrainConfig` fields added after runs were written, with their defaults
+_LATER_FIELDS: dict[str, Any] = {"env_options": {}}
+
+
 def seed_dir(out: str | Path, seed: int) -> Path:
     """Where `train_seeds` puts the run of one seed."""
     return Path(out) / f"seed_{seed}"
@@ -84,7 +90,10 @@ def finished_run(out: str | Path, config: TrainConfig) -> TrainResult | None:
         return None
     report = json.loads(report_path.read_text())
     want = {**asdict(config), "obs_keys": list(config.obs_keys)}
-    if report.get("config") != want:
+    have = dict(report.get("config") or {})
+    for name, default in _LATER_FIELDS.items():  # a run written before the field existed
+        have.setdefault(name, default)
+    if have != want:
         return None
     names = {f.name for f in fields(TrainResult)}
     data = {k: v for k, v in report.items() if k in names}

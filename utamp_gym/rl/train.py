@@ -87,6 +87,7 @@ def train(
         "num_objects": num_objects,
         "masks": config.masks,
         "interface": config.interface,
+        **config.env_options,
     }
     vec = make_vec_env(
         env_id, n_envs, seed=seed, subproc=grounding == "physics", obs_keys=config.obs_keys,
