@@ -16,6 +16,10 @@ Three heads, plain numpy at run time (`AttributeModel`):
   regression, temperature-scaled likewise;
 * **mass** (kg): ridge regression of log mass, clamped into the predicted class.
 
+Where cross-validation on train finds the hand-built volume x density rule reads the mass
+class better than the two mass heads (``mass_head: rule``), the perceiver keeps that rule,
+applied to the learned material, with its own confidences.
+
 Robustness is the material's (the posterior summed over the materials of each class).
 `benchmarks/attribute_model.py` renders procedural-v1/train, trains the model (even/odd
 cross-validation chooses its settings) and ships it as
@@ -160,6 +164,9 @@ class AttributeModel:
     w_mass: np.ndarray
     t_material: float = 1.0
     t_mass_class: float = 1.0
+    #: "learned": mass from the two mass heads; "rule": the hand-built volume x density
+    #: rule (`material.estimate_mass`) on the learned material (chosen by cross-validation)
+    mass_head: str = "learned"
 
     def _xb(self, x: np.ndarray) -> np.ndarray:
         z = (np.atleast_2d(x) - self.mean) / self.std
@@ -188,6 +195,7 @@ class AttributeModel:
             "w_mass_class": np.round(self.w_mass_class, r).tolist(),
             "w_mass": np.round(self.w_mass, r).tolist(),
             "t_material": self.t_material, "t_mass_class": self.t_mass_class,
+            "mass_head": self.mass_head,
         }  # fmt: skip
 
     @classmethod

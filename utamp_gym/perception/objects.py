@@ -348,16 +348,23 @@ def perceive_instance(
         )
         mat = MaterialEstimate(max(pred.material, key=pred.material.__getitem__), pred.material)
         mass, low, high = estimate_mass(mat.name, volume, area)
-        scale = pred.mass / max(mass, 1e-9)  # the material's density range about the mass
-        reported, low, high = pred.mass, low * scale, high * scale
-        conf, alts = learned_confidences(pred, mat.name, shape.covered)
+        if model.mass_head == "rule":  # volume x density of the learned material
+            reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
+            conf, alts = raw_confidences(
+                mat.posterior, mat.name, reported, volume, area, shape.covered
+            )
+        else:
+            scale = pred.mass / max(mass, 1e-9)  # the material's density range about it
+            reported, low, high = pred.mass, low * scale, high * scale
+            conf, alts = learned_confidences(pred, mat.name, shape.covered)
     else:
         mass, low, high = estimate_mass(mat.name, volume, area)
         reported = lift_mass(mass, high)
         conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
     calibration = packaged_calibration()
     if calibration is not None:  # the learned heads are calibrated already (temperatures)
-        conf = {**conf, **calibration.apply({"members": conf["members"]})} if model else \
+        mapped = ("members", "mass") if model and model.mass_head == "rule" else ("members",)
+        conf = {**conf, **calibration.apply({a: conf[a] for a in mapped})} if model else \
             calibration.apply(conf)  # fmt: skip
     return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape, high),
                            conf, alts)  # fmt: skip
