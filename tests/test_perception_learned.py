@@ -4,6 +4,7 @@ the confidences it gives in the form the planner under doubt reads."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from utamp_gym.errors import AssetError
 from utamp_gym.perception.confidence import MASS_BOUNDS, mass_class
 from utamp_gym.perception.learned import (
     MATERIAL_NAMES,
+    MODEL_FILE,
     AttributeModel,
     Prediction,
     best_temperature,
@@ -20,6 +22,7 @@ from utamp_gym.perception.learned import (
     learned_confidences,
     packaged_attribute_model,
 )
+from utamp_gym.resources import asset_path
 
 
 def test_softmax_regression_separates_and_ridge_recovers_a_line() -> None:
@@ -48,6 +51,13 @@ def test_the_shipped_model_round_trips_and_rejects_other_materials() -> None:
     assert model is not None, "assets/perception/attribute_model.json is shipped"
     again = AttributeModel.from_json(json.loads(json.dumps(model.to_json())))
     assert np.allclose(again.w_material, model.w_material)
+    assert (
+        again.mass_head
+        == model.mass_head
+        == json.loads((Path(asset_path(*MODEL_FILE))).read_text())["mass_head"]
+    )
+    with pytest.raises(AssetError, match="mass_head 'guess'"):
+        AttributeModel.from_json({**model.to_json(), "mass_head": "guess"}, "x.json")
     bad = {**model.to_json(), "materials": ["wood"]}
     with pytest.raises(AssetError, match="materials"):
         AttributeModel.from_json(bad, "x.json")

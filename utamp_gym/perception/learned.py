@@ -206,11 +206,15 @@ class AttributeModel:
             raise AssetError(f"{source}: mass_bounds {data['mass_bounds']} != {list(MASS_BOUNDS)}")
         arr = {k: np.asarray(data[k], dtype=float) for k in
                ("mean", "std", "w_material", "w_mass_class", "w_mass")}  # fmt: skip
+        head = str(data.get("mass_head", "learned"))
+        if head not in ("learned", "rule"):
+            raise AssetError(f"{source}: mass_head {head!r} is neither 'learned' nor 'rule'")
         return cls(
             **arr,
             t_material=float(data["t_material"]),  # type: ignore[arg-type]
-            t_mass_class=float(data["t_mass_class"]),
-        )  # type: ignore[arg-type]
+            t_mass_class=float(data["t_mass_class"]),  # type: ignore[arg-type]
+            mass_head=head,
+        )
 
 
 def learned_confidences(
