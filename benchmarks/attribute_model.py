@@ -304,11 +304,13 @@ def report(
     lines = [
         "The learned attribute model (`utamp_gym.perception.learned`, trained on "
         f"{TRAIN} renders only by `benchmarks/attribute_model.py train --write`) on the "
-        "measurements of every object of each split (rendered at seed 0; test splits are "
-        "only evaluated here). Accuracy of the learned heads beside the hand-built pipeline's; "
+        "measurements of every object of the scenes collected of each split (`collect "
+        "--part I/N`: every N-th scene, the scenes column; rendered at seed 0; test splits are "
+        "only evaluated here; the train row is held out by even/odd halves). Accuracy of "
+        "the learned heads beside the hand-built pipeline's; "
         "mass judged as its class at the rules' thresholds 0.5 / 1.1 / 1.5 / 3.0 kg. The "
         "learned model is a classifier trained on train-split renders with the true labels: "
-        "its accuracy on a split is the ceiling the brief asks for where the rendering "
+        "its accuracy on a split is the evidence's ceiling (issue #42) where the rendering "
         "leaves an attribute ambiguous by design (material colours overlap between palettes; "
         "mass is never seen).",
         "",
