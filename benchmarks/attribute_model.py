@@ -261,6 +261,13 @@ def reliability(ev: dict[str, object]) -> dict[str, list[dict[str, float]]]:
     return out
 
 
+def _rule_mass(material_name: str, m: dict[str, float]) -> float:
+    """The hand-built mass of a piece (volume x density of `material_name`, `lift_mass`)
+    from its measurements (not the stored mass: a later model may have made that)."""
+    kg, _, high = estimate_mass(material_name, m["volume"], m["area"])
+    return lift_mass(kg, high)
+
+
 def handbuilt_accuracy(rows: list[dict[str, object]]) -> dict[str, float]:
     """The hand-built pipeline's accuracy on `rows` (its material and reported mass)."""
     pairs = [(r["handbuilt"], r["declared"]) for r in rows]  # type: ignore[index]
@@ -271,7 +278,15 @@ def handbuilt_accuracy(rows: list[dict[str, object]]) -> dict[str, float]:
     return {
         "material": float(np.mean([h["material"] == d["material"] for h, d in pairs])),
         "robustness": float(np.mean([rob(h["material"]) == d["robustness"] for h, d in pairs])),
-        "mass": float(np.mean([mass_class(h["mass"]) == mass_class(d["mass"]) for h, d in pairs])),
+        "mass": float(
+            np.mean(
+                [
+                    mass_class(_rule_mass(h["material"], r["measurements"]))  # type: ignore[arg-type,index]
+                    == mass_class(float(r["declared"]["mass"]))
+                    for r, (h, _) in zip(rows, pairs, strict=True)  # type: ignore[index]
+                ]
+            )
+        ),
     }
 
 
