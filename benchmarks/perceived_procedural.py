@@ -50,6 +50,11 @@ def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[st
     lo, hi = wilson_interval(ok, len(ach)) if ach else (0.0, 0.0)
     stats = method_stats(rows)
     acc = stats["attribute_accuracy"] or dict.fromkeys(ATTRIBUTES)
+    by_n: dict[str, list[int]] = {}  # objects in the scene -> [solved, achievable runs]
+    for r in ach:
+        cell = by_n.setdefault(str(r.n_objects), [0, 0])
+        cell[0] += int(r.success)
+        cell[1] += 1
     return {
         "runs": len(rows),
         "achievable_runs": len(ach),
@@ -61,6 +66,7 @@ def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[st
         "affordance_f1": stats["affordance_f1"],
         "accuracy": acc,
         "crashed": sum(r.crashed for r in rows),
+        "achievable_by_objects": dict(sorted(by_n.items())),
     }
 
 
@@ -98,6 +104,21 @@ def _markdown(table: dict[str, dict[str, dict[str, object]]], shard: tuple[int, 
     for split, methods in table.items():
         acc = methods["utamp2-perceived"]["accuracy"]
         cells = ["–" if acc[a] is None else f"{acc[a]:.3f}" for a in ATTRIBUTES]  # type: ignore[index]
+        lines.append(f"| {split} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "Achievable scenes planned validly by `utamp2-perceived`, by the number of objects "
+        "in the scene (solved / runs):",
+        "",
+        "| split | " + " | ".join(f"{n} objects" for n in range(2, 7)) + " |",
+        "|---" * 6 + "|",
+    ]
+    for split, methods in table.items():
+        by_n = methods["utamp2-perceived"]["achievable_by_objects"]
+        cells = [
+            f"{by_n[str(n)][0]}/{by_n[str(n)][1]}" if str(n) in by_n else "–"  # type: ignore[operator,index]
+            for n in range(2, 7)
+        ]
         lines.append(f"| {split} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

@@ -10,7 +10,7 @@ import pytest
 from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.errors import PlanningError
-from utamp_gym.eval.closed_loop import run_closed_loop
+from utamp_gym.eval.closed_loop import NO_ACTIONS, run_closed_loop
 from utamp_gym.eval.interactive import SATURATED_MASS, InteractivePerception
 from utamp_gym.seeding import run_seed
 
@@ -106,3 +106,12 @@ def test_a_perceiver_that_sees_nothing_ends_the_episode_at_perception(
         SCENE, "utamp2-perceived:user_perceiver:BlindPerceiver", grounding="symbolic"
     )
     assert not out.success and out.failure.startswith("perception: no camera saw")
+
+
+@pytest.mark.parametrize("grounding", ["symbolic", "physics"])
+def test_a_scene_that_affords_no_action_ends_unsolved_not_crashed(grounding: str) -> None:
+    # procedural-v1/train/0040: two objects whose ground-truth affordances leave no ground
+    # action in the scene's own universe (the env's Discrete(0) used to raise ValueError)
+    out = run_closed_loop("procedural-v1/train/0040", "utamp2-perceived", grounding=grounding)
+    assert not out.success and out.actions == ()
+    assert out.failure.endswith(NO_ACTIONS) and out.failure.startswith("no plan")

@@ -21,15 +21,19 @@ from utamp_gym.agents import PlannerPolicy, run_policy
 from utamp_gym.agents.episode import Policy
 from utamp_gym.backend import DEFAULT_PERCEPTION
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
+from utamp_gym.env.options import EnvOptions
 from utamp_gym.eval.interactive import InteractivePerception
 from utamp_gym.methods.perceived import perceive_live
 from utamp_gym.methods.perceivers import load_perceiver, split_method
 from utamp_gym.planning.methods import method_spec
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, resolve_scene
+from utamp_gym.symbolic.universe import ground_universe
 
 #: macro actions per closed-loop episode (five-object optimal plans have at most 14)
 MAX_STEPS = 40
+#: the failure of an episode whose scene affords no ground action (nothing to act with)
+NO_ACTIONS = "the scene's objects afford no action (every goal is unreachable)"
 
 
 @dataclass(frozen=True)
@@ -73,12 +77,17 @@ def run_closed_loop(
     physics: dict[str, object] = {} if pose_noise is None else {"pose_noise": pose_noise}
     if grounding == "physics":
         physics["perception"] = perception
+    where = {"suite": suite, "objects": tuple(objects), "scene": scene, "domain": spec.domain}
+    if ground_universe(EnvOptions(**where).universe_key()).n_actions == 0:
+        # the scene's own universe affords no action at all (an unachievable procedural
+        # scene): no episode can act, and the env's Discrete(0) action space cannot exist
+        return ClosedLoopResult(
+            success=False, failure=f"no plan from the initial state of {scene}: {NO_ACTIONS}",
+            actions=(), n_faults=0, n_replans=0, planning_time_s=0.0, execution_time_s=0.0,
+        )  # fmt: skip
     env = UTampKitchenEnv(
-        suite=suite,
-        objects=objects,
-        scene=scene,
+        **where,
         grounding=grounding,
-        domain=spec.domain,
         affordances="gt",
         disturbance=disturbance,
         **physics,

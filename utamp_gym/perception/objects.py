@@ -50,8 +50,14 @@ import numpy as np
 from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
 from utamp_gym.perception.confidence import packaged_calibration, raw_confidences
+from utamp_gym.perception.learned import (
+    learned_confidences,
+    measurements,
+    packaged_attribute_model,
+)
 from utamp_gym.perception.material import (
     MaterialEstimate,
+    appearance_features,
     classify_material,
     estimate_mass,
     shape_class,
@@ -332,14 +338,34 @@ def perceive_instance(
     shape = fit_shape(cloud, scene, instance, prior_yaw=prior_yaw)
     provisional = MaterialEstimate("default", {"default": 1.0})
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
-    mat = classify_material(colours, looks.shape_class())
+    cls = looks.shape_class()
+    mat = classify_material(colours, cls)
     volume, area = _solid_volume(shape), _shell_area(shape)
-    mass, low, high = estimate_mass(mat.name, volume, area)
-    reported = lift_mass(mass, high)
-    conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
+    model = packaged_attribute_model()
+    if model is not None and mat.name != "default":  # the learned model (`learned`)
+        pred = model.predict(
+            measurements(shape, appearance_features(colours), mat.posterior, cls, volume, area)
+        )
+        mat = MaterialEstimate(max(pred.material, key=pred.material.__getitem__), pred.material)
+        mass, low, high = estimate_mass(mat.name, volume, area)
+        if model.mass_head == "rule":  # volume x density of the learned material
+            reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
+            conf, alts = raw_confidences(
+                mat.posterior, mat.name, reported, volume, area, shape.covered
+            )
+        else:
+            scale = pred.mass / max(mass, 1e-9)  # the material's density range about it
+            reported, low, high = pred.mass, low * scale, high * scale
+            conf, alts = learned_confidences(pred, mat.name, shape.covered)
+    else:
+        mass, low, high = estimate_mass(mat.name, volume, area)
+        reported = lift_mass(mass, high)
+        conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
     calibration = packaged_calibration()
-    if calibration is not None:
-        conf = calibration.apply(conf)
+    if calibration is not None:  # the learned heads are calibrated already (temperatures)
+        mapped = ("members", "mass") if model and model.mass_head == "rule" else ("members",)
+        conf = {**conf, **calibration.apply({a: conf[a] for a in mapped})} if model else \
+            calibration.apply(conf)  # fmt: skip
     return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape, high),
                            conf, alts)  # fmt: skip
 
