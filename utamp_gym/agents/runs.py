@@ -29,7 +29,8 @@ from utamp_gym.backend import DEFAULT_PERCEPTION, DEFAULT_POSE_NOISE, PhysicsBac
 from utamp_gym.env.kitchen import DEFAULT_OBJECTS, UTampKitchenEnv
 from utamp_gym.env.symbolic_backend import SymbolicBackend
 from utamp_gym.errors import UnknownNameError
-from utamp_gym.planning.methods import PlanOutcome, plan_scene
+from utamp_gym.planning.crosscheck import checking_domain
+from utamp_gym.planning.methods import METHODS, PlanOutcome, method_spec, plan_scene
 from utamp_gym.scene.model import Scene
 from utamp_gym.seeding import run_seed
 from utamp_gym.suites import SUITES, resolve_scene
@@ -127,18 +128,25 @@ def open_loop_env(
     disturbance: float = 0.0,
     perception: str = DEFAULT_PERCEPTION,
     grounding: str = "physics",
+    domain: str = "utamp2",
 ) -> UTampKitchenEnv:
     """The env an open-loop plan of `scene` is played in (module docstring); with `backend`,
     acting in that simulator (`pose_noise` and `perception` are then its own). In
     ``symbolic`` grounding the ground-truth outcome model decides each step (``masks="none"``:
     the U-TAMP-2 precondition under the scene's ground truth); the physics arguments are
-    unused."""
+    unused. `domain`: the domain the plan was made in; an extended domain's plan plays in an
+    env of that domain (its actions, its ground truth), any other in U-TAMP-2's
+    (`utamp_gym.planning.crosscheck.checking_domain`)."""
+    env_domain = checking_domain(domain)
+    # masks "none" exists for U-TAMP-2 only; an extended domain's env masks by its ground
+    # truth, so a step it forbids fails on its false literal (in physics too, before acting)
+    masks = {"masks": "none"} if env_domain == "utamp2" else {"affordances": "gt"}
     if grounding == "symbolic":
-        return scene_env(scene, grounding="symbolic", masks="none")
+        return scene_env(scene, grounding="symbolic", domain=env_domain, **masks)
     physics = {"pose_noise": pose_noise, "perception": perception} if backend is None else {}
     return scene_env(
-        scene, backend=backend, masks="none", disturbance=disturbance, record_timings=True,
-        **physics,
+        scene, backend=backend, disturbance=disturbance, record_timings=True,
+        domain=env_domain, **masks, **physics,
     )  # fmt: skip
 
 
@@ -154,6 +162,7 @@ def execute_plan(
     perception: str = DEFAULT_PERCEPTION,
     env: UTampKitchenEnv | None = None,
     grounding: str = "physics",
+    domain: str = "utamp2",
 ) -> Execution:
     """Play `plan` on `scene` in the env of `grounding` (`open_loop_env`), stopping at the
     first failed step (open loop; module docstring). `scene`: a name, a file path or a `Scene`.
@@ -166,13 +175,13 @@ def execute_plan(
     (``gaussian`` or ``rgbd``). With `disturbance` p, each executed step is followed with
     probability p by an injected fault. `env`: an `open_loop_env` of the scene to play in
     (e.g. one whose simulator was looked at first), left open; the other physics arguments
-    are then its own.
+    are then its own. `domain`: the domain the plan was made in (`open_loop_env`).
     """
     own = env is None and backend is None
     if env is None:
         env = open_loop_env(
             scene, backend=backend, pose_noise=pose_noise, disturbance=disturbance,
-            perception=perception, grounding=grounding,
+            perception=perception, grounding=grounding, domain=domain,
         )  # fmt: skip
     sim: Any = env.backend
     unknown = _first_unknown(env, plan)  # played up to it, and failed there
@@ -265,6 +274,7 @@ def episode_result(
         disturbance=disturbance,
         perception=perception,
         env=env,
+        domain=method_spec(outcome.method).domain if outcome.method in METHODS else "utamp2",
     )
     failure = ex.failure
     if not outcome.solved:

@@ -239,12 +239,15 @@ def _run_open_loop(task: EvalTask, scene: Scene, start: float, env: Any) -> Resu
     valid_gt = None
     plan = planned.plan
     if planned.solved:  # the plan played open loop in the env (`OpenLoopPolicy`)
-        valid_gt = check_against_ground_truth(scene, plan).valid
+        valid_gt = check_against_ground_truth(scene, plan, planned.domain).valid
         physics = {} if task.grounding == "symbolic" else {
             "pose_noise": task.pose_noise, "disturbance": task.disturbance,
             "perception": task.perception,
         }  # fmt: skip
-        ex = execute_plan(task.scene, plan, task.seed, env=env, grounding=task.grounding, **physics)
+        ex = execute_plan(
+            task.scene, plan, task.seed, env=env, grounding=task.grounding,
+            domain=planned.domain, **physics,
+        )  # fmt: skip
         success, failure, exec_time = ex.success, ex.failure_reason, ex.execution_time_s
         n_faults = ex.n_faults
     else:
