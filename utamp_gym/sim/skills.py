@@ -86,7 +86,7 @@ def pick(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(f"cannot pick {sym.obj}: the hand already holds {st.held.obj}")
     before = snapshot(st, {sym.obj})
     support, looked = st.stack().get(sym.obj), st.estimate(sym.obj)
-    lift = lift_height(st, sym.obj)
+    lift = lift_height(st, sym.obj, sym.member)
     for attempt in range(1, GRASP_ATTEMPTS + 1):
         last = attempt == GRASP_ATTEMPTS
         try:
