@@ -14,8 +14,6 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from utamp_gym.affordances.hand import TORQUE_LIMIT, G
-from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.contract.tracking import PoseTracker
 from utamp_gym.errors import GroundingError
 from utamp_gym.scene.catalogue import ObjectType
@@ -34,9 +32,6 @@ MOVED = 0.02  # m, another object moving this far was disturbed
 LIFT = 0.12  # m, least lift after grasping
 LIFT_CLEARANCE = 0.03  # m, lift the held object this far over the tallest other object
 MAX_LIFT = 0.30  # m
-#: deg an object whose weight's moment exceeds the pads' hanging hold may turn in the hand
-#: while carried (`pivot_allowance`); the pick fails it beyond `grasp_phases.MAX_TILT_DEG`
-CARRY_TILT_DEG = 10.0
 SETTLED = 0.01  # m/s (and rad/s): objects slower than this have settled (`settle_objects`)
 SETTLE_CHECK = 0.02  # s between the checks of `settle_objects`
 
@@ -158,38 +153,27 @@ def settle_objects(st: SimState, *, min_s: float = 0.25, max_s: float = 1.2) -> 
                 return
 
 
-def lift_height(st: SimState, name: str, member: str | None = None) -> float:
+def lift_height(st: SimState, name: str) -> float:
     """Least lift taking `name` over the tallest other object (`LIFT` .. `MAX_LIFT`), from
-    the robot's estimates of the poses; held by `member`, with room for it to turn in the
-    hand while carried (`pivot_allowance`)."""
+    the robot's estimates of the poses."""
     scene = st.world.scene
-    t = scene.type_of(name)
-    bottom = world_aabb(t.bbox, st.estimate(name))[0][2]
+    bottom = world_aabb(scene.type_of(name).bbox, st.estimate(name))[0][2]
     tops = [
         world_aabb(scene.type_of(o).bbox, st.estimate(o))[1][2]
         for o in st.world.body_ids
         if o != name
     ]
     need = max(tops, default=0.0) + LIFT_CLEARANCE - bottom
-    if member is not None:
-        need += pivot_allowance(t, member)
     return float(np.clip(need, LIFT, MAX_LIFT))
 
 
-def pivot_allowance(t: ObjectType, member: str) -> float:
-    """m the far end of `t` held by `member` may sink while carried: where its weight's
-    moment about the grasp exceeds the pads' hanging hold (`hand.TORQUE_LIMIT`; the extended
-    domain's handle grasps carry more), the object turns in the hand (a 1.3 kg board held by
-    its handle turned 3.5 deg in a carry and swept a tumbler), up to `CARRY_TILT_DEG` at its
-    farthest corner; 0 for a grasp the pads hold."""
+def sweep_reach(t: ObjectType, member: str) -> float:
+    """m from the middle of `member` to the farthest corner of `t`'s footprint: how far the
+    object reaches out of the hand holding it there."""
     box = t.members[member].box
     gx, gy = (box.min[0] + box.max[0]) / 2, (box.min[1] + box.max[1]) / 2
-    cx, cy = centre_of_mass(t)
-    if t.mass * G * math.hypot(cx - gx, cy - gy) <= TORQUE_LIMIT:
-        return 0.0
     lo, hi = t.bbox.min, t.bbox.max
-    reach = max(math.hypot(x - gx, y - gy) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]))
-    return reach * math.sin(math.radians(CARRY_TILT_DEG))
+    return max(math.hypot(x - gx, y - gy) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]))
 
 
 def verify_on(st: SimState, name: str, support: str) -> None:
