@@ -50,6 +50,10 @@ UPPER_FINGER = (0.021, 0.026, 0.022)  # m: height, thickness, width of the finge
 NOISE_MARGIN = 0.002  # m, the robot's pose estimate is this uncertain (one sigma)
 HAND_ABOVE_TCP = 0.031  # m: the hand's underside above the TCP
 HAND_HALF_THICKNESS = 0.0172  # m: half the hand's thickness across the fingers' plane, low down
+#: the wrist (the Panda's link 7, measured on its collision mesh in the TCP frame): its
+#: underside this far above the TCP, this half width across the fingers' plane, and reaching
+#: this far along the fingers' axis on its longer (joint-housing) side
+WRIST_ABOVE_TCP, WRIST_HALF_WIDTH, WRIST_REACH = 0.1036, 0.0439, 0.088
 MIN_PINCH = 0.007  # m: a pinched wall the 70 N squeeze leaves wider than the 4 mm the hand
 #: reads as "holding something"
 # ------------------------------------------------------------------ how a grasp is decoded
@@ -190,6 +194,25 @@ def hand_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | No
     return next((n for n, s in material if s.overlaps(rect[0], rect[1])), None)
 
 
+def wrist_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | None:
+    """The member the wrist above the hand would land on, or None: an upside-down stock pot
+    held by a lug near the table, its floor standing higher than the wrist comes down
+    (procedural-v2/test-tasks/0005: the wrist met the floor, the hand stopped 11 mm short)."""
+    flipped = palm == "under"
+    box = member_box(t, member, flipped)
+    ax = axis_of(finger)
+    lat = 1 - ax
+    tcp = tip_height(t, member, palm) + TIP_BELOW_TCP
+    bottom = tcp + WRIST_ABOVE_TCP + STOP_TOLERANCE
+    cl, ca = grip_centre(t, member, lat, flipped), (box.min[ax] + box.max[ax]) / 2
+    half = WRIST_HALF_WIDTH + NOISE_MARGIN
+    rect = [(0.0, 0.0), (0.0, 0.0)]
+    rect[ax] = (ca - WRIST_REACH - NOISE_MARGIN, ca + WRIST_REACH + NOISE_MARGIN)
+    rect[lat] = (cl - half, cl + half)
+    material = [(n, s) for n, s in solids(t, flipped) if n != member and s.hi[2] > bottom]
+    return next((n for n, s in material if s.overlaps(rect[0], rect[1])), None)
+
+
 def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
     """Both fingers reach their places beside the member, the hand comes down above them,
     and a pinched edge is thick enough to be felt (see the module docstring)."""
@@ -300,4 +323,5 @@ __all__ = [
     "holds",
     "tip_height",
     "width_fits",
+    "wrist_blocker",
 ]

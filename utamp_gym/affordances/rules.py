@@ -55,6 +55,7 @@ from utamp_gym.affordances.hand import (
     hold_refusal,
     holds,
     width_fits,
+    wrist_blocker,
 )
 from utamp_gym.affordances.hand import GRIPPER_OPENING as GRIPPER_OPENING  # re-exported
 from utamp_gym.affordances.rim import rim_pinches
@@ -181,7 +182,12 @@ def _fingers_refusal(
         if other is not None and low_cover(t, member, palm, other):
             excused.add(("hand-room", other))  # the hand comes down around the cover
         if (refusal.rule, other) in excused:
-            return None
+            refusal = None
+    if extended and refusal is None:  # the wrist above the hand (the paper's rules: the hand)
+        wrist = wrist_blocker(t, member, palm, f1)
+        if wrist is not None:
+            values = {"member": member, "other": wrist, "fingers": f"{f1}/{f2}"}
+            return Refusal("wrist-room", values) if why else REFUSED
     return refusal if why or refusal is None else REFUSED
 
 

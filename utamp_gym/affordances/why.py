@@ -57,6 +57,7 @@ TEMPLATES: dict[str, str] = {
         "the squeezed fingers feel"
     ),
     "hand-room": "closing on {member} ({fingers}), the hand would land on {other}",
+    "wrist-room": "closing on {member} ({fingers}), the wrist above the hand would land on {other}",
     "finger-room": (
         "closing on {member} ({fingers}), the {side} finger would stop {shortfall:cm} cm "
         "above its target, on its {other} ({tolerance:cm} cm allowed)"

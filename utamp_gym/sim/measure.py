@@ -16,6 +16,7 @@ import numpy as np
 
 from utamp_gym.contract.tracking import PoseTracker
 from utamp_gym.errors import GroundingError
+from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.sim.control import ArmDriver
 from utamp_gym.sim.decode import GraspSymbols, pose_of, support_point, world_aabb
 from utamp_gym.sim.estimate import PoseEstimator
@@ -164,6 +165,15 @@ def lift_height(st: SimState, name: str) -> float:
     ]
     need = max(tops, default=0.0) + LIFT_CLEARANCE - bottom
     return float(np.clip(need, LIFT, MAX_LIFT))
+
+
+def sweep_reach(t: ObjectType, member: str) -> float:
+    """m from the middle of `member` to the farthest corner of `t`'s footprint: how far the
+    object reaches out of the hand holding it there."""
+    box = t.members[member].box
+    gx, gy = (box.min[0] + box.max[0]) / 2, (box.min[1] + box.max[1]) / 2
+    lo, hi = t.bbox.min, t.bbox.max
+    return max(math.hypot(x - gx, y - gy) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]))
 
 
 def verify_on(st: SimState, name: str, support: str) -> None:

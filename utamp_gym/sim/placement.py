@@ -165,11 +165,15 @@ def _support_surfaces(st: SimState, act: MacroAction) -> list[np.ndarray]:
         raise SkillFailure(f"cannot place {act.grasp.obj} on {act.support}: {exc}") from None
 
 
-def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
+def plan_place(
+    st: SimState, held: Held, act: MacroAction, carry_z: float | None = None
+) -> LinePath:
     """Path from the place configuration up to the pre-place one, or `GroundingError`.
 
     The object turns square to its support (its yaw); if that does not fit, it keeps its
-    current yaw.
+    current yaw. With `carry_z` the pre-place pose is raised to that TCP height where the
+    line allows (the height the object was carried at: it comes over the support as high
+    as it was lifted, above every other object, and then goes down).
     """
     name, arm = held.obj, st.arm
     t, now = st.world.scene.type_of(name), arm.tcp() @ held.belief
@@ -210,17 +214,19 @@ def plan_place(st: SimState, held: Held, act: MacroAction) -> LinePath:
             for target in targets:
                 posed = True
                 tcp = hand_for_object(target, held.belief)
+                high = PREPLACE if carry_z is None else max(PREPLACE, carry_z - tcp[2, 3])
                 for q in arm.ik_solutions(tcp, near.is_valid):
-                    try:
-                        return arm.line(
-                            q,
-                            tcp,
-                            np.array([0.0, 0.0, PREPLACE]),
-                            near.is_valid,
-                            what=f"lowering {name} onto {act.support}",
-                        )
-                    except GroundingError as exc:
-                        tried.append(str(exc))
+                    for rise in dict.fromkeys((high, PREPLACE)):
+                        try:
+                            return arm.line(
+                                q,
+                                tcp,
+                                np.array([0.0, 0.0, rise]),
+                                near.is_valid,
+                                what=f"lowering {name} onto {act.support}",
+                            )
+                        except GroundingError as exc:
+                            tried.append(str(exc))
                 tried.append("no collision-free IK solution")
     finally:
         near.detach()

@@ -52,6 +52,7 @@ from utamp_gym.sim.measure import (
     riders,
     settle_objects,
     snapshot,
+    sweep_reach,
     verify_on,
 )
 from utamp_gym.sim.payload import hold_and_measure, payload_failure
@@ -70,6 +71,9 @@ CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measur
 CONTACT_N = 5.0
 PLACE_ATTEMPTS = 3
 GRASP_ATTEMPTS = 2
+#: m: a held object reaching farther than this out of the hand (beyond the hand's own
+#: 10 cm half length) is carried over its support at its lift height (`place`)
+SWEEP_REACH = 0.15
 
 
 # ------------------------------------------------------------------ skills
@@ -123,7 +127,11 @@ def place(st: SimState, act: MacroAction) -> None:
     if not arm.holds_something() or slip > DROP_SLIP or tilt > DROP_TILT_DEG:
         raise SkillFailure(f"{name} is no longer in the hand (it moved {slip * 100:.1f} cm)")
     before = snapshot(st, {name})
-    up = plan_place(st, held, act)
+    # an object reaching far out of the hand comes over its support at the height it was
+    # lifted to, above the others (it would sweep a neighbour on a lower path)
+    t = st.world.scene.type_of(name)
+    carry = float(arm.tcp()[2, 3]) if sweep_reach(t, held.member) > SWEEP_REACH else None
+    up = plan_place(st, held, act, carry)
     what = f"carrying {name} to {act.support}"
     arm.transfer(up.end, held=(held.body, held.belief), what=what)
     slip, tilt = grasp_drift(st, held)
@@ -137,11 +145,11 @@ def place(st: SimState, act: MacroAction) -> None:
     if overload:
         raise SkillFailure(overload)
     if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
-        up = plan_place(st, held, act)
+        up = plan_place(st, held, act, carry)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
 
     def aim_again() -> LinePath:
-        path = plan_place(st, held, act)
+        path = plan_place(st, held, act, carry)
         arm.transfer(path.end, held=(held.body, held.belief), what=what)
         return path
 
@@ -156,7 +164,7 @@ def place(st: SimState, act: MacroAction) -> None:
         if st.estimator is not None:
             st.estimator.forget(act.support)
         _looked_again(st, held, always=True)
-        up = plan_place(st, held, act)
+        up = plan_place(st, held, act, carry)
         arm.transfer(up.end, held=(held.body, held.belief), what=what)
     release_and_retreat(st, name, held.opening)
     settle_objects(st)
