@@ -13,12 +13,12 @@ from gymnasium.utils.env_checker import check_env
 
 from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.env.object_maps import tables
 from utamp_gym.env.objects import (
     GRASPS,
     MAX_OBJECTS,
     N_ACTIONS,
     ObjectAction,
-    _tables,
     decode,
     encode,
     encode_type,
@@ -70,7 +70,7 @@ def test_observation_is_lossless_and_the_mask_exact(masks: str) -> None:
     for seed in range(15):
         obs, info = env.reset(seed=seed)
         oi = kitchen.objects
-        atoms = _tables(kitchen.universe.key).atoms
+        atoms = tables(kitchen.universe.key).atoms
         for _ in range(8):
             # every fluent atom of the scene has its own cell (the empty hand: no object held)
             vec = kitchen._state.vector().astype(bool)

@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from utamp_gym.env import objects as env_objects
+from utamp_gym.env import object_maps
 from utamp_gym.env.registry import register_envs
 from utamp_gym.suites import ALL_SUITES, all_scene_names
 from utamp_gym.symbolic import scene_cache
@@ -84,10 +84,10 @@ def test_an_env_meeting_new_scenes_keeps_only_the_bound_and_acts_the_same(
     assert max(n for n, _ in kept) > 2  # the rollout met more scenes than the bound below
     monkeypatch.setattr(scene_cache, "SCENES_KEPT", 2)
     # the scene maps shared by a process's object interfaces are made anew at the lower bound
-    env_objects._shared_maps.cache_clear()
+    object_maps.shared_maps.cache_clear()
     try:
         bounded, kept = _rollout(12)
     finally:
-        env_objects._shared_maps.cache_clear()  # later tests get caches at the packaged bound
+        object_maps.shared_maps.cache_clear()  # later tests get caches at the packaged bound
     assert all(size == 2 and n <= 2 for n, size in kept)
     assert bounded == unbounded

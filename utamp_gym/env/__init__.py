@@ -13,6 +13,9 @@ Import the modules directly; this package imports nothing and registers nothing
   ``env.state`` ... are deprecated aliases);
 * `grounding`, `physics`, `symbolic_backend` – what the env asks of its grounding, the
   physics grounding (perception, faults) and symbolic grounding as a backend;
+* `objects`, `object_space`, `object_maps`, `object_goal` – the object-centric interface
+  (`ObjectInterface`), its spaces and action coding, its per-universe and per-scene tables,
+  and the goal entries of its observation;
 * `wrappers` (`SymbolicActionWrapper`); `planner_policy` is a deprecated alias (the
   policies live in `utamp_gym.agents`).
 """
