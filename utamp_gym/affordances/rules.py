@@ -2,19 +2,8 @@
 
 The rules are the paper's assumptions made explicit (Sections IV and VI):
 
-* a part an object can rest on must be flat (or an open rim) and not a food surface
-  (food surfaces are never put face-down), and the object's centre of mass must lie over
-  it (a pan whose heavy handle outweighs its shallow body tips onto the handle);
-* a part supports others only if it is flat (or a concave dish spanned by the object
-  on it) and the object can rest with that part facing up; fixed furniture supports
-  on its top only;
-* small objects do not support larger ones: on a flat surface the footprint of the
-  supported object must fit the surface (on a round one, the circle), with a margin
-  inside a rim (a tray's floor, a plate's well) or for an object taller than wide (a glass
-  on another's foot tips over); a concave surface (a pan) only
-  supports objects whose standing surface spans its opening with a margin (a pan's
-  narrower floor would sink into another pan); the supporter's robustness bounds the
-  load;
+* the support rules (what an object rests on, which parts carry others, whose footprint
+  fits whose surface, the load a supporter bears): `utamp_gym.affordances.support`;
 * the gripper approaches from above (palm on a part that can face up) and comes down
   onto the member's palm face: no sibling member (the body included) stands over it
   (a bottle's neck over its body, a bowl's floor under its rim when upside-down); its
@@ -33,9 +22,7 @@ Each rule decides through its ``*_refusal`` twin (`rest_refusal`, `supportable_r
 `supportive_refusal`, `p2p_refusal`, `grasp_refusal`, `lift_refusal`, `pick_refusal`): None
 grants the affordance, a `utamp_gym.affordances.why.Refusal` names the failing test and its
 numbers, so an explanation (`utamp plan --explain`) says exactly why a rule refuses. The
-boolean rules ask with ``why=False`` (any refusal is then the shared `REFUSED`). The support
-rules (the first three points) live in `utamp_gym.affordances.support`; this module has the
-grasp and lift rules and makes the facts.
+boolean rules ask with ``why=False`` (any refusal is then the shared `REFUSED`).
 """
 
 from __future__ import annotations
