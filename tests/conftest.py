@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import tomllib
 from typing import Any
 
@@ -18,7 +19,10 @@ def demo_dict() -> dict[str, Any]:
 
 @pytest.fixture(scope="session")
 def session_display():
-    """One Xvfb display for windows opened inside the test process (None without Xvfb)."""
+    """One Xvfb display for windows opened inside the test process (None without Xvfb, or
+    without tkinter, which the schematic window needs: a Python built without Tk)."""
     from xvfb import process_display
 
+    if importlib.util.find_spec("tkinter") is None:
+        return None
     return process_display()
