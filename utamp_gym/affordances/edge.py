@@ -50,8 +50,8 @@ from utamp_gym.scene.catalogue import ObjectType
 #: 18.5 mm long) and the lower finger then clear the table's edge by 5 mm
 OVERHANG = 0.035
 PAD_IN = 0.022  # m: the pads' middle this far inside the board's back end
-#: m from the base's axis (|y|) the board is dragged to, in turn: the pinch beyond the near
-#: edge is reached there (0.4 m is not) and the board clears the robot's base
+#: m from the base's axis (absolute y) the board is dragged to, in turn: the pinch beyond
+#: the near edge is reached there (0.4 m is not) and the board clears the robot's base
 EDGE_Y = (0.3, 0.33, 0.27)
 BASE_CLEARANCE = 0.16  # m from the base's axis the board's near side keeps while dragged
 #: the grasp of an edge pinch: member, palm, fingers (the hand horizontal, closing vertically)
