@@ -132,24 +132,3 @@ class EpisodeInfo:
             "goal": self.goal,
             "instruction": self.instruction,
         }
-
-
-def step_info(
-    *,
-    action: str | None,
-    mask: np.ndarray,
-    failure: str | None,
-    timings: Mapping[str, float] | None,
-    macro: MacroResult | None,
-    unexpected: Iterable[str],
-    objects: Iterable[str],
-    anomalies: Mapping[str, str],
-    fault: str | None,
-    scene: str,
-    success: bool,
-    goal: tuple[str, ...],
-    instruction: str,
-) -> dict[str, Any]:
-    """One info on its own (`EpisodeInfo`, which the env keeps per episode, for one call)."""
-    episode = EpisodeInfo(scene, objects, goal, instruction)
-    return episode(action, mask, failure, timings, macro, unexpected, anomalies, fault, success)
