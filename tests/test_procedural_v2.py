@@ -206,3 +206,26 @@ def test_every_label_is_the_planners_in_a_fresh_process(split: str) -> None:
         if (lab.achievable, lab.plan_length) != (g.achievable, g.plan_length):
             wrong.append((i, g.template, g.achievable, g.plan_length, lab.achievable))
     assert not wrong, wrong
+
+
+def test_select_takes_a_relax_seed_without_a_log(monkeypatch, tmp_path) -> None:
+    """``select SPLIT OUT N RELAX_AFTER``: the quotas relaxed, nothing resumed; with LOG the run
+    it records goes on."""
+    from utamp_gym.suites.procedural_v2 import selection
+
+    calls = []
+    monkeypatch.setattr(selection, "select_seeds", lambda *a, **k: calls.append((a, k)) or {})
+    out = tmp_path / "out.json"
+    assert selection.main(["select", "test-count", str(out), "100", "778"]) == 0
+    log = tmp_path / "log"
+    log.write_text(
+        "test-count 1 4 clear Label(achievable=True, plan_length=6, timed_out=False, "
+        "planning_time_s=0.1)\n"
+    )
+    assert selection.main(["select", "test-count", str(out), "100", "778", str(log)]) == 0
+    assert [(a[1], k["relax_after"], k["resume"]) for a, k in calls] == [
+        (100, 778, []),
+        (100, 778, [(4, "clear", True, 6)]),
+    ]
+    assert json.loads(out.read_text()) == {"split": "test-count"}
+    assert selection.main(["select", "test-count"]) == 2
