@@ -24,7 +24,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from sweeps import Rows, reason_kind, sweep_parser, sweep_splits
+from sweeps import Rows, by_count, reason_kind, sweep_parser, sweep_splits
 
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.suites import procedural
@@ -126,7 +126,7 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
         "|---|" + "---|" * len(summaries),
     ]
     kinds = [Counter(reason_kind(f["reason"]) for f in s["failures"]) for s in summaries]
-    for kind in sorted({k for c in kinds for k in c}, key=lambda k: -sum(c[k] for c in kinds)):
+    for kind in by_count(kinds):
         out.append(
             f"| {kind} | " + " | ".join(str(c[kind]) if c[kind] else "–" for c in kinds) + " |"
         )

@@ -3,7 +3,7 @@
 `procedural_sweep.py` (procedural-v1) and `v2_physics.py` (procedural-v2) both run, per split,
 ``utamp eval --out OUT/<split>`` (or, with ``--summarize-only``, read what an earlier run
 left there) and summarize that split's results.csv rows: `sweep_parser` is their options,
-`sweep_splits` that loop, `reason_kind` how they group failure reasons.
+`sweep_splits` that loop, `reason_kind` and `by_count` how they group failure reasons.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import csv
 import re
 import subprocess
 import sys
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -63,3 +64,9 @@ def reason_kind(reason: str) -> str:
     text = re.sub(r"\bobj\d\b|(?<!robot's )\bbase\b", "X", text)
     text = re.sub(r"\s*\(.*\)", "", text)  # details such as the contacts or the IK's notes
     return re.sub(r"-?\d+(\.\d+)?", "#", text).strip()
+
+
+def by_count(kinds: list[Counter[str]]) -> list[str]:
+    """The failure kinds counted in `kinds` (one counter a split), the most frequent over all
+    splits first, ties by name (a set's order would change with the run's hash seed)."""
+    return sorted({k for c in kinds for k in c}, key=lambda k: (-sum(c[k] for c in kinds), k))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import subprocess
 import sys
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -91,3 +92,8 @@ def test_failure_kinds_drop_step_names_and_numbers() -> None:
     assert sweeps.reason_kind("step 3 (pick obj2 x): obj2 slipped 1.5 cm (contacts: a~b)") == (
         "X slipped # cm"
     )
+
+
+def test_failure_kinds_are_listed_by_count_then_name() -> None:
+    kinds = [Counter({"b": 1, "c": 2}), Counter({"a": 1, "d": 1})]
+    assert sweeps.by_count(kinds) == ["c", "a", "b", "d"]
