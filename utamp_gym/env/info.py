@@ -89,10 +89,11 @@ def anomalies_info(objects: Iterable[str], anomalies: Mapping[str, str]) -> dict
     return {name: str(anomalies.get(name, "")) for name in objects}
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class StepRecord:
     """What one step (or reset) reports; `EpisodeInfo` puts it in the info's fixed structure.
-    The defaults are a step that reports nothing: no action, no failure, no macro action."""
+    The defaults are a step that reports nothing: no action, no failure, no macro action.
+    (Not frozen: a frozen dataclass takes about three times as long to make, every step.)"""
 
     mask: np.ndarray  # ``action_mask``
     success: bool  # ``is_success``: whether the goal holds now
