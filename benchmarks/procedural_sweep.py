@@ -17,37 +17,33 @@ split's own summary.md and figures in OUT/<split>.
 from __future__ import annotations
 
 import argparse
-import csv
-import re
-import subprocess
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from sweeps import Rows, by_count, reason_kind, sweep_parser, sweep_splits
+
 from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.suites import procedural
 
 SPLITS = ("train", "test-instances", "test-families", "test-count")
 TARGET = 0.97  # planned runs that must succeed in physics on every split
 
 
-def run_split(split: str, args: argparse.Namespace) -> Path:
-    out = Path(args.out) / split
-    cmd = [
-        sys.executable, "-m", "utamp_gym.cli", "eval",
-        "--suite", f"procedural-v1/{split}", "--methods", "utamp2-rules",
+def eval_command(split: str, args: argparse.Namespace) -> list[str]:
+    """The ``utamp eval`` arguments of one split's runs."""
+    return [
+        "eval", "--suite", f"procedural-v1/{split}", "--methods", "utamp2-rules",
         "--grounding", "physics", "--seeds", str(args.seeds),
-        "--workers", str(args.workers), "--out", str(out), "--quiet",
+        "--workers", str(args.workers), "--out", str(Path(args.out) / split), "--quiet",
     ]  # fmt: skip
-    print(" ".join(cmd[2:]), flush=True)
-    subprocess.run(cmd, check=True)
-    return out
 
 
-def summarize_split(split: str, folder: Path) -> dict[str, Any]:
-    from utamp_gym.suites import procedural
-
-    rows = list(csv.DictReader((folder / "results.csv").open()))
+def summarize_split(split: str, rows: Rows) -> dict[str, Any]:
+    """One split's figures from its results.csv rows (labels from the split file)."""
     labels = {
         procedural.split_scene(split, i).scene.name: procedural.split_scene(split, i)
         for i in range(len(procedural.split_seeds(split)))
@@ -82,14 +78,6 @@ def summarize_split(split: str, folder: Path) -> dict[str, Any]:
             if r["success"] != "true"
         ],
     }
-
-
-def reason_kind(reason: str) -> str:
-    """A failure reason without its step, action, names and numbers: its kind."""
-    text = reason.split("): ", 1)[-1]  # drop "step N (action)"
-    text = re.sub(r"\bobj\d\b|(?<!robot's )\bbase\b", "X", text)
-    text = re.sub(r"\s*\(.*\)", "", text)  # details such as the contacts or the IK's notes
-    return re.sub(r"-?\d+(\.\d+)?", "#", text).strip()
 
 
 def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> str:
@@ -138,7 +126,7 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
         "|---|" + "---|" * len(summaries),
     ]
     kinds = [Counter(reason_kind(f["reason"]) for f in s["failures"]) for s in summaries]
-    for kind in sorted({k for c in kinds for k in c}, key=lambda k: -sum(c[k] for c in kinds)):
+    for kind in by_count(kinds):
         out.append(
             f"| {kind} | " + " | ".join(str(c[kind]) if c[kind] else "–" for c in kinds) + " |"
         )
@@ -152,21 +140,6 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
     return "\n".join(out) + "\n"
 
 
-def sweep_parser(
-    description: str, *, seeds: int, splits: list[str] | tuple[str, ...], out: str
-) -> argparse.ArgumentParser:
-    """The options of a sweep of `utamp eval` over a suite's splits (this script and
-    `v2_physics.py`), with their defaults."""
-    ap = argparse.ArgumentParser(description=description)
-    ap.add_argument("--seeds", type=int, default=seeds)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--splits", default=",".join(splits))
-    ap.add_argument("--out", default=out)
-    ap.add_argument("--results", default="docs/results")
-    ap.add_argument("--summarize-only", action="store_true", help="read OUT, run nothing")
-    return ap
-
-
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
     return sweep_parser(__doc__.splitlines()[0], seeds=3, splits=SPLITS, out="out/procedural")
@@ -175,11 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main() -> None:
     args = build_parser().parse_args()
     commit()  # the provenance of what this run writes: the code as it is now
-    splits = [s.strip() for s in args.splits.split(",") if s.strip()]
-    summaries = []
-    for split in splits:
-        folder = Path(args.out) / split if args.summarize_only else run_split(split, args)
-        summaries.append(summarize_split(split, folder))
+    summaries = sweep_splits(args, eval_command, summarize_split)
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     data = {"args": vars(args), "splits": summaries}

@@ -17,8 +17,6 @@ the planned runs; and every failed planned run with its physical reason. The tar
 from __future__ import annotations
 
 import argparse
-import csv
-import subprocess
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
@@ -26,7 +24,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from procedural_sweep import reason_kind, sweep_parser
+from sweeps import Rows, by_count, reason_kind, sweep_parser, sweep_splits
 
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.suites import procedural_v2
@@ -46,18 +44,11 @@ def eval_command(split: str, args: argparse.Namespace) -> list[str]:
     ]  # fmt: skip
 
 
-def run_split(split: str, args: argparse.Namespace) -> Path:
-    cmd = [sys.executable, "-m", "utamp_gym.cli", *eval_command(split, args)]
-    print("utamp " + " ".join(cmd[3:]), flush=True)
-    subprocess.run(cmd, check=True)
-    return Path(args.out) / split
-
-
 def _rate(c: Counter[str]) -> float | None:
     return c["ok"] / c["runs"] if c["runs"] else None
 
 
-def summarize_split(split: str, rows: list[dict[str, str]]) -> dict[str, Any]:
+def summarize_split(split: str, rows: Rows) -> dict[str, Any]:
     """One split's figures from its results.csv rows (labels from the split file)."""
     scenes = procedural_v2.split_scenes(split)
     labels = {s.scene.name: s for s in scenes}
@@ -185,7 +176,7 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
         "| reason | " + " | ".join(names) + " |",
         "|---|" + "---|" * len(names),
     ]
-    for kind in sorted({k for c in kinds for k in c}, key=lambda k: -sum(c[k] for c in kinds)):
+    for kind in by_count(kinds):
         out.append(
             f"| {kind} | " + " | ".join(str(c[kind]) if c[kind] else "–" for c in kinds) + " |"
         )
@@ -223,12 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main() -> None:
     args = build_parser().parse_args()
     commit()  # the provenance of what this run writes: the code as it is now
-    splits = [s.strip() for s in args.splits.split(",") if s.strip()]
-    summaries = []
-    for split in splits:
-        folder = Path(args.out) / split if args.summarize_only else run_split(split, args)
-        rows = list(csv.DictReader((folder / "results.csv").open()))
-        summaries.append(summarize_split(split, rows))
+    summaries = sweep_splits(args, eval_command, summarize_split)
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     data = {"args": vars(args), "method": METHOD, "splits": summaries}

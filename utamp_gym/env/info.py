@@ -41,6 +41,7 @@ without a symbol. The objects themselves are still there: `UTampKitchenEnv.macro
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -88,6 +89,23 @@ def anomalies_info(objects: Iterable[str], anomalies: Mapping[str, str]) -> dict
     return {name: str(anomalies.get(name, "")) for name in objects}
 
 
+@dataclass(slots=True, kw_only=True)
+class StepRecord:
+    """What one step (or reset) reports; `EpisodeInfo` puts it in the info's fixed structure.
+    The defaults are a step that reports nothing: no action, no failure, no macro action.
+    (Not frozen: a frozen dataclass takes about three times as long to make, every step.)"""
+
+    mask: np.ndarray  # ``action_mask``
+    success: bool  # ``is_success``: whether the goal holds now
+    action: str | None = None  # the action's PDDL string
+    failure: str | None = None  # why the action failed
+    timings: Mapping[str, float] | None = None  # None: timings are not recorded
+    macro: MacroResult | None = None  # None: no macro action reached the simulator
+    unexpected: Iterable[str] = ()  # ``"+ATOM"`` / ``"-ATOM"`` entries, sorted
+    anomalies: Mapping[str, str] | None = None  # the objects without a symbol -> why
+    fault: str | None = None  # the injected fault
+
+
 class EpisodeInfo:
     """The info dicts of one episode: the entries fixed for the episode (``scene``, ``goal``,
     ``instruction``, the all-empty ``anomalies``) are made once, at reset, and each step
@@ -102,33 +120,23 @@ class EpisodeInfo:
         self.goal, self.instruction = goal, instruction
         self._calm = dict.fromkeys(self.objects, "")  # copied: copying beats building
 
-    def __call__(
-        self,
-        action: str | None,
-        mask: np.ndarray,
-        failure: str | None,
-        timings: Mapping[str, float] | None,
-        macro: MacroResult | None,
-        unexpected: Iterable[str],
-        anomalies: Mapping[str, str],
-        fault: str | None,
-        success: bool,
-    ) -> dict[str, Any]:
+    def __call__(self, step: StepRecord) -> dict[str, Any]:
         """One step's (or reset's) info in the fixed structure of the module docstring;
-        `timings` None leaves ``info["timings"]`` empty (not recorded)."""
+        ``step.timings`` None leaves ``info["timings"]`` empty (not recorded)."""
+        timings, macro, anomalies = step.timings, step.macro, step.anomalies
         return {
-            "action": action or "",
-            "action_mask": mask,
-            "failure_reason": failure or "",
+            "action": step.action or "",
+            "action_mask": step.mask,
+            "failure_reason": step.failure or "",
             "timings": {} if timings is None else timings_info(timings),
             "macro_result": _NOT_EXECUTED.copy() if macro is None else macro_info(macro),
-            "unexpected_atoms": join_atoms(unexpected) if unexpected else "",
+            "unexpected_atoms": join_atoms(step.unexpected) if step.unexpected else "",
             "anomalies": (
                 anomalies_info(self.objects, anomalies) if anomalies else self._calm.copy()
             ),
-            "fault": fault or "",
+            "fault": step.fault or "",
             "scene": self.scene,
-            "is_success": bool(success),
+            "is_success": bool(step.success),
             "goal": self.goal,
             "instruction": self.instruction,
         }

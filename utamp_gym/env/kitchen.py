@@ -24,6 +24,7 @@ from utamp_gym.backend import (
 from utamp_gym.env.episode import RESET_OPTIONS, Episode, chosen_scene
 from utamp_gym.env.goals import EpisodeGoals
 from utamp_gym.env.grounding import make_grounding
+from utamp_gym.env.info import StepRecord
 from utamp_gym.env.objects import ObjectInterface
 from utamp_gym.env.observe import Obs, Observer
 from utamp_gym.env.options import EnvOptions, action_id
@@ -393,15 +394,17 @@ class UTampKitchenEnv(KitchenViews, gym.Env[Obs, np.int64]):
             macro, unexpected, fault = stepped.macro, stepped.unexpected, stepped.fault
             self._last = (macro, unexpected)
         return episode.info(
-            None if a is None else self.universe.actions[a],
-            self.action_masks(),
-            failure,
-            stepped.timings if self._grounding.recorded else None,
-            macro,
-            unexpected,
-            anomalies,
-            fault,
-            goal,
+            StepRecord(
+                action=None if a is None else self.universe.actions[a],
+                mask=self.action_masks(),
+                success=goal,
+                failure=failure,
+                timings=stepped.timings if self._grounding.recorded else None,
+                macro=macro,
+                unexpected=unexpected,
+                anomalies=anomalies,
+                fault=fault,
+            )
         )
 
     # ------------------------------------------------------------------ pickling

@@ -9,13 +9,15 @@ and the mapping stops there. Among the bindings that satisfy those, the mapper t
 one that violates the fewest ground-truth affordance preconditions (of the domain mapped
 in: U-TAMP-2, or the extended ``utamp2x`` on procedural-v2) (a valid one when
 there is one), so validating the mapped plan afterwards names the affordance the VLM
-got wrong. Names: detected kinds (``glass-mug``) or scene names (``mug``); ``table``
-for the table top (a free slot is chosen), ``space`` for any free space.
+got wrong. Names: detected kinds (``glass-mug``), the numbered kinds the prompt gives
+objects that share a kind (``glass-mug-1``, `answer_names`) or scene names (``mug``);
+``table`` for the table top (a free slot is chosen), ``space`` for any free space.
 """
 
 from __future__ import annotations
 
 import re
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -46,6 +48,19 @@ class MappedPlan:
         return self.error is None
 
 
+def answer_names(scene: Scene) -> dict[str, str]:
+    """Object -> the name an answer uses for it: its kind (type), as the detection question
+    asks; objects that share a kind get the kind and their number among those objects, in
+    the scene's order (``glass-mug-1``, ``glass-mug-2``: the prompt says which is which)."""
+    kinds = Counter(o.type for o in scene.objects)
+    seen: Counter[str] = Counter()
+    names = {}
+    for o in scene.objects:
+        seen[o.type] += 1
+        names[o.name] = o.type if kinds[o.type] == 1 else f"{o.type}-{seen[o.type]}"
+    return names
+
+
 def _norm(token: str) -> str:
     return re.sub(r"[\s_]+", "-", token.strip().strip("'\"").lower())
 
@@ -73,6 +88,9 @@ class PlanMapper:
         self.parts = sorted(c for c, t in self.domain.constants.items() if t == "part")
         self.slots = [s.name for s in scene.slots]
         self.spaces = [s.name for s in scene.spaces]
+        self.numbered = {  # the names the prompt gives objects that share a kind
+            _norm(n): o for o, n in answer_names(scene).items() if n != scene.object(o).type
+        }
 
     def resolve(self, name: str, *, space: bool = False) -> list[str]:
         """Scene symbols a name may denote (empty if unknown)."""
@@ -82,6 +100,8 @@ class PlanMapper:
             return [name] if name in self.spaces else []
         if name in TABLE_NAMES:
             return list(self.slots)
+        if name in self.numbered:
+            return [self.numbered[name]]
         hits = [o.name for o in self.scene.objects if name in (o.name, o.type)]
         return hits or ([name] if name in self.slots else [])
 

@@ -6,21 +6,22 @@ the base (``prompts/planner_goal.txt``). A scene with a goal (procedural-v2) is 
 goal (``prompts/planner_task.txt``): its instruction (`utamp_gym.tasks.language`), then each
 of its literals in words, in the names the VLM answers with (the detected kinds,
 `object_name`; table regions by their slot names), so the text and the planner's goal are
-the same data. `answer_steps` writes a full plan in the answer's format (``pick X Y``,
-``place X Y``, ``slide X SPACE``), which `utamp_gym.methods.plan_mapping.map_plan` reads
-back: the planning benchmark uses it to check the format offline, with no VLM.
+the same data. Objects that share a kind are numbered (``mug-1``, ``mug-2``), and the goal
+message then says where each of them stands (`naming_note`). `answer_steps` writes a full
+plan in the answer's format (``pick X Y``, ``place X Y``, ``slide X SPACE``), which
+`utamp_gym.methods.plan_mapping.map_plan` reads back: the planning benchmark uses it to check
+the format offline, with no VLM.
 """
 
 from __future__ import annotations
 
-from collections import Counter
 from collections.abc import Sequence
 from functools import lru_cache
 from importlib import resources
 from string import Template
 
 from utamp_gym.affordances.facts import Fact
-from utamp_gym.methods.plan_mapping import map_plan
+from utamp_gym.methods.plan_mapping import answer_names, map_plan
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites.procedural_v2.spec import DOMAIN as V2_DOMAIN
 from utamp_gym.suites.procedural_v2.spec import SUITE as V2_SUITE
@@ -50,11 +51,30 @@ def prompt(name: str, **values: str) -> str:
 
 
 def object_name(scene: Scene, obj: str) -> str:
-    """How the answer names `obj`: its kind (type), as the detection question asks, unless
-    another object of the scene is of that kind (then its scene name)."""
-    kinds = Counter(o.type for o in scene.objects)
-    t = scene.object(obj).type
-    return t if kinds[t] == 1 else obj
+    """How the answer names `obj`: its kind (type), as the detection question asks, or, if
+    other objects of the scene are of that kind, its kind and number (`answer_names`)."""
+    return answer_names(scene)[obj]
+
+
+def naming_note(scene: Scene) -> str:
+    """Which object each numbered name is, by where it stands (every object stands on its
+    own support, so that tells them apart in the image); "" when no two objects share a kind."""
+    names = answer_names(scene)
+    numbered = [o for o in scene.objects if names[o.name] != o.type]
+    if not numbered:
+        return ""
+    words = region_words(scene)
+    slots = {s.name for s in scene.slots}
+
+    def where(on: str) -> str:
+        if on not in slots:
+            return f"on the {names[on]}"
+        if scene.goal is None:  # the paper's prompt names the table, not its regions
+            return f"on the table, in its {words[on]}"
+        return f"directly on the table in region {on} ({words[on]})"
+
+    lines = "".join(f"  - {names[o.name]}: the one {where(o.on)}\n" for o in numbered)
+    return "\nObjects of the same kind are told apart by a number in their names:\n" + lines
 
 
 def _name(scene: Scene, x: str) -> str:
@@ -112,7 +132,7 @@ def goal_text(scene: Scene) -> str:
     """The goal message of the ``vlm-planner`` for `scene` (see the module docstring)."""
     goal = scene.goal
     if goal is None:
-        return _tower_text(scene)
+        return _tower_text(scene) + naming_note(scene)
     words = region_words(scene)
     regions = ", ".join(f"{s.name} ({words[s.name]})" for s in scene.slots)
     summary = (
@@ -122,7 +142,7 @@ def goal_text(scene: Scene) -> str:
     )
     said = "" if goal.template == CUSTOM else f'\n"{instruction(scene, goal)}"\n'
     conditions = "\n".join(f"  - {c}" for c in goal_conditions(scene, goal))
-    return prompt(
+    text = prompt(
         "planner_task",
         instruction=said,
         template=goal.template,
@@ -131,6 +151,7 @@ def goal_text(scene: Scene) -> str:
         regions=regions,
         example=_example(scene),
     )
+    return text + naming_note(scene)
 
 
 def _example(scene: Scene) -> str:
@@ -185,6 +206,7 @@ __all__ = [
     "answer_steps",
     "goal_conditions",
     "goal_text",
+    "naming_note",
     "object_name",
     "prompt",
     "replay_answer",
