@@ -189,7 +189,6 @@ def run_rl_episode(
     disturbance: float = 0.0,
 ) -> RLEpisode:
     """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
-    import gymnasium as gym
 
     register_envs()  # explicitly: a worker process may have skipped it on import
 
