@@ -84,6 +84,10 @@ class CollisionChecker:
         self.self_margin = float(self_margin)
         self._gen_margin = max(self.margin, self.self_margin)
         self._base_margin = self.model.geom_margin.copy()
+        self._base_body_margin = self.model.body_margin.copy()
+        # The robot's bodies keep their compiled body_margin (only a held object's is widened,
+        # `_widen_bodies`): widening the fingers' (4 geoms each) would count objects within the
+        # margin of them too, but it changes the paper suites' seeded rollouts.
         self.model.geom_margin[ids.geom_ids] = np.maximum(
             self._base_margin[ids.geom_ids], self._gen_margin
         )
@@ -174,6 +178,15 @@ class CollisionChecker:
         self._cls[geoms] = _HELD
         self._set_bits(geoms, robot=True)
         m.geom_margin[geoms] = np.maximum(self._base_margin[geoms], self._gen_margin)
+        self._widen_bodies(geoms)
+
+    def _widen_bodies(self, geoms: np.ndarray) -> None:
+        """Each body of `geoms` gets at least their margins: MuJoCo's mid-phase bounds a body
+        of several geoms by its ``body_margin`` (set when the model compiled), so a wider geom
+        margin alone misses pairs of such bodies between the old and the new margin."""
+        np.maximum.at(
+            self.model.body_margin, self.model.geom_bodyid[geoms], self.model.geom_margin[geoms]
+        )
 
     def detach(self) -> None:
         """Forget the held object and put it back where the world state had it."""
@@ -182,6 +195,8 @@ class CollisionChecker:
             self.data.qpos[adr : adr + 7] = self._held_qpos0
         g = self._held_geoms
         self.model.geom_margin[g] = self._base_margin[g]
+        bodies = self.model.geom_bodyid[g]
+        self.model.body_margin[bodies] = self._base_body_margin[bodies]
         self._cls[g] = _WORLD
         self._set_bits(g, robot=False)
         self._held_geoms = np.zeros(0, dtype=int)
