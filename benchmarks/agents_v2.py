@@ -7,29 +7,39 @@ with `utamp train`'s functions, one row per learner, several seeds:
 * BC: behaviour cloning from planner episodes (``utamp2x-rules``, the planner the v2 labels
   assume, recorded with `utamp demos`' recorder on the training split, reset seeds from
   100,000; only episodes that reach the goal are cloned);
-* MaskablePPO from scratch (and, with ``--rows bc,ppo,ft``, BC then MaskablePPO), each seed
-  stopped at ``--ppo-steps`` or at its first evaluation after ``--time-limit`` seconds of
-  training (the steps reached are recorded).
+* MaskablePPO from scratch and BC then MaskablePPO (``ft``: from the BC model of the same
+  seed), each seed stopped at the first evaluation where its curve on the training split is
+  flat (``--plateau``: `utamp_gym.rl.callbacks.plateaued`, at least 10 evaluations), at
+  ``--ppo-steps`` / ``--ft-steps``, or at its first evaluation after ``--time-limit`` /
+  ``--ft-time-limit`` seconds of training (the steps reached are recorded). Evaluations
+  during training: ``--eval-episodes`` fixed episodes of the training split (its first
+  scenes in turn), every ``--eval-every`` steps.
 
 The env: ``UTampKitchenGoals-v0`` with 8 object slots (``slots=8``: one policy for every split,
 test-count's 8-object scenes included, smaller scenes padded), the extended domain with
 rule-derived affordances (``domain="utamp2x"``, ``affordances="rules"``: the planner's view;
 masks: the U-TAMP-2 precondition under those affordances), symbolic grounding, shaped reward.
 Each seed's final model is evaluated with `utamp eval`'s sweep (``rl:PATH``, deterministic
-masked policy, 10 steps per object) on every v2 split (``--limit``: the first N scenes of
-each), and the planner on the same scenes. Writes
+masked policy, 10 steps per object) on every scene of every v2 split (``--limit``: the first
+N scenes of each), and the planner (``utamp2x-rules``) by the same sweep: its plans played in
+the env of the utamp2x domain and checked against its ground truth, as `utamp eval` does.
+Writes
 
 * ``docs/results/agents_v2.md``: rows x splits, success mean ± 95 % t interval over the
   seeds, the train → test-tasks gap (per seed, then its interval), the achievable share of
   the evaluated scenes (the ceiling), budgets, steps and wall time per seed;
-* ``docs/results/agents_v2.json``: every number (per seed and split, pooled Wilson intervals).
+* ``docs/results/agents_v2.json``: every number (per seed and split, pooled Wilson intervals);
+* ``docs/results/agents_v2_curves.png``: the learning curves (success on the training split).
 
-    python benchmarks/agents_v2.py [--seeds 3] [--demos 200] [--bc-epochs 30]
-        [--ppo-steps 100000] [--time-limit S] [--ft-steps N] [--rows bc,ppo]
-        [--eval-every N] [--eval-episodes N] [--limit N] [--workers N] [--train-only]
-        [--out runs/agents_v2] [--docs docs/results] [--rewrite]
+    python benchmarks/agents_v2.py [--seeds 3] [--demos 1200] [--bc-epochs 30]
+        [--ppo-steps 200000] [--time-limit S] [--ft-steps N] [--ft-time-limit S]
+        [--plateau 0.02] [--rows bc,ppo,ft] [--envs 8] [--eval-every N] [--eval-episodes N]
+        [--limit N] [--workers N] [--train-workers N] [--train-only] [--out runs/agents_v2]
+        [--docs docs/results] [--rewrite]
 
-Runs resume: a finished seed of the same configuration is reused.
+Runs resume: with the same ``--out``, the demonstrations, every finished seed of the same
+configuration and every evaluated (scene, method) row are reused, so the same command
+continues an interrupted run.
 """
 
 from __future__ import annotations
@@ -40,10 +50,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from agents import evaluate, fine_tune, flat_curve, load  # benchmarks/ is on sys.path when run
+from agents import fine_tune, flat_curve, load  # benchmarks/ is on sys.path when run
 
+from utamp_gym.distributed import make_executor
 from utamp_gym.eval.intervals import t_interval, wilson_interval
 from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.rl.callbacks import plot_learning_curves
 
 ENV_ID = "UTampKitchenGoals-v0"
 #: the agents' env options beyond the env id's (saved with each model, so `utamp eval`
@@ -68,20 +80,32 @@ def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--demos", type=int, default=200, help="planner episodes for BC")
+    p.add_argument("--demos", type=int, default=1_200,
+                   help="planner episodes for BC (random training scenes by reset seed: 1,200 "
+                   "draws meet about 95 %% of the 400)")  # fmt: skip
     p.add_argument("--bc-epochs", type=int, default=30)
-    p.add_argument("--ppo-steps", type=int, default=100_000)
-    p.add_argument("--ft-steps", type=int, default=16_384)
+    p.add_argument("--ppo-steps", type=int, default=200_000)
+    p.add_argument("--ft-steps", type=int, default=200_000)
     p.add_argument("--time-limit", type=float, default=None,
                    help="stop a MaskablePPO seed at its first evaluation after this many "
                    "training seconds")  # fmt: skip
-    p.add_argument("--rows", default="bc,ppo", help=f"learned rows: any of {', '.join(ROWS)}")
+    p.add_argument("--ft-time-limit", type=float, default=None,
+                   help="the same for fine-tuning (default: --time-limit)")  # fmt: skip
+    p.add_argument("--plateau", type=float, default=0.02,
+                   help="stop a MaskablePPO seed once its curve gained less than this over its "
+                   "last 20 %% (0: never)")  # fmt: skip
+    p.add_argument("--envs", type=int, default=8, help="MaskablePPO's parallel envs")
+    p.add_argument("--rows", default="bc,ppo,ft", help=f"learned rows: any of {', '.join(ROWS)}")
     p.add_argument("--eval-every", type=int, default=4_096)
-    p.add_argument("--eval-episodes", type=int, default=30,
+    p.add_argument("--eval-episodes", type=int, default=20,
                    help="evaluation episodes of the training split during training")  # fmt: skip
     p.add_argument("--limit", type=int, default=None, help="scenes per split (first N)")
     p.add_argument("--hard", action="store_true", help="also evaluate procedural-v2/hard")
-    p.add_argument("--workers", type=int, default=0, help="evaluation worker processes")
+    p.add_argument("--workers", type=int, default=0,
+                   help="evaluation worker processes (0: in this process)")  # fmt: skip
+    p.add_argument("--train-workers", type=int, default=0,
+                   help="train a row's seeds in this many worker processes (0: one after "
+                   "another in this process)")  # fmt: skip
     p.add_argument("--out", default="runs/agents_v2")
     p.add_argument("--docs", default="docs/results")
     p.add_argument("--train-only", action="store_true",
@@ -125,21 +149,27 @@ def train_rows(args: argparse.Namespace, out: Path, train_suite: str) -> dict[st
     common = {"env_id": ENV_ID, "masks": MASKS, "interface": "objects",
               "eval_episodes": args.eval_episodes, "progress": False,
               "env_options": dict(ENV_OPTIONS)}  # fmt: skip
+    rl = {"n_envs": args.envs, "eval_every": args.eval_every,
+          "stop_at_plateau": args.plateau or None}  # fmt: skip
+    executor = make_executor("local", workers=args.train_workers) if args.train_workers else None
     done: dict[str, Any] = {}
-    if "ppo" in rows:
-        agg = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
-                          steps=args.ppo_steps, eval_every=args.eval_every,
-                          time_limit_s=args.time_limit, **common)  # fmt: skip
-        done["ppo"] = {"runs": agg["runs"]}
     if "bc" in rows or "ft" in rows:
         demo = record_or_reuse_demos(train_suite, args.demos, out / "demos")
         agg = train_seeds(args.seeds, out=out / "bc", algo="bc", demos=demo["path"],
-                          hyperparams={"epochs": args.bc_epochs}, **common)  # fmt: skip
+                          hyperparams={"epochs": args.bc_epochs}, executor=executor,
+                          **common)  # fmt: skip
         done["bc"] = {"runs": agg["runs"], "demos": demo}
+    if "ppo" in rows:
+        agg = train_seeds(args.seeds, out=out / "ppo", algo="maskable-ppo",
+                          steps=args.ppo_steps, time_limit_s=args.time_limit, executor=executor,
+                          **rl, **common)  # fmt: skip
+        done["ppo"] = {"runs": agg["runs"]}
     if "ft" in rows:
-        ft = {"algo": "maskable-ppo", "steps": args.ft_steps, "time_limit_s": args.time_limit,
-              "eval_every": min(args.eval_every, max(1, args.ft_steps // 3)), **common}  # fmt: skip
-        done["ft"] = {"runs": [r for a in fine_tune(args.seeds, out, ft, None) for r in a["runs"]]}
+        limit = args.time_limit if args.ft_time_limit is None else args.ft_time_limit
+        ft = {"algo": "maskable-ppo", "steps": args.ft_steps, "time_limit_s": limit,
+              **rl, **common}  # fmt: skip
+        tuned = fine_tune(args.seeds, out, ft, executor)
+        done["ft"] = {"runs": [r for a in tuned for r in a["runs"]]}
     return {k: v for k, v in done.items() if k in rows}
 
 
@@ -165,30 +195,49 @@ def main() -> None:
         d = trained["bc"]["demos"]
         table["demos"] = {k: d[k] for k in ("episodes", "steps", "successes", "method")}
         table["demos"]["left_out"] = len(d.get("left_out", {}))
+    models = [f"rl:{Path(run) / 'model.zip'}" for row in trained.values() for run in row["runs"]]
+    evaluated = {split: evaluate_all((*models, PLANNER), suite, out / "eval", args.workers,
+                                     args.limit) for split, suite in suites.items()}  # fmt: skip
     for key, row in trained.items():
         per_seed = []
         for run in map(Path, row["runs"]):
             report = json.loads((run / "train.json").read_text())
-            success = {}
-            for split, suite in suites.items():
-                where = out / "eval" / run.relative_to(out)
-                rows = evaluate(f"rl:{run / 'model.zip'}", suite, where, args.workers, args.limit)
-                success[split] = _rates(rows)
+            method = f"rl:{run / 'model.zip'}"
+            success = {split: _rates(evaluated[split][method]) for split in suites}
             per_seed.append({"run": str(run), "seed": report["config"]["seed"],
                              "steps": report["steps"], "wall_time_s": report["wall_time_s"],
                              "train_time_s": report["train_time_s"], "curve": report["curve"],
                              "config": report["config"], "success": success})  # fmt: skip
         table["methods"][ROWS[key]] = {"kind": "learned", "per_seed": per_seed}
-    success = {}
-    for split, suite in suites.items():
-        success[split] = _rates(evaluate(PLANNER, suite, out / "eval" / PLANNER, args.workers,
-                                         args.limit))  # fmt: skip
+    success = {split: _rates(evaluated[split][PLANNER]) for split in suites}
     table["methods"][f"planner ({PLANNER})"] = {"kind": "planner", "success": success}
     table["achievable"] = achievable(suites, args.limit)
     table["load_average"] = {"start": load_at_start, "end": load()}
     table["training_wall_time_s"] = round(train_wall, 1)
     table["total_wall_time_s"] = round(time.perf_counter() - start, 1)
     write(table, docs)
+
+
+def evaluate_all(
+    methods: tuple[str, ...], suite: str, out: Path, workers: int, limit: int | None
+) -> dict[str, list[Any]]:
+    """`utamp eval` rows of every method on one suite (symbolic grounding, seed 0), by method:
+    one sweep (so its worker processes, and the env an ``rl:PATH`` method keeps per process,
+    serve every model), in the suite's own folder under `out`; a rerun reuses the rows it
+    finds there (an interrupted evaluation continues)."""
+    from utamp_gym.eval.sweep import SweepConfig, run_sweep
+
+    cfg = SweepConfig(suite=suite, methods=methods, grounding="symbolic", explain=False,
+                      limit=limit)  # fmt: skip
+    report = run_sweep(cfg, out / suite.rsplit("/", 1)[-1], workers=workers, progress=False)
+    if report.crashed:
+        first = report.crashed[0]
+        raise RuntimeError(f"{len(report.crashed)} crashed rows on {suite}, e.g. {first.method}: "
+                           f"{first.failure_reason}")  # fmt: skip
+    by_method: dict[str, list[Any]] = {m: [] for m in methods}
+    for r in report.rows:
+        by_method[r.method].append(r)
+    return by_method
 
 
 def _rates(rows: list[Any]) -> dict[str, Any]:
@@ -262,7 +311,7 @@ def write(table: dict[str, Any], docs: Path) -> None:
             + f" | {'/'.join(format(p['wall_time_s'], '.0f') for p in seeds)}"
             + f" | {'/'.join(flat_curve(p['curve']) for p in seeds)} |"
         )  # fmt: skip
-    lines += ["", budgets(table), ""]
+    lines += ["", budgets(table), "", planner_note(table), ""]
     if "demos" in table:
         d = table["demos"]
         lines.append(
@@ -284,6 +333,22 @@ def write(table: dict[str, Any], docs: Path) -> None:
     )
     prov = write_json(docs / "agents_v2.json", table, indent=2, default=str)
     write_markdown(docs / "agents_v2.md", "\n".join(lines) + "\n", prov)
+    curves = {label: [p["curve"] for p in m["per_seed"]] for label, m in table["methods"].items()
+              if m["kind"] == "learned" and any(p["curve"] for p in m["per_seed"])}  # fmt: skip
+    if curves:  # success on the training split; BC's x axis counts demonstration samples
+        plot_learning_curves(curves, docs / "agents_v2_curves.png",
+                             f"evaluation success on {table['splits']['train']} during "
+                             "training")  # fmt: skip
+
+
+def planner_note(table: dict[str, Any]) -> str:
+    """How much of the ceiling the planner row reaches, per split."""
+    label, m = next((k, v) for k, v in table["methods"].items() if v["kind"] == "planner")
+    parts = [f"{s} {m['success'][s]['successes']}/{table['achievable'][s][0]}"
+             for s in table["splits"]]  # fmt: skip
+    return (f"{label[0].upper()}{label[1:]}: goals reached / goals labelled achievable, per split: "
+            f"{', '.join(parts)} (its plans played in the env of the utamp2x domain and checked "
+            "against that domain's ground truth, as `utamp eval` does).")  # fmt: skip
 
 
 def budgets(table: dict[str, Any]) -> str:
@@ -299,6 +364,8 @@ def budgets(table: dict[str, Any]) -> str:
             continue
         limit = f", stopped at the first evaluation after {c['time_limit_s']:.0f} s of " \
             "training" if c.get("time_limit_s") else ""  # fmt: skip
+        if c.get("stop_at_plateau"):
+            limit += f" or once its curve is flat (gain < {c['stop_at_plateau']})"
         start = " from the BC policy of the same seed" if c.get("init_from") else ""
         parts.append(f"{label}: at most {c['steps']:,} env steps ({c['n_envs']} envs){start}"
                      f"{limit}, evaluated every {c['eval_every']:,} steps on "

@@ -82,7 +82,8 @@ def test_table_has_every_split_intervals_and_the_train_to_test_tasks_gap(tmp_pat
                             "test-tasks"]  # fmt: skip
     seeds = [_seed({s: 0.4 for s in splits} | {"test-tasks": 0.1}, 0),
              _seed({s: 0.6 for s in splits} | {"test-tasks": 0.1}, 1)]  # fmt: skip
-    planner = {"kind": "planner", "success": {s: {"rate": 0.9, "n": 10} for s in splits}}
+    planner = {"kind": "planner",
+               "success": {s: {"rate": 0.9, "n": 10, "successes": 9} for s in splits}}  # fmt: skip
     table = {"env_id": bench.ENV_ID, "splits": splits, "limit": 10, "planner": bench.PLANNER,
              "achievable": {s: [9, 10] for s in splits}, "training_wall_time_s": 10.0,
              "load_average": {"start": [1, 1, 1], "end": [1, 1, 1]},
@@ -97,6 +98,7 @@ def test_table_has_every_split_intervals_and_the_train_to_test_tasks_gap(tmp_pat
     assert summary["train"]["t95_half_width"] == pytest.approx(12.706 * 0.1414 / 2**0.5, rel=1e-3)
     assert "| MaskablePPO from scratch | 2 | 0.50 ± 1.27 |" in text
     assert "+0.40 ± 1.27" in text and "test-count (9/10 achievable)" in text
+    assert "goals reached / goals labelled achievable, per split: train 9/9, " in text
     assert "_Written by" in text
 
 
@@ -105,12 +107,16 @@ def test_smoke_run_trains_evaluates_and_writes(tmp_path: Path) -> None:
     """The whole benchmark with tiny budgets (about two minutes)."""
     out, docs = tmp_path / "runs", tmp_path / "docs"
     cmd = [sys.executable, "benchmarks/agents_v2.py", "--seeds", "1", "--demos", "3",
-           "--bc-epochs", "1", "--ppo-steps", "256", "--eval-every", "128", "--eval-episodes",
-           "2", "--limit", "1", "--out", str(out), "--docs", str(docs)]  # fmt: skip
+           "--bc-epochs", "1", "--ppo-steps", "256", "--ft-steps", "128", "--envs", "2",
+           "--eval-every", "128", "--eval-episodes", "2", "--limit", "1", "--out", str(out),
+           "--docs", str(docs)]  # fmt: skip
     subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True, text=True)
     table = json.loads((docs / "agents_v2.json").read_text())
     assert set(table["methods"]) == {"BC from planner episodes", "MaskablePPO from scratch",
-                                     "planner (utamp2x-rules)"}  # fmt: skip
+                                     "BC, then MaskablePPO", "planner (utamp2x-rules)"}  # fmt: skip
+    ft = table["methods"]["BC, then MaskablePPO"]["per_seed"][0]["config"]
+    assert ft["init_from"].endswith("bc/seed_0/model.zip") and ft["stop_at_plateau"] == 0.02
+    assert (docs / "agents_v2_curves.png").is_file()
     for m in table["methods"].values():
         if m["kind"] == "learned":
             assert set(m["per_seed"][0]["success"]) == set(bench.split_suites())

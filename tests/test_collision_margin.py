@@ -1,13 +1,12 @@
-"""robot/collision.py and bodies of several geoms: a known miss, reproduced, not fixed.
+"""robot/collision.py and bodies of several geoms (MuJoCo's mid-phase bounds such a body by its
+compiled ``body_margin``).
 
-MuJoCo's mid-phase bounds a body of several geoms by its compiled ``body_margin``; the checker
-widens the geoms' margins (robot and held object) but not that, so such a body 0 to 1 cm from
-another body of several geoms gives no contact at the 1 cm margin: a held board 5 mm from a
-tumbler, a finger (4 geoms) 5 mm from one. Widening ``body_margin`` too (the held object's at
-`attach`, restored at `detach`; the robot's at construction) makes both tests pass, but it
-changes seeded rollouts of the paper's sliding env (`benchmarks/rollout_identity.py`: the
-held-object part alone moves the final poses of UTampKitchenSlide-v0 physics episode 4 at
-20 steps by ~1e-5), so it is left to a decision; the tests are strict xfails until then.
+The checker widens a held object's ``body_margin`` with its geoms' margins at `attach` (and
+restores it at `detach`), so a held board 5 mm from a tumbler counts at the 1 cm margin. The
+robot's own bodies keep their compiled ``body_margin``: a finger (4 geoms) 5 mm from a tumbler
+still gives no contact. Widening those too changes seeded rollouts of the paper's
+Procedural and Slide physics envs (`benchmarks/rollout_identity.py`), so that part is left
+open: its test is a strict xfail.
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ BOX = mujoco.mjtGeom.mjGEOM_BOX
 GAP = 0.005  # m between the held board and the tumbler: inside the 1 cm margin
 MISSED = pytest.mark.xfail(
     strict=True,
-    reason="not fixed: the checker leaves MuJoCo's body_margin as compiled (module docstring)",
+    reason="not fixed: the robot's bodies keep their compiled body_margin (module docstring)",
 )
 
 
@@ -58,7 +57,7 @@ def _place(model: mujoco.MjModel, data: mujoco.MjData, body: str, pos: np.ndarra
     data.qpos[adr + 3 : adr + 7] = [1, 0, 0, 0]
 
 
-@pytest.mark.parametrize("gap", [pytest.param(GAP, marks=MISSED), 0.02])
+@pytest.mark.parametrize("gap", [GAP, 0.02])
 def test_a_held_board_counts_a_tumbler_inside_the_margin(gap: float) -> None:
     model, data, ids = _world()
     checker = CollisionChecker(model, ids, margin=0.01)

@@ -179,6 +179,8 @@ CONSTANTS = {
     "rated_payload_kg": ("utamp_gym.sim.payload", "RATED_PAYLOAD_KG", 1),
     "hold_s": ("utamp_gym.sim.payload", "HOLD_S", 1),
     "carry_hold_s": ("utamp_gym.sim.skills", "CARRY_HOLD_S", 1),
+    "sweep_reach_cm": ("utamp_gym.sim.skills", "SWEEP_REACH", 100),
+    "carry_tilt_deg": ("utamp_gym.sim.measure", "CARRY_TILT_DEG", 1),
     "uncertainty_sigmas": ("utamp_gym.sim.grasping", "UNCERTAINTY_SIGMAS", 1),
     "contact_n": ("utamp_gym.sim.skills", "CONTACT_N", 1),
     "place_attempts": ("utamp_gym.sim.skills", "PLACE_ATTEMPTS", 1),

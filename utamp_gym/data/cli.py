@@ -5,6 +5,7 @@ Usage::
     utamp demos --suite SUITE --episodes N --out DIR [--track macro|low-level]
         [--method utamp2-gt] [--seed S] [--grounding symbolic|physics]
         [--masks affordances|geometric|none] [--interface objects|grounded]
+        [--slots N] [--domain D] [--affordances A]
         [--image-size H W] [--executor local|ray] [--workers N] [--ray-address A]
 
     utamp demos export-lerobot --root DIR --dataset ID --out DIR [--repo-id NAME]
@@ -27,6 +28,7 @@ from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
 from utamp_gym.outputs import new_output_dir, output_dir
 from utamp_gym.planning.methods import METHODS
+from utamp_gym.rl.cli import add_env_option_flags, env_option_flags
 from utamp_gym.suites import ALL_SUITES  # the paper's suites and the procedural splits
 
 
@@ -49,6 +51,11 @@ def _cmd_demos(args: argparse.Namespace) -> int:
         require("utamp demos --track low-level", "dm")
     if args.executor == "ray":
         require("utamp demos --executor ray", "ray")
+    flags = env_option_flags(args, args.interface) if args.track == "macro" else {}
+    if args.track != "macro" and any(getattr(args, k) is not None
+                                     for k in ("slots", "domain", "affordances")):  # fmt: skip
+        raise UtampError("--slots, --domain and --affordances are options of the macro track's "
+                         "env (--track macro)")  # fmt: skip
     output_dir(args.out, "--out")  # before any episode is recorded
     # lazy: keeps `utamp --help` from loading utamp_gym.data.record
     from utamp_gym.data.record import record_demos
@@ -60,7 +67,8 @@ def _cmd_demos(args: argparse.Namespace) -> int:
     options: dict[str, Any] = {}
     if args.track == "macro":
         grounding = args.grounding or "symbolic"
-        options = {"grounding": grounding, "masks": args.masks, "interface": args.interface}
+        options = {"grounding": grounding, "masks": args.masks, "interface": args.interface,
+                   **flags}  # fmt: skip
     elif args.grounding == "symbolic":
         raise UtampError("--track low-level is always physics (joint commands in MuJoCo)")
     result = record_demos(
@@ -121,6 +129,7 @@ def add_demos_parser(sub: Any) -> None:
         default="objects",
         help="macro track: the env's spaces (objects: fixed for every suite)",
     )
+    add_env_option_flags(p)
     p.add_argument(
         "--image-size",
         type=int,

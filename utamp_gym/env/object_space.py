@@ -79,6 +79,12 @@ def n_actions(k: int = MAX_OBJECTS) -> int:
     return k * _M * _G + k * (k + _R) + k * _M * _G * _S
 
 
+def slots_for_actions(n: int) -> int | None:
+    """The object slots `k` (1..`MAX_SLOTS`) whose action space has `n` indices (None if no
+    slot count has): the slots of a model saved with only its action-space size."""
+    return next((k for k in range(1, MAX_SLOTS + 1) if n_actions(k) == n), None)
+
+
 def encode(action: ObjectAction, k: int = MAX_OBJECTS) -> int:
     """The `Discrete` index of an `ObjectAction` (`k` object slots); `ValueError` for a field
     out of range."""

@@ -2,7 +2,7 @@
 
     utamp train --env UTampKitchen-v0 --algo maskable-ppo|ppo|dqn [--grounding symbolic|physics]
         [--masks affordances|geometric|none] [--interface grounded|objects] [--init-from ZIP]
-        [--num-objects N] [--steps N] [--envs K]
+        [--num-objects N] [--slots N] [--domain D] [--affordances A] [--steps N] [--envs K]
         [--seed S] [--seeds K [--executor local|ray] [--workers N] [--ray-address A]]
         --out DIR
 
@@ -18,12 +18,15 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from utamp_gym.affordances.sources import AFFORDANCE_SOURCES
 from utamp_gym.distributed import make_executor
+from utamp_gym.env.object_space import MAX_SLOTS
 from utamp_gym.env.registry import env_ids
 from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
 from utamp_gym.rl.config import GROUNDINGS, TRAIN_ALGOS, TrainConfig
+from utamp_gym.symbolic.problem import DOMAINS
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
 #: the parser imports no env code; a test keeps the two equal)
@@ -35,6 +38,42 @@ def _positive(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be a positive integer, got {value}")
     return value
+
+
+def slots_count(text: str) -> int:
+    """``--slots``: object slots of the objects interface, 1..`MAX_SLOTS`."""
+    value = int(text)
+    if not 1 <= value <= MAX_SLOTS:
+        raise argparse.ArgumentTypeError(f"must be an integer in 1..{MAX_SLOTS}, got {value}")
+    return value
+
+
+def add_env_option_flags(p: argparse.ArgumentParser) -> None:
+    """``--slots``, ``--domain`` and ``--affordances``: env options of `utamp train` and
+    `utamp demos` (saved with a model, so `utamp eval` rebuilds its env)."""
+    p.add_argument("--slots", type=slots_count, default=None, metavar="N",
+                   help="objects interface: N object slots (default: 6, or the most objects "
+                   "of a scene; 8 for procedural-v2/test-count)")  # fmt: skip
+    p.add_argument("--domain", choices=DOMAINS, default=None,
+                   help="the env's planning domain (default utamp2; utamp2x: the extended one "
+                   "procedural-v2's labels assume; needs --masks affordances)")  # fmt: skip
+    p.add_argument("--affordances", choices=AFFORDANCE_SOURCES, default=None,
+                   help="the affordance source of the masks and the outcome model (default "
+                   "gt; rules: derived from the objects' attributes)")  # fmt: skip
+
+
+def env_option_flags(args: argparse.Namespace, interface: str) -> dict[str, Any]:
+    """The env options `add_env_option_flags` set, checked (`UtampError`, one line)."""
+    options = {k: getattr(args, k) for k in ("slots", "domain", "affordances")}
+    options = {k: v for k, v in options.items() if v is not None}
+    if "slots" in options and interface != "objects":
+        raise UtampError(f"--slots sets the objects interface's slots, not the {interface} one's: "
+                         "add --interface objects")  # fmt: skip
+    if options.get("domain", "utamp2") != "utamp2" and args.masks != "affordances":
+        raise UtampError(f"--masks {args.masks} needs --domain utamp2 (it drops U-TAMP-2's "
+                         f"affordance preconditions); with --domain {options['domain']} use "
+                         "--masks affordances")  # fmt: skip
+    return options
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
@@ -68,6 +107,10 @@ def _cmd_train(args: argparse.Namespace) -> int:
         config = TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
     except ValueError as exc:
         raise UtampError(str(exc)) from None
+    options = env_option_flags(args, config.interface)
+    if options:
+        kwargs["env_options"] = options
+        config = TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
         raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")
@@ -164,6 +207,7 @@ def add_train_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="N",
         help="train on the N-object scenes only (2-5; default all)",
     )
+    add_env_option_flags(p)
     p.add_argument("--steps", type=_positive, default=200_000, help="environment steps")
     p.add_argument("--envs", type=_positive, default=8, help="parallel envs")
     p.add_argument("--seed", type=int, default=0, help="seed (of the first run with --seeds)")

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from utamp_gym import suites
 from utamp_gym.agents.episode import run_policy
+from utamp_gym.env.object_space import slots_for_actions
 from utamp_gym.env.options import EnvOptions
 from utamp_gym.env.registry import register_envs
 from utamp_gym.rl.envs import n_fluents
@@ -59,18 +60,50 @@ def check_rl_method(method: str, suite: str | None = None, *, spaces: bool = Tru
     path = model_path(method)
     meta = read_meta(path)
     check_model(meta, path, suite=suite, same_actions=shares_actions(meta, suite))
+    check_slots(meta, path, suite)
     if spaces:
         import gymnasium as gym
 
         register_envs()  # explicitly: a worker process may have skipped it on import
 
         try:
-            env = gym.make(meta.env_id, grounding="symbolic", **meta.env_kwargs)
+            env = gym.make(meta.env_id, grounding="symbolic", **model_env_options(meta))
         except (gym.error.Error, ValueError) as exc:
             raise ModelError(f"{path}: cannot make its env {meta.env_id} ({exc})") from None
         check_spaces(meta, path, int(env.action_space.n), n_fluents(env))  # type: ignore[attr-defined]
         env.close()
     return meta
+
+
+def model_slots(meta: ModelMeta) -> int | None:
+    """An objects-interface model's object slots: its env option ``slots``, else the count its
+    action space was made for (a model saved without the option took the env's default);
+    None for a grounded model."""
+    if meta.env_options.get("interface") != "objects":
+        return None
+    given = meta.env_options.get("slots")
+    return int(given) if given else slots_for_actions(meta.n_actions)
+
+
+def model_env_options(meta: ModelMeta) -> dict[str, Any]:
+    """The env options a model acts in: its own, with an objects-interface model's slot count
+    explicit (`model_slots`: a suite of larger scenes would otherwise widen the spaces)."""
+    slots = model_slots(meta)
+    return meta.env_kwargs if slots is None else {**meta.env_kwargs, "slots": slots}
+
+
+def check_slots(meta: ModelMeta, path: str | Path, suite: str | None) -> None:
+    """Raise `ModelError` if `suite` has a scene with more objects than the model's slots."""
+    slots = model_slots(meta)
+    if slots is None or suite is None or _suite_of(f"{suite}/") != suite:
+        return
+    big = max(suites.suite_scenes(suite), key=lambda s: s.n_objects, default=None)
+    if big is not None and big.n_objects > slots:
+        raise ModelError(
+            f"{path} acts on {slots} object slots, but scene '{big.name}' of {suite} has "
+            f"{big.n_objects} objects: evaluate it on scenes of at most {slots} objects, or "
+            f"train with --slots {big.n_objects} (utamp train --interface objects --slots N)"
+        )
 
 
 def _suite_of(scene: str) -> str | None:
@@ -156,14 +189,13 @@ def run_rl_episode(
     disturbance: float = 0.0,
 ) -> RLEpisode:
     """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
-    import gymnasium as gym
 
     register_envs()  # explicitly: a worker process may have skipped it on import
 
     path = model_path(method)
     meta = check_rl_method(method, spaces=False)  # checked below on the env itself
     policy = _load(str(path.resolve()), path.stat().st_mtime_ns)
-    options: dict[str, Any] = {**meta.env_kwargs, "disturbance": disturbance}
+    options: dict[str, Any] = {**model_env_options(meta), "disturbance": disturbance}
     if meta.env_options.get("interface") == "objects":
         options.update(suite_options(scene))
     else:  # a grounded model: on another suite of its action universe (checked), that suite
@@ -173,14 +205,8 @@ def run_rl_episode(
             options.update(_suite_choice(suite))
     if grounding == "physics" and pose_noise is not None:
         options["pose_noise"] = pose_noise
-    env = gym.make(
-        meta.env_id,
-        grounding=grounding,
-        reward_shaping=False,
-        terminate_on_failure=False,
-        record_timings=False,
-        **options,
-    )
+    options.update(reward_shaping=False, terminate_on_failure=False, record_timings=False)
+    env = _episode_env(meta.env_id, grounding, options)
     try:
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         check_spaces(meta, path, n_actions, n_fluents(env))
@@ -205,7 +231,30 @@ def run_rl_episode(
             ep.success, why, ep.actions, ep.n_failed, ep.decision_s, ep.step_s, ep.n_faults
         )
     finally:
-        env.close()
+        if grounding != "symbolic":
+            env.close()
+
+
+#: the symbolic env of the last ``rl:PATH`` episode in this process, by its options
+_KEPT: dict[str, Any] = {}
+
+
+def _episode_env(env_id: str, grounding: str, options: dict[str, Any]) -> Any:
+    """The env of an episode: in symbolic grounding the one the previous episode of the same
+    options used (a sweep's episodes differ in scene and seed only; every reset reseeds it,
+    and making the env and deriving each scene anew cost more than the episode), else a new
+    one (the caller closes it)."""
+    import gymnasium as gym
+
+    if grounding != "symbolic":
+        return gym.make(env_id, grounding=grounding, **options)
+    key = repr((env_id, sorted(options.items())))
+    if key not in _KEPT:
+        for old in _KEPT.values():
+            old.close()
+        _KEPT.clear()
+        _KEPT[key] = gym.make(env_id, grounding=grounding, **options)
+    return _KEPT[key]
 
 
 def _terminal_reason(info: dict[str, Any], steps: int) -> str:

@@ -11,6 +11,7 @@ from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.env.object_space import slots_for_actions
 from utamp_gym.rl.config import TrainConfig, TrainResult
 from utamp_gym.rl.envs import EVAL_SEED_OFFSET, make_env, n_fluents
 from utamp_gym.rl.saved import ModelMeta, write_meta
@@ -22,6 +23,8 @@ def model_meta(config: TrainConfig, env: Any) -> ModelMeta:
     options: dict[str, Any] = {
         "masks": config.masks, "interface": config.interface, **config.env_options
     }  # fmt: skip
+    if config.interface == "objects":  # the slot count the spaces were made for, explicitly
+        options["slots"] = slots_for_actions(int(env.action_space.n))
     return ModelMeta(
         env_id=config.env_id,
         suite=str(kitchen.options.suite),

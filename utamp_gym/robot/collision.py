@@ -4,13 +4,14 @@
 and a scratch `MjData`; it never touches the simulation's data. Counted contacts:
 robot (or held object) vs world closer than `margin`, and robot self-contacts
 (pairs not excluded by the SRDF) closer than `self_margin`. A held object moves
-rigidly with the TCP; its contacts with the hand are ignored.
+rigidly with the TCP; its contacts with the hand are ignored. It may be checked at
+other poses in the hand as well (`attach`'s `also`: where it may turn while carried).
 """
 
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -83,6 +84,10 @@ class CollisionChecker:
         self.self_margin = float(self_margin)
         self._gen_margin = max(self.margin, self.self_margin)
         self._base_margin = self.model.geom_margin.copy()
+        self._base_body_margin = self.model.body_margin.copy()
+        # The robot's bodies keep their compiled body_margin (only a held object's is widened,
+        # `_widen_bodies`): widening the fingers' (4 geoms each) would count objects within the
+        # margin of them too, but it changes the paper suites' seeded rollouts.
         self.model.geom_margin[ids.geom_ids] = np.maximum(
             self._base_margin[ids.geom_ids], self._gen_margin
         )
@@ -139,10 +144,16 @@ class CollisionChecker:
         return out
 
     # ------------------------------------------------------------ held object
-    def attach(self, body_id: int, tcp_T_obj: np.ndarray | None = None) -> None:
+    def attach(
+        self,
+        body_id: int,
+        tcp_T_obj: np.ndarray | None = None,
+        also: Sequence[np.ndarray] = (),
+    ) -> None:
         """Treat free body `body_id` (with its subtree) as rigidly held at `tcp_T_obj` (4x4).
 
-        Without `tcp_T_obj` the relative pose is taken from the current world state.
+        Without `tcp_T_obj` the relative pose is taken from the current world state. Its
+        contacts at each pose of `also` (4x4 in the TCP frame) count as well.
         """
         m = self.model
         if not 0 < body_id < m.nbody:
@@ -162,10 +173,20 @@ class CollisionChecker:
         self._held_qpos_adr = int(m.jnt_qposadr[jnt])
         self._held_qpos0 = self.data.qpos[self._held_qpos_adr : self._held_qpos_adr + 7].copy()
         self._held_tcp_T_obj = np.array(tcp_T_obj, dtype=float)
+        self._held_also = [np.array(p, dtype=float) for p in also]
         self.held_body = body_id
         self._cls[geoms] = _HELD
         self._set_bits(geoms, robot=True)
         m.geom_margin[geoms] = np.maximum(self._base_margin[geoms], self._gen_margin)
+        self._widen_bodies(geoms)
+
+    def _widen_bodies(self, geoms: np.ndarray) -> None:
+        """Each body of `geoms` gets at least their margins: MuJoCo's mid-phase bounds a body
+        of several geoms by its ``body_margin`` (set when the model compiled), so a wider geom
+        margin alone misses pairs of such bodies between the old and the new margin."""
+        np.maximum.at(
+            self.model.body_margin, self.model.geom_bodyid[geoms], self.model.geom_margin[geoms]
+        )
 
     def detach(self) -> None:
         """Forget the held object and put it back where the world state had it."""
@@ -174,11 +195,14 @@ class CollisionChecker:
             self.data.qpos[adr : adr + 7] = self._held_qpos0
         g = self._held_geoms
         self.model.geom_margin[g] = self._base_margin[g]
+        bodies = self.model.geom_bodyid[g]
+        self.model.body_margin[bodies] = self._base_body_margin[bodies]
         self._cls[g] = _WORLD
         self._set_bits(g, robot=False)
         self._held_geoms = np.zeros(0, dtype=int)
         self._held_qpos_adr = -1
         self._held_tcp_T_obj = np.eye(4)
+        self._held_also: list[np.ndarray] = []
         self.held_body = None
 
     # ------------------------------------------------------------ checks
@@ -187,19 +211,38 @@ class CollisionChecker:
         d.qpos[self.ids.arm_qpos_adr] = q
         mujoco.mj_kinematics(m, d)
         if self.held_body is not None:
-            # Put the held body's free joint where the hand carries it, then redo kinematics
-            # (the mid-phase reads body as well as geom poses, so writing geoms is not enough).
-            world = self.tcp_pose() @ self._held_tcp_T_obj
-            adr = self._held_qpos_adr
-            d.qpos[adr : adr + 3] = world[:3, 3]
-            mujoco.mju_mat2Quat(d.qpos[adr + 3 : adr + 7], world[:3, :3].ravel())
-            mujoco.mj_kinematics(m, d)
+            self._hold_at(self._held_tcp_T_obj)
         mujoco.mj_collision(m, d)
         self.checks += 1
 
+    def _hold_at(self, tcp_T_obj: np.ndarray) -> None:
+        """Put the held body's free joint where the hand carries it at `tcp_T_obj`, then
+        redo kinematics (the mid-phase reads body as well as geom poses, so writing geoms is
+        not enough)."""
+        world = self.tcp_pose() @ tcp_T_obj
+        adr = self._held_qpos_adr
+        self.data.qpos[adr : adr + 3] = world[:3, 3]
+        mujoco.mju_mat2Quat(self.data.qpos[adr + 3 : adr + 7], world[:3, :3].ravel())
+        mujoco.mj_kinematics(self.model, self.data)
+
     def _counted(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Contacts at `q` that count: (geom pairs, distances, kinds), before tolerance."""
+        """Contacts at `q` that count: (geom pairs, distances, kinds), before tolerance;
+        the held object's at each of its `also` poses as well."""
         self._collide(q)
+        found = [self._kept()]
+        for pose in self._held_also:
+            self._hold_at(pose)
+            mujoco.mj_collision(self.model, self.data)
+            geom, dist, kind = self._kept()
+            held = (self._cls[geom] == _HELD).any(axis=1)
+            found.append((geom[held], dist[held], kind[held]))
+        if len(found) == 1:
+            return found[0]
+        geom, dist, kind = (np.concatenate(parts) for parts in zip(*found, strict=True))
+        return geom, dist, kind
+
+    def _kept(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The counted contacts of the last collision pass."""
         n = self.data.ncon
         if n == 0:
             return _NO_PAIRS, _NO_FLOATS, _NO_KINDS

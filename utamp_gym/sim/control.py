@@ -318,16 +318,22 @@ class ArmDriver:
         self.settle_arm(line.q[-1])
 
     def transfer(
-        self, q_goal: np.ndarray, *, held: tuple[int, np.ndarray] | None = None, what: str = ""
+        self,
+        q_goal: np.ndarray,
+        *,
+        held: tuple[int, np.ndarray] | None = None,
+        turned: np.ndarray | None = None,
+        what: str = "",
     ) -> None:
         """Collision-free joint motion (OMPL if the straight line is blocked) to `q_goal`.
 
-        `held` = (body id, tcp_T_obj) carries an object in the collision model. Raises
-        `GroundingError` ("OMPL infeasible: <what>: ...") if no path is found.
+        `held` = (body id, tcp_T_obj) carries an object in the collision model, checked at
+        `turned` (tcp_T_obj) as well if given: where it may turn in the hand on the way.
+        Raises `GroundingError` ("OMPL infeasible: <what>: ...") if no path is found.
         """
         checker = self.sync(self.free)
         if held is not None:
-            checker.attach(held[0], held[1])
+            checker.attach(held[0], held[1], () if turned is None else (turned,))
         t0 = time.perf_counter()
         try:
             plan = plan_motion(checker, self.q(), q_goal, self.rng, timeout=1.5)

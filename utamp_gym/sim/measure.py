@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.contract.tracking import PoseTracker
 from utamp_gym.errors import GroundingError
 from utamp_gym.scene.catalogue import ObjectType
@@ -32,6 +33,12 @@ MOVED = 0.02  # m, another object moving this far was disturbed
 LIFT = 0.12  # m, least lift after grasping
 LIFT_CLEARANCE = 0.03  # m, lift the held object this far over the tallest other object
 MAX_LIFT = 0.30  # m
+#: deg an object reaching far out of the hand (`sweep_reach`) may turn in it while carried:
+#: the pads' hold creeps under its weight's moment even below the rules' torque limit (a
+#: 0.96 kg paddle board held by its handle, 1.26 N m, turned 4.4 deg in 3 s of a carry on
+#: procedural-v1/test-count/0086, 5.6 deg by its end, and swept a tumbler 2 cm lower than
+#: believed)
+CARRY_TILT_DEG = 10.0
 SETTLED = 0.01  # m/s (and rad/s): objects slower than this have settled (`settle_objects`)
 SETTLE_CHECK = 0.02  # s between the checks of `settle_objects`
 
@@ -153,9 +160,10 @@ def settle_objects(st: SimState, *, min_s: float = 0.25, max_s: float = 1.2) -> 
                 return
 
 
-def lift_height(st: SimState, name: str) -> float:
+def lift_height(st: SimState, name: str, sink: float = 0.0) -> float:
     """Least lift taking `name` over the tallest other object (`LIFT` .. `MAX_LIFT`), from
-    the robot's estimates of the poses."""
+    the robot's estimates of the poses, with room for its lowest point to sink `sink` m
+    while carried (`turn_sink`)."""
     scene = st.world.scene
     bottom = world_aabb(scene.type_of(name).bbox, st.estimate(name))[0][2]
     tops = [
@@ -163,7 +171,7 @@ def lift_height(st: SimState, name: str) -> float:
         for o in st.world.body_ids
         if o != name
     ]
-    need = max(tops, default=0.0) + LIFT_CLEARANCE - bottom
+    need = max(tops, default=0.0) + LIFT_CLEARANCE + sink - bottom
     return float(np.clip(need, LIFT, MAX_LIFT))
 
 
@@ -174,6 +182,29 @@ def sweep_reach(t: ObjectType, member: str) -> float:
     gx, gy = (box.min[0] + box.max[0]) / 2, (box.min[1] + box.max[1]) / 2
     lo, hi = t.bbox.min, t.bbox.max
     return max(math.hypot(x - gx, y - gy) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]))
+
+
+def turn_sink(t: ObjectType, member: str) -> float:
+    """m the far end of `t` held by `member` sinks if it turns `CARRY_TILT_DEG` in the hand."""
+    return sweep_reach(t, member) * math.sin(math.radians(CARRY_TILT_DEG))
+
+
+def turned_in_hand(t: ObjectType, tcp: np.ndarray, tcp_t_obj: np.ndarray) -> np.ndarray:
+    """`tcp_t_obj` (4x4, `t` held at world TCP pose `tcp`) turned `CARRY_TILT_DEG` about the
+    TCP the way the weight turns it: about the horizontal axis across the lever from the
+    TCP to the centre of mass, the centre going down. Unchanged if that lever is vertical."""
+    cx, cy = centre_of_mass(t)
+    com = tcp_t_obj[:3, :3] @ np.array([cx, cy, float(t.bbox.center[2])]) + tcp_t_obj[:3, 3]
+    axis = np.cross(tcp[:3, :3] @ com, (0.0, 0.0, -1.0))  # world; turns the lever down
+    norm = float(np.linalg.norm(axis))
+    if norm < 1e-9:
+        return tcp_t_obj.copy()
+    kx, ky, kz = tcp[:3, :3].T @ axis / norm  # the axis in the TCP frame
+    k = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    a = math.radians(CARRY_TILT_DEG)
+    out = tcp_t_obj.copy()
+    out[:3, :] = (np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * k @ k) @ tcp_t_obj[:3, :]
+    return out
 
 
 def verify_on(st: SimState, name: str, support: str) -> None:

@@ -53,6 +53,8 @@ from utamp_gym.sim.measure import (
     settle_objects,
     snapshot,
     sweep_reach,
+    turn_sink,
+    turned_in_hand,
     verify_on,
 )
 from utamp_gym.sim.payload import hold_and_measure, payload_failure
@@ -72,7 +74,9 @@ CONTACT_N = 5.0
 PLACE_ATTEMPTS = 3
 GRASP_ATTEMPTS = 2
 #: m: a held object reaching farther than this out of the hand (beyond the hand's own
-#: 10 cm half length) is carried over its support at its lift height (`place`)
+#: 10 cm half length) is lifted with room to turn in the hand (`measure.turn_sink`), carried
+#: with its turned pose in the collision model (`measure.turned_in_hand`) and over its
+#: support at its lift height (`place`)
 SWEEP_REACH = 0.15
 
 
@@ -91,7 +95,9 @@ def pick(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(f"cannot pick {sym.obj}: the hand already holds {st.held.obj}")
     before = snapshot(st, {sym.obj})
     support, looked = st.stack().get(sym.obj), st.estimate(sym.obj)
-    lift = lift_height(st, sym.obj)
+    t = st.world.scene.type_of(sym.obj)
+    sweeps = sweep_reach(t, sym.member) > SWEEP_REACH
+    lift = lift_height(st, sym.obj, turn_sink(t, sym.member) if sweeps else 0.0)
     for attempt in range(1, GRASP_ATTEMPTS + 1):
         last = attempt == GRASP_ATTEMPTS
         try:
@@ -128,12 +134,19 @@ def place(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(f"{name} is no longer in the hand (it moved {slip * 100:.1f} cm)")
     before = snapshot(st, {name})
     # an object reaching far out of the hand comes over its support at the height it was
-    # lifted to, above the others (it would sweep a neighbour on a lower path)
+    # lifted to, above the others (it would sweep a neighbour on a lower path), and may
+    # turn in the hand on the way (its pads creep under its weight's moment)
     t = st.world.scene.type_of(name)
-    carry = float(arm.tcp()[2, 3]) if sweep_reach(t, held.member) > SWEEP_REACH else None
-    up = plan_place(st, held, act, carry)
+    sweeps = sweep_reach(t, held.member) > SWEEP_REACH
+    carry = float(arm.tcp()[2, 3]) if sweeps else None
     what = f"carrying {name} to {act.support}"
-    arm.transfer(up.end, held=(held.body, held.belief), what=what)
+
+    def carry_to(q: np.ndarray) -> None:
+        turned = turned_in_hand(t, arm.tcp(), held.belief) if sweeps else None
+        arm.transfer(q, held=(held.body, held.belief), turned=turned, what=what)
+
+    up = plan_place(st, held, act, carry)
+    carry_to(up.end)
     slip, tilt = grasp_drift(st, held)
     if not arm.holds_something() or slip > DROP_SLIP or tilt > DROP_TILT_DEG:
         raise SkillFailure(
@@ -146,11 +159,11 @@ def place(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(overload)
     if _looked_again(st, held):  # it turned in the hand (or the last look was off): re-aim
         up = plan_place(st, held, act, carry)
-        arm.transfer(up.end, held=(held.body, held.belief), what=what)
+        carry_to(up.end)
 
     def aim_again() -> LinePath:
         path = plan_place(st, held, act, carry)
-        arm.transfer(path.end, held=(held.body, held.belief), what=what)
+        carry_to(path.end)
         return path
 
     up = relook.aim_place(st, act.support, up, aim_again)  # the wrist camera on the support
@@ -165,7 +178,7 @@ def place(st: SimState, act: MacroAction) -> None:
             st.estimator.forget(act.support)
         _looked_again(st, held, always=True)
         up = plan_place(st, held, act, carry)
-        arm.transfer(up.end, held=(held.body, held.belief), what=what)
+        carry_to(up.end)
     release_and_retreat(st, name, held.opening)
     settle_objects(st)
     verify_on(st, name, act.support)
