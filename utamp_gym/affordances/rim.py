@@ -174,7 +174,7 @@ def _rim_refusal(
     if width > lateral + 1e-9:
         return no("rim-across", width=width, lateral=lateral, fingers=f"{f1}/{f2}")
     thinnest = CALIBRATED_MIN_WIDTH if calibrated else RIM_MIN_WIDTH
-    if not thinnest <= width <= GRIPPER_OPENING:
+    if not thinnest - 1e-9 <= width <= GRIPPER_OPENING:
         limits = (thinnest, GRIPPER_OPENING)
         return no("rim-width", width=width, limits=limits, fingers=f"{f1}/{f2}")
     blocker = hand_blocker(t, member, palm, f1)
