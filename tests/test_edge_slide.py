@@ -7,6 +7,8 @@ The physics tests look only at what the simulation measured (the skills' own che
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -33,23 +35,20 @@ from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.sim.decode import parse_action
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "_scripts"))
+import readme
+
+grasp_coverage = readme.load_script("benchmarks/grasp_coverage.py")
 physics = pytest.mark.physics
 SLIDE = "(slide-edge obj obj-body back on under back on slot1 under on)"
 PLACE = "(place-edge obj obj-body back on under back on under slot2 back on)"
 
 
 def _scene(fam: str, seed: int, goal: bool = True) -> Any:
-    """Instance `seed` of `fam` alone on slot1 of a two-slot table (goal: on slot2)."""
+    """Instance `seed` of `fam` alone on slot1 of a two-slot table, the benchmarks' scene
+    (`grasp_coverage.lone_data`; goal: on slot2)."""
     table = type_table(family(fam), draw(family(fam), "v1", seed))
-    data: dict[str, Any] = {
-        "name": f"edge-{fam}-{seed}", "types": {"obj": table},
-        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
-        "slots": [
-            {"name": "slot1", "position": [0.5, -0.18], "min": [0.2, -0.5], "max": [0.8, 0.08]},
-            {"name": "slot2", "position": [0.5, 0.3], "min": [0.2, 0.08], "max": [0.8, 0.6]},
-        ],
-        "objects": [{"name": "obj", "type": "obj", "on": "slot1"}],
-    }  # fmt: skip
+    data = grasp_coverage.lone_data(table, f"edge-{fam}-{seed}")
     if goal:
         data["goal"] = {"atoms": ["(oc under obj slot2)"]}
     return scene_from_dict(data)
