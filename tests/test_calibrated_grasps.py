@@ -21,6 +21,7 @@ from utamp_gym.affordances.rim import (
     THICK_TORQUE_LIMIT,
     rim_couple_limit,
     rim_pinch_refusal,
+    wall_bow,
 )
 from utamp_gym.affordances.rules import object_facts, pick_refusal
 from utamp_gym.kitchenware import generate
@@ -100,6 +101,10 @@ def test_thin_pot_walls_are_pinched_up_to_the_calibrated_width_and_moment():
         assert rim_pinch_refusal(t, "body", "on", "front", "back") is None, (fam, seed)
     slips = rim_pinch_refusal(generate("stock-pot", "v1", 33), "body", "on", "front", "back")
     assert slips.rule == "torque" and slips.values["limit"] == CALIBRATED_THIN_TORQUE_LIMIT
+    # a sub-millimetre wall bowing across the pads more than it is thick: refused
+    bowed = rim_pinch_refusal(generate("tumbler", "v1", 23), "body", "on", "left", "right")
+    assert bowed.rule == "rim-curved" and bowed.values["bow"] > bowed.values["width"]
+    assert wall_bow(0.07) < 0.0009 < wall_bow(0.0387)
 
 
 def test_a_finger_may_land_on_a_lug_just_below_the_rim():
@@ -181,6 +186,7 @@ def _pick_and_place(sim: Any, fam: str, seed: int, grasp: str) -> str:
         ("stock-pot", 31, "body", "front", "back"),  # granted: a 0.9 mm wall
         ("saucepan", 8, "body", "front", "back"),  # granted: a thin wall at 0.66 N m
         ("stock-pot", 33, "body", "front", "back"),  # refused: a thin wall at 0.73 N m
+        ("tumbler", 23, "body", "left", "right"),  # refused: a 0.9 mm wall bowed 1 mm
         ("stock-pot", 9, "body", "left", "right"),  # granted: a finger on the lug
         ("stock-pot", 16, "body", "left", "right"),  # refused: 6 mm early on the lug
         ("tray", 24, "edge-left", "left", "right"),  # granted: 2.32 N m, 17.3 mm rim

@@ -39,6 +39,7 @@ from utamp_gym.affordances.hand import (
     MIN_PAD_OVERLAP,
     MIN_PINCH,
     PAD_HEIGHT,
+    PAD_WIDTH,
     TORQUE_LIMIT,
     TOUCH,
     G,
@@ -52,8 +53,9 @@ from utamp_gym.scene.geometry import axis_of
 from utamp_gym.scene.shapes import rim_strip
 
 RIM_MIN_WIDTH = 0.001  # m: the thinnest wall pinched (steel bowls of 1.1 mm held)
-#: m: the thinnest wall the calibrated rules pinch (0.9 mm pot walls were lifted: 5 of 5
-#: v1 saucepan and stock-pot pinches within the torque limit)
+#: m: the thinnest wall the calibrated rules pinch (0.8-0.9 mm pot walls were lifted: 7 of
+#: 7 v1 saucepan and stock-pot pinches within the torque limit), if it bows across the pads
+#: less than it is thick (`wall_bow`)
 CALIBRATED_MIN_WIDTH = 0.0008
 RIM_STOP_TOLERANCE = 0.005  # m a finger may land early on the object's own body
 RIM_LIFT_LIMIT = 1.1  # kg a rim pinch carries (plates of 1.05 kg were lifted and placed)
@@ -177,6 +179,10 @@ def _rim_refusal(
     if not thinnest - 1e-9 <= width <= GRIPPER_OPENING:
         limits = (thinnest, GRIPPER_OPENING)
         return no("rim-width", width=width, limits=limits, fingers=f"{f1}/{f2}")
+    if width < RIM_MIN_WIDTH - 1e-9 and t.body.geom == "cylinder":
+        bow = wall_bow(float(body.size[ax]) / 2)  # the round wall across the pads
+        if bow > width:
+            return no("rim-curved", width=width, bow=bow, fingers=f"{f1}/{f2}")
     blocker = hand_blocker(t, member, palm, f1)
     if blocker is not None:
         return no("hand-room", other=blocker, fingers=f"{f1}/{f2}")
@@ -204,6 +210,15 @@ def _rim_refusal(
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None
+
+
+def wall_bow(radius: float) -> float:
+    """m a round wall of `radius` m bows across the flat pads' width (`hand.PAD_WIDTH`): a
+    wall thinner than that bow is not straddled by pads facing each other through it (the
+    inner pad touches it at its two ends, the outer at its middle) and the calibrated rules
+    refuse a sub-millimetre wall so bowed (a 7.7 cm tumbler of 0.9 mm slipped out, pots of
+    14-19 cm held)."""
+    return (PAD_WIDTH / 2) ** 2 / (2 * radius)
 
 
 def rim_couple_limit(width: float) -> float:
@@ -234,4 +249,5 @@ __all__ = [
     "rim_couple_limit",
     "rim_pinch_refusal",
     "rim_pinches",
+    "wall_bow",
 ]
