@@ -24,8 +24,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from grasp_coverage import lone_scene
+from result_page import write_page
 
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 from utamp_gym.robot.kinematics import HOME_Q, PandaKinematics
 
 OUTSIDE = 0.03  # m beyond the edge: the overhang the pads close on
@@ -127,10 +128,7 @@ def main() -> None:
     commit()
     start = time.perf_counter()
     data = {"step": args.step, "edges": measure(args.step)}
-    data["wall_s"] = round(time.perf_counter() - start, 1)
-    out = Path(args.out)
-    prov = write_json(out.with_suffix(".json"), data, indent=1)
-    write_markdown(out.with_suffix(".md"), markdown(data), prov)
+    write_page(args.out, data, markdown, start)
 
 
 if __name__ == "__main__":

@@ -30,13 +30,14 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 from grasp_coverage import FORBIDDEN_TARGET, IN_PAYLOAD, TARGET, lone_scene
+from result_page import share, write_page
 
-from utamp_gym.affordances.edge import PAD_IN, edge_pinch_refusal
+from utamp_gym.affordances.edge import DEEP_PAD_IN, PAD_IN, edge_depth, edge_pinch_refusal
 from utamp_gym.affordances.hand import G
 from utamp_gym.affordances.rules import object_facts
 from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.kitchenware import FAMILIES, generate
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 
 SHAPE_RULES = ("edge-slab", "edge-thickness")
 SLIDE = "(slide-edge obj obj-body back on under back on slot1 under on)"
@@ -68,15 +69,17 @@ def rules_table(n: int) -> dict[str, dict[str, Any]]:
     return out
 
 
-def pinch_moment(fam: str, seed: int) -> tuple[float, float, float]:
-    """(mass kg, thickness m, moment N m of the weight about the pinch) of an instance."""
+def pinch_moment(fam: str, seed: int) -> tuple[float, float, float, float]:
+    """(mass kg, thickness m, moment N m of the weight about the pinch, the pinch's depth m:
+    `edge_depth`, as the skill pinches it) of an instance."""
     t = generate(fam, "v1", seed)
     cx, cy = centre_of_mass(t)
     x0 = float(t.bbox.min[0])
     end = [m for m in t.members.values() if m.box.min[0] <= x0 + 1e-6]
     py = float(end[0].box.center_xy[1]) if end else 0.0
-    lever = math.hypot(cx - (x0 + PAD_IN), cy - py)
-    return t.mass, float(t.bbox.size[2]), t.mass * G * lever
+    depth = edge_depth(t)
+    lever = math.hypot(cx - (x0 + depth), cy - py)
+    return t.mass, float(t.bbox.size[2]), t.mass * G * lever, depth
 
 
 def physics_table(n: int, families: list[str]) -> list[dict[str, Any]]:
@@ -90,10 +93,11 @@ def physics_table(n: int, families: list[str]) -> list[dict[str, Any]]:
         for fam in families:
             for seed in range(n):
                 refusal = edge_pinch_refusal(generate(fam, "v1", seed))
-                mass, thick, moment = pinch_moment(fam, seed)
+                mass, thick, moment, depth = pinch_moment(fam, seed)
                 case = {"family": fam, "seed": seed, "allowed": refusal is None,
                         "rule": refusal.rule if refusal else "", "mass": round(mass, 3),
-                        "thickness": round(thick, 4), "moment": round(moment, 3)}  # fmt: skip
+                        "thickness": round(thick, 4), "moment": round(moment, 3),
+                        "depth": depth}  # fmt: skip
                 try:
                     sim.reset(lone_scene(fam, seed), np.random.default_rng(seed))
                 except Exception as exc:  # a scene the table cannot hold: reported
@@ -112,10 +116,6 @@ def physics_table(n: int, families: list[str]) -> list[dict[str, Any]]:
     finally:
         sim.close()
     return cases
-
-
-def _share(k: int, n: int) -> str:
-    return f"{k}/{n} ({k / n:.0%})" if n else "–"
 
 
 def markdown(data: dict[str, Any]) -> str:
@@ -138,23 +138,26 @@ def markdown(data: dict[str, Any]) -> str:
             continue
         why = ", ".join(f"{k} {v}" for k, v in sorted(r["why"].items()) if k != "granted")
         lines.append(
-            f"| {fam} | {r['in_payload']}/{r['n']} | {_share(r['edge'], r['n'])} | "
-            f"{_share(r['edge_in_payload'], r['in_payload'])} | {_share(r['liftable'], r['n'])} "
-            f"| {_share(r['liftable_in_payload'], r['in_payload'])} | {why or '–'} |"
+            f"| {fam} | {r['in_payload']}/{r['n']} | {share(r['edge'], r['n'])} | "
+            f"{share(r['edge_in_payload'], r['in_payload'])} | {share(r['liftable'], r['n'])} "
+            f"| {share(r['liftable_in_payload'], r['in_payload'])} | {why or '–'} |"
         )
     if data["physics"]:
         m = data["physics_instances"]
         lines += [
             "",
             f"Physics, each of the first {m} instances alone on the table (MuJoCo, no pose "
-            "noise), slid to the edge, pinched and lifted (`slide-edge`): allowed by the rule, "
+            "noise), slid to the edge, pinched and lifted (`slide-edge`; "
+            f"{PAD_IN * 1000:.0f} mm inside its end, or {DEEP_PAD_IN * 1000:.0f} mm, slid "
+            "further out, where the weight would turn it out of the shallower pinch: "
+            "`edge_depth`; the moments are about the pinch made): allowed by the rule, "
             "lifted, then put on the other slot (`place-edge`) "
             f"(target ≥ {TARGET:.0%}); refused (beyond the shape), lifted anyway "
             f"(target ≤ {FORBIDDEN_TARGET:.0%}).",
             "",
             "| family | allowed: lifted | allowed: lifted and placed | refused: lifted anyway "
-            "| moments lifted (N m) | moments failed (N m) |",
-            "|---|---|---|---|---|---|",
+            "| pinched deep | moments lifted (N m) | moments failed (N m) |",
+            "|---|---|---|---|---|---|---|",
         ]
         for fam in dict.fromkeys(c["family"] for c in data["physics"]):
             cs = [c for c in data["physics"] if c["family"] == fam]
@@ -164,10 +167,10 @@ def markdown(data: dict[str, Any]) -> str:
             bad = [c["moment"] for c in cs if not c["ok"]]
             span = lambda xs: f"{min(xs):.2f}–{max(xs):.2f}" if xs else "–"  # noqa: E731
             lines.append(
-                f"| {fam} | {_share(sum(c['ok'] for c in allowed), len(allowed))} | "
-                f"{_share(sum(c['placed'] for c in allowed), len(allowed))} | "
-                f"{_share(sum(c['ok'] for c in refused), len(refused))} | {span(ok)} | "
-                f"{span(bad)} |"
+                f"| {fam} | {share(sum(c['ok'] for c in allowed), len(allowed))} | "
+                f"{share(sum(c['placed'] for c in allowed), len(allowed))} | "
+                f"{share(sum(c['ok'] for c in refused), len(refused))} | "
+                f"{sum(c.get('depth', PAD_IN) > PAD_IN for c in cs)} | {span(ok)} | {span(bad)} |"
             )
         fails = [c for c in data["physics"] if c["allowed"] and not c["placed"]]
         if fails:
@@ -199,10 +202,7 @@ def main() -> None:
         "physics_instances": args.physics,
         "physics": physics_table(args.physics, slabs) if args.physics else [],
     }
-    data["wall_s"] = round(time.perf_counter() - start, 1)
-    out = Path(args.out)
-    prov = write_json(out.with_suffix(".json"), data, indent=1)
-    write_markdown(out.with_suffix(".md"), markdown(data), prov)
+    write_page(args.out, data, markdown, start)
 
 
 if __name__ == "__main__":

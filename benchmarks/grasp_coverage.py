@@ -36,11 +36,12 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 from compare import base_worktree, git
+from result_page import share, write_page
 
 from utamp_gym.affordances.rules import LIFT_FRACTION, PAYLOAD, object_facts
 from utamp_gym.kitchenware import FAMILIES, family, generate, type_table
 from utamp_gym.kitchenware.params import draw
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.scene.model import Scene
 from utamp_gym.symbolic.slots import admits
@@ -98,18 +99,24 @@ def base_table(base: str, n: int) -> dict[str, dict[str, int]]:
     return {k: dict(v) for k, v in out.items()}
 
 
-def lone_scene(fam: str, seed: int) -> Scene:
-    """Instance `seed` of `fam` alone on slot1 of a two-slot table."""
-    table = type_table(family(fam), draw(family(fam), "v1", seed))
-    return scene_from_dict({
-        "name": f"lone-{fam}-{seed}", "types": {"obj": table},
+def lone_data(table: dict[str, Any], name: str = "lone") -> dict[str, Any]:
+    """Scene data: one object ``obj`` of the type table `table` alone on slot1 of a two-slot
+    table (the tests add a goal or a second object to it)."""
+    return {
+        "name": name, "types": {"obj": table},
         "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
         "slots": [
             {"name": "slot1", "position": [0.5, -0.18], "min": [0.2, -0.5], "max": [0.8, 0.08]},
             {"name": "slot2", "position": [0.5, 0.3], "min": [0.2, 0.08], "max": [0.8, 0.6]},
         ],
         "objects": [{"name": "obj", "type": "obj", "on": "slot1"}],
-    })  # fmt: skip
+    }  # fmt: skip
+
+
+def lone_scene(fam: str, seed: int) -> Scene:
+    """Instance `seed` of `fam` alone on slot1 of a two-slot table (`lone_data`)."""
+    table = type_table(family(fam), draw(family(fam), "v1", seed))
+    return scene_from_dict(lone_data(table, f"lone-{fam}-{seed}"))
 
 
 def candidates(fam: str, seed: int) -> list[tuple[str, str, str, bool]]:
@@ -150,12 +157,16 @@ def try_grasp(sim: Any, fam: str, seed: int, member: str, f1: str, f2: str, plac
     return "" if res.success else res.reason or "failed"
 
 
-def physics_table(n: int) -> tuple[dict[str, dict[str, int]], list[dict[str, Any]]]:
+def physics_table(
+    n: int,
+) -> tuple[dict[str, dict[str, int]], list[dict[str, Any]], list[dict[str, Any]]]:
+    """Per family the counts, the allowed grasps physics failed and the forbidden ones it
+    lifted (the picks the rules miss)."""
     from utamp_gym.sim.backend import MujocoBackend
 
     sim = MujocoBackend(pose_noise=0.0)
     rows: dict[str, dict[str, int]] = {}
-    cases = []
+    cases, missed = [], []
     try:
         for fam in FAMILIES:
             row = defaultdict(int)
@@ -174,16 +185,15 @@ def physics_table(n: int) -> tuple[dict[str, dict[str, int]], list[dict[str, Any
                     if allowed and why:
                         cases.append({"family": fam, "seed": seed, "member": member,
                                       "fingers": f"{f1}/{f2}", "reason": why})  # fmt: skip
+                    if not allowed and not why:
+                        missed.append({"family": fam, "seed": seed, "member": member,
+                                       "fingers": f"{f1}/{f2}"})  # fmt: skip
                     print(f"{fam:15s} {seed:3d} {member:12s} {f1}/{f2} "
                           f"{key:9s} {'ok' if not why else why[:80]}", flush=True)  # fmt: skip
             rows[fam] = dict(row)
     finally:
         sim.close()
-    return rows, cases
-
-
-def _share(k: int, n: int) -> str:
-    return f"{k}/{n} ({k / n:.0%})" if n else "–"
+    return rows, cases, missed
 
 
 def markdown(data: dict[str, Any]) -> str:
@@ -204,13 +214,13 @@ def markdown(data: dict[str, Any]) -> str:
     ]
     for fam, r in data["rules"].items():
         b = data["before"].get(fam, {}) if data["before"] else {}
-        before = _share(b.get("utamp2_in_payload", 0), r["in_payload"]) if b else "–"
+        before = share(b.get("utamp2_in_payload", 0), r["in_payload"]) if b else "–"
         lines.append(
             f"| {fam} | {r['in_payload']}/{r['n']} | {before} | "
-            f"{_share(r['utamp2_in_payload'], r['in_payload'])} | "
-            f"{_share(r['utamp2x_in_payload'], r['in_payload'])} | "
-            f"{_share(r['utamp2x_edge_in_payload'], r['in_payload'])} | "
-            f"{_share(r['utamp2x_edge'], r['n'])} |"
+            f"{share(r['utamp2_in_payload'], r['in_payload'])} | "
+            f"{share(r['utamp2x_in_payload'], r['in_payload'])} | "
+            f"{share(r['utamp2x_edge_in_payload'], r['in_payload'])} | "
+            f"{share(r['utamp2x_edge'], r['n'])} |"
         )
     if data["physics"]:
         m = data["physics_instances"]
@@ -232,13 +242,13 @@ def markdown(data: dict[str, Any]) -> str:
             for k in ("allowed", "allowed_ok", "forbidden", "forbidden_ok"):
                 tot[k] += r.get(k, 0)
             lines.append(
-                f"| {fam} | {_share(r.get('allowed_ok', 0), r.get('allowed', 0))} | "
+                f"| {fam} | {share(r.get('allowed_ok', 0), r.get('allowed', 0))} | "
                 f"{r.get('placed_back', 0)}, {r.get('pick_only', 0)} | "
-                f"{_share(r.get('forbidden_ok', 0), r.get('forbidden', 0))} |"
+                f"{share(r.get('forbidden_ok', 0), r.get('forbidden', 0))} |"
             )
         lines.append(
-            f"| **all** | {_share(tot['allowed_ok'], tot['allowed'])} | | "
-            f"{_share(tot['forbidden_ok'], tot['forbidden'])} |"
+            f"| **all** | {share(tot['allowed_ok'], tot['allowed'])} | | "
+            f"{share(tot['forbidden_ok'], tot['forbidden'])} |"
         )
         if data["failures"]:
             lines += ["", "Allowed grasps physics failed:", ""]
@@ -246,6 +256,12 @@ def markdown(data: dict[str, Any]) -> str:
                 f"- {c['family']} {c['seed']} {c['member']} ({c['fingers']}): {c['reason']}"
                 for c in data["failures"]
             ]
+        if data.get("missed"):
+            lines += ["", "Forbidden grasps physics lifted (the picks the rules miss):", ""]
+            for fam in dict.fromkeys(c["family"] for c in data["missed"]):
+                cs = [c for c in data["missed"] if c["family"] == fam]
+                grasps = ", ".join(f"{c['seed']} {c['member']} ({c['fingers']})" for c in cs)
+                lines.append(f"- {fam}: {grasps}")
     lines.append("")
     return "\n".join(lines)
 
@@ -272,13 +288,11 @@ def main() -> None:
         "physics_instances": args.physics,
         "physics": {},
         "failures": [],
+        "missed": [],
     }
     if args.physics:
-        data["physics"], data["failures"] = physics_table(args.physics)
-    data["wall_s"] = round(time.perf_counter() - start, 1)
-    out = Path(args.out)
-    prov = write_json(out.with_suffix(".json"), data, indent=1)
-    write_markdown(out.with_suffix(".md"), markdown(data), prov)
+        data["physics"], data["failures"], data["missed"] = physics_table(args.physics)
+    write_page(args.out, data, markdown, start)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,16 @@ import numpy as np
 import pytest
 
 from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, LOW_COVER_LIMIT
-from utamp_gym.affordances.rim import THICK_TORQUE_LIMIT, rim_pinch_refusal
+from utamp_gym.affordances.hand import HAND_REST_TOLERANCE, hand_landing
+from utamp_gym.affordances.rim import (
+    CALIBRATED_MIN_WIDTH,
+    CALIBRATED_THIN_TORQUE_LIMIT,
+    RIM_STOP_TOLERANCE,
+    THICK_TORQUE_LIMIT,
+    rim_couple_limit,
+    rim_pinch_refusal,
+    wall_bow,
+)
 from utamp_gym.affordances.rules import object_facts, pick_refusal
 from utamp_gym.kitchenware import generate
 
@@ -59,6 +68,64 @@ def test_a_thick_rim_carries_up_to_the_thick_torque_limit():
     slips = rim_pinch_refusal(generate("tray", "v1", 6), "edge-left", "on", "left", "right")
     assert slips is not None and slips.rule == "torque"
     assert slips.values["moment"] > THICK_TORQUE_LIMIT
+
+
+def test_a_mug_handle_is_pinched_with_its_wall_the_hand_resting_a_little_on_the_rim():
+    # the inner finger goes down inside the mug; the hand above lands on its rim
+    for seed, granted in ((9, True), (28, True), (14, False), (31, False)):
+        t = generate("mug", "v1", seed)
+        landing = hand_landing(t, "handle", "on", "front")
+        assert landing is not None and landing[0] == "body"
+        assert (landing[1] <= HAND_REST_TOLERANCE) == granted, seed
+        assert _grants("mug", seed, "handle", "front", "back", True) == granted, seed
+        assert not _grants("mug", seed, "handle", "front", "back", False)
+    refusal = pick_refusal(generate("mug", "v1", 14), "handle", "on", "front", "back", True)
+    assert refusal.rule == "hand-room" and refusal.values["shortfall"] > HAND_REST_TOLERANCE
+    # a mug narrow enough to wrap: its wall is what its open top leaves (the hand clears it)
+    narrow = generate("mug", "v1", 12)
+    assert narrow.body.box.size[0] < 0.074
+    assert pick_refusal(narrow, "handle", "on", "front", "back").rule == "finger-blocked"
+    assert _grants("mug", 12, "handle", "front", "back", True)
+
+
+def test_thin_pot_walls_are_pinched_up_to_the_calibrated_width_and_moment():
+    wall = rim_pinch_refusal(generate("stock-pot", "v1", 31), "body", "on", "front", "back")
+    assert wall is None  # a 0.9 mm wall
+    old = rim_pinch_refusal(
+        generate("stock-pot", "v1", 31), "body", "on", "front", "back", calibrated=False
+    )
+    assert old is not None and old.rule == "rim-width"
+    assert old.values["width"] >= CALIBRATED_MIN_WIDTH - 1e-9
+    for fam, seed in (("saucepan", 8), ("stock-pot", 29)):  # 0.60-0.66 N m: held
+        t = generate(fam, "v1", seed)
+        assert rim_pinch_refusal(t, "body", "on", "front", "back") is None, (fam, seed)
+    slips = rim_pinch_refusal(generate("stock-pot", "v1", 33), "body", "on", "front", "back")
+    assert slips.rule == "torque" and slips.values["limit"] == CALIBRATED_THIN_TORQUE_LIMIT
+    # a sub-millimetre wall bowing across the pads more than it is thick: refused
+    bowed = rim_pinch_refusal(generate("tumbler", "v1", 23), "body", "on", "left", "right")
+    assert bowed.rule == "rim-curved" and bowed.values["bow"] > bowed.values["width"]
+    assert wall_bow(0.07) < 0.0009 < wall_bow(0.0387)
+
+
+def test_a_finger_may_land_on_a_lug_just_below_the_rim():
+    lands = rim_pinch_refusal(generate("stock-pot", "v1", 9), "body", "on", "left", "right")
+    assert lands is None  # 3.4 mm early on the lug
+    old = rim_pinch_refusal(
+        generate("stock-pot", "v1", 9), "body", "on", "left", "right", calibrated=False
+    )
+    assert old is not None and old.rule == "rim-finger-room"
+    far = rim_pinch_refusal(generate("stock-pot", "v1", 16), "body", "on", "left", "right")
+    assert far.rule == "rim-finger-room" and far.values["shortfall"] > RIM_STOP_TOLERANCE
+
+
+def test_a_thicker_tray_rim_bears_more():
+    assert rim_couple_limit(0.0195) > THICK_TORQUE_LIMIT > rim_couple_limit(0.013)
+    held = rim_pinch_refusal(generate("tray", "v1", 24), "edge-left", "on", "left", "right")
+    assert held is None  # 2.32 N m on a 17.3 mm rim
+    slips = rim_pinch_refusal(generate("tray", "v1", 32), "edge-left", "on", "left", "right")
+    assert slips.rule == "torque"  # 2.62 N m on a 14.3 mm rim
+    assert slips.values["moment"] > slips.values["limit"]
+    assert slips.values["limit"] == pytest.approx(rim_couple_limit(0.0143))
 
 
 def test_the_extended_rules_only_add_to_the_paper_rules_on_the_calibrated_families():
@@ -112,6 +179,18 @@ def _pick_and_place(sim: Any, fam: str, seed: int, grasp: str) -> str:
         ("sheet-pan", 20, "edge-left", "left", "right"),  # refused: a 19.9 mm rim, 2.1 N m
         ("bowl", 0, "rim-front", "front", "back"),  # granted: a light steel bowl, at 15 N
         ("tumbler", 0, "body", "front", "back"),  # granted: a light steel tumbler, at 15 N
+        ("mug", 9, "handle", "front", "back"),  # granted: the hand 3 mm on the rim
+        ("mug", 28, "handle", "front", "back"),  # granted: 12 mm on the rim
+        ("mug", 12, "handle", "front", "back"),  # granted: a mug the hand could wrap
+        ("mug", 14, "handle", "front", "back"),  # refused: 15.6 mm, the hand stops short
+        ("stock-pot", 31, "body", "front", "back"),  # granted: a 0.9 mm wall
+        ("saucepan", 8, "body", "front", "back"),  # granted: a thin wall at 0.66 N m
+        ("stock-pot", 33, "body", "front", "back"),  # refused: a thin wall at 0.73 N m
+        ("tumbler", 23, "body", "left", "right"),  # refused: a 0.9 mm wall bowed 1 mm
+        ("stock-pot", 9, "body", "left", "right"),  # granted: a finger on the lug
+        ("stock-pot", 16, "body", "left", "right"),  # refused: 6 mm early on the lug
+        ("tray", 24, "edge-left", "left", "right"),  # granted: 2.32 N m, 17.3 mm rim
+        ("tray", 32, "edge-left", "left", "right"),  # refused: 2.62 N m, 14.3 mm rim
     ],
 )
 def test_the_rule_decides_as_physics_does(sim, fam, seed, member, f1, f2):

@@ -7,6 +7,8 @@ The physics tests look only at what the simulation measured (the skills' own che
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -14,12 +16,17 @@ import pytest
 
 from utamp_gym.affordances.edge import (
     COM_MARGIN,
+    DEEP_PAD_IN,
     EDGE_GRASP,
     OVERHANG,
+    PAD_IN,
+    edge_depth,
     edge_pinch_refusal,
     edge_torque_limit,
 )
+from utamp_gym.affordances.hand import G
 from utamp_gym.affordances.rules import derive_affordances, object_facts
+from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.kitchenware import family, generate, type_table
 from utamp_gym.kitchenware.params import draw
 from utamp_gym.planning.methods import plan_scene
@@ -28,23 +35,20 @@ from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.io import scene_from_dict
 from utamp_gym.sim.decode import parse_action
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "_scripts"))
+import readme
+
+grasp_coverage = readme.load_script("benchmarks/grasp_coverage.py")
 physics = pytest.mark.physics
 SLIDE = "(slide-edge obj obj-body back on under back on slot1 under on)"
 PLACE = "(place-edge obj obj-body back on under back on under slot2 back on)"
 
 
 def _scene(fam: str, seed: int, goal: bool = True) -> Any:
-    """Instance `seed` of `fam` alone on slot1 of a two-slot table (goal: on slot2)."""
+    """Instance `seed` of `fam` alone on slot1 of a two-slot table, the benchmarks' scene
+    (`grasp_coverage.lone_data`; goal: on slot2)."""
     table = type_table(family(fam), draw(family(fam), "v1", seed))
-    data: dict[str, Any] = {
-        "name": f"edge-{fam}-{seed}", "types": {"obj": table},
-        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
-        "slots": [
-            {"name": "slot1", "position": [0.5, -0.18], "min": [0.2, -0.5], "max": [0.8, 0.08]},
-            {"name": "slot2", "position": [0.5, 0.3], "min": [0.2, 0.08], "max": [0.8, 0.6]},
-        ],
-        "objects": [{"name": "obj", "type": "obj", "on": "slot1"}],
-    }  # fmt: skip
+    data = grasp_coverage.lone_data(table, f"edge-{fam}-{seed}")
     if goal:
         data["goal"] = {"atoms": ["(oc under obj slot2)"]}
     return scene_from_dict(data)
@@ -81,6 +85,20 @@ def test_the_moment_about_the_pinch_bounds_the_lift_by_the_boards_thickness():
     assert edge_torque_limit(0.01) < edge_torque_limit(0.02) < edge_torque_limit(0.03)
 
 
+def test_a_board_that_turns_out_of_a_shallow_pinch_is_pinched_deeper_nearer_its_centre():
+    board = generate("paddle-board", "v1", 1)  # 1.26 kg, its handle at the back end
+    cx, _ = centre_of_mass(board)
+    x0, thick = float(board.bbox.min[0]), float(board.bbox.size[2])
+    assert board.mass * G * (cx - x0 - PAD_IN) > edge_torque_limit(thick)  # shallow: turns
+    assert edge_depth(board) == DEEP_PAD_IN
+    assert edge_pinch_refusal(board) is None
+    # a board the shallow pinch holds keeps it (the slide and pinch as before)
+    assert edge_depth(generate("paddle-board", "v1", 0)) == PAD_IN
+    # deeper is not enough for every board: its moment still refuses it
+    refusal = edge_pinch_refusal(generate("paddle-board", "v1", 27))
+    assert refusal is not None and refusal.rule == "torque"
+
+
 def test_the_centre_of_mass_must_stay_on_the_table_while_the_board_overhangs():
     board = generate("chopping-board", "v1", 1)
     half = OVERHANG + COM_MARGIN - 0.005  # a slab this short would tip off the edge
@@ -107,12 +125,14 @@ def test_slide_edge_facts_come_from_a_fixed_flat_top_and_plans_use_them():
 
 
 # ------------------------------------------------------------------ physics
-def _run(fam: str, seed: int, actions: tuple[str, ...]) -> list[Any]:
+def _run(fam: str, seed: int, actions: tuple[str, ...], rng: int | None = None) -> list[Any]:
     from utamp_gym.sim.backend import MujocoBackend
 
     sim = MujocoBackend(pose_noise=0.002)
     try:
-        sim.reset(_scene(fam, seed, goal=False), np.random.default_rng(seed))
+        sim.reset(
+            _scene(fam, seed, goal=False), np.random.default_rng(seed if rng is None else rng)
+        )
         out = []
         for a in actions:
             out.append(sim.execute(a))
@@ -136,11 +156,21 @@ def test_a_handleless_board_is_slid_to_the_edge_lifted_and_put_on_the_other_slot
 
 @physics
 def test_a_board_the_rule_refuses_for_its_moment_slips_in_the_pads():
-    refusal = edge_pinch_refusal(generate("paddle-board", "v1", 1))
+    refusal = edge_pinch_refusal(generate("paddle-board", "v1", 27))
     assert refusal is not None and refusal.rule == "torque"
-    slid, _ = _run("paddle-board", 1, (SLIDE,))
+    slid, _ = _run("paddle-board", 27, (SLIDE,), rng=1)  # (rng 27: the noisy slide falls short)
     assert not slid.success
     assert "not liftable" in (slid.reason or "")
+
+
+@physics
+def test_a_board_pinched_deeper_is_lifted_and_put_on_the_other_slot():
+    board = generate("paddle-board", "v1", 1)
+    assert edge_depth(board) == DEEP_PAD_IN and edge_pinch_refusal(board) is None
+    slid, placed, pose = _run("paddle-board", 1, (SLIDE, PLACE))
+    assert slid.success, slid.reason
+    assert placed.success, placed.reason
+    assert abs(pose[1] - 0.3) < 0.03  # on slot2 (its handle shifts its origin along x)
 
 
 @pytest.mark.parametrize("grounding", ["symbolic", pytest.param("physics", marks=physics)])

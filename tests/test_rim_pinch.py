@@ -8,6 +8,8 @@ object rose with the hand, held in the pads, and stands on the other slot afterw
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -24,6 +26,10 @@ from utamp_gym.scene.shapes import WRAP_LIMIT, rim_strip
 from utamp_gym.sim.decode import GraspSymbols, grasp_candidates
 from utamp_gym.symbolic.problem import DOMAINS, domain_text
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "_scripts"))
+import readme
+
+grasp_coverage = readme.load_script("benchmarks/grasp_coverage.py")
 physics = pytest.mark.physics
 YAWS = (0.0, 0.8, 2.0, -2.6)
 
@@ -143,15 +149,9 @@ def test_the_extended_domain_is_the_paper_domain_by_another_name_and_the_edge_ac
 
 # ------------------------------------------------------------------ scenes
 def _lone(table: dict[str, Any], tray: bool = False) -> Any:
-    data: dict[str, Any] = {
-        "name": "lone", "types": {"obj": table},
-        "workspace": {"min": [0.0, -0.6, 0.0], "max": [0.82, 0.6, 0.7]},
-        "slots": [
-            {"name": "slot1", "position": [0.5, -0.18], "min": [0.2, -0.5], "max": [0.8, 0.08]},
-            {"name": "slot2", "position": [0.5, 0.3], "min": [0.2, 0.08], "max": [0.8, 0.6]},
-        ],
-        "objects": [{"name": "obj", "type": "obj", "on": "slot1"}],
-    }  # fmt: skip
+    """`table` alone on slot1 of the benchmarks' two-slot table (`grasp_coverage.lone_data`;
+    `tray`: a wooden tray on slot2, the goal's base)."""
+    data = grasp_coverage.lone_data(table)
     if tray:
         data["objects"].append({"name": "tray", "type": "wooden-tray", "on": "slot2"})
         data["goal_base"] = "tray"

@@ -20,7 +20,9 @@ mass alone, never from a family or a type name:
 * it fits the drag line: its half-width leaves `BASE_CLEARANCE` to the base's axis at the
   farthest line `EDGE_Y`;
 * lifting it: at most `EDGE_LIFT_LIMIT`, and the moment of its weight about the pinch within
-  what the pads' friction couple across its thickness bears (`edge_torque_limit`).
+  what the pads' friction couple across its thickness bears (`edge_torque_limit`); a board
+  it turns out of is slid further out and pinched deeper, nearer its centre of mass
+  (`edge_depth`), where its end is solid that deep and its centre of mass stays on the table.
 
 The facts: ``canEdgePinch`` (the grasp body/back/on/under, lifting included) and
 ``canSlideEdge`` from each fixed flat top it rests on (`edge_slide_facts`). What the skill
@@ -43,13 +45,19 @@ from utamp_gym.affordances.hand import (
 )
 from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.affordances.why import REFUSED, Refusal
-from utamp_gym.scene.catalogue import ObjectType
+from utamp_gym.scene.catalogue import Member, ObjectType
 
 # the geometry the skill (`utamp_gym.sim.edge`) works to
 #: m the board's back end is dragged beyond the near edge: the pads (`PAD_IN` inside the end,
 #: 18.5 mm long) and the lower finger then clear the table's edge by 5 mm
 OVERHANG = 0.035
 PAD_IN = 0.022  # m: the pads' middle this far inside the board's back end
+#: m: the deeper pinch (`edge_depth`) a board whose weight turns out of a `PAD_IN` one is
+#: taken by, slid `DEEP_PAD_IN - PAD_IN` further out: its pads then close nearer its centre
+#: of mass, the fingertips still short of the hand's reach over the board (paddle boards
+#: of 1.1-1.5 kg were lifted and placed so, their moment about a `PAD_IN` pinch beyond
+#: what it bears)
+DEEP_PAD_IN = 0.037
 #: m from the base's axis (absolute y) the board is dragged to, in turn: the pinch beyond
 #: the near edge is reached there (0.4 m is not) and the board clears the robot's base
 EDGE_Y = (0.3, 0.33, 0.27)
@@ -69,6 +77,10 @@ GRIP_FORCE = 70.0  # N each pad squeezes with (`utamp_gym.robot.panda_mjcf.GRIPP
 #: the couple of their friction across its thickness, of which this share holds: calibrated
 #: on every board of procedural v1 slid to the edge (`benchmarks/edge_slide.py`)
 EDGE_COUPLE_SHARE = 0.65
+#: the share that holds for a `DEEP_PAD_IN` pinch: more of the board's end lies behind the
+#: pads, against the fingers, as it turns (v1 boards pinched deep: lifted with shares up to
+#: 0.78 needed; a 1.4 kg paddle board needing 0.99 slipped)
+DEEP_COUPLE_SHARE = 0.8
 
 
 def _no(rule: str, why: bool, **values: object) -> Refusal:
@@ -95,18 +107,10 @@ def edge_pinch_refusal(t: ObjectType, why: bool = True) -> Refusal | None:
         return _no("edge-thickness", why, thickness=thick, limits=(MIN_THICKNESS, MAX_THICKNESS))
     x0 = float(box.min[0])
     end = [m for m in t.members.values() if m.box.min[0] <= x0 + 1e-6]
-    solid = [
-        m
-        for m in end
-        if m.box.min[2] <= box.min[2] + 1e-6
-        and m.box.max[2] >= top - 1e-6
-        and m.box.size[1] >= PAD_WIDTH - 1e-9
-        and m.box.size[0] >= PAD_DEPTH - 1e-9
-    ]
+    solid = _solid_end(t, PAD_IN)
     if not solid:
         return _no("edge-end", why, member=end[0].name if end else "nothing", depth=PAD_DEPTH)
-    cx, cy = centre_of_mass(t)
-    inside = cx - x0 - OVERHANG
+    inside = centre_of_mass(t)[0] - x0 - OVERHANG
     if inside < COM_MARGIN:
         return _no("edge-com", why, inside=inside, margin=COM_MARGIN)
     drag = (PAD_FRICTION - TABLE_FRICTION) * PRESS_FORCE / (TABLE_FRICTION * G)
@@ -118,20 +122,65 @@ def edge_pinch_refusal(t: ObjectType, why: bool = True) -> Refusal | None:
     if t.mass > EDGE_LIFT_LIMIT:
         return _no("payload", why, member="body", mass=t.mass, limit=EDGE_LIFT_LIMIT,
                    kind="edge pinch", payload=3.0)  # fmt: skip
-    pinch_y = float(solid[0].box.center_xy[1])
-    lever = math.hypot(cx - (x0 + PAD_IN), cy - pinch_y)
+    depth = edge_depth(t)
+    lever = _lever(t, depth)
     moment = t.mass * G * lever
-    limit = edge_torque_limit(thick)
+    limit = edge_torque_limit(thick, DEEP_COUPLE_SHARE if depth > PAD_IN else EDGE_COUPLE_SHARE)
     if moment > limit:
-        return _no("torque", why, member=solid[0].name, mass=t.mass, lever=lever,
-                   moment=moment, limit=limit)  # fmt: skip
+        return _no("torque", why, member=_solid_end(t, depth)[0].name, mass=t.mass,
+                   lever=lever, moment=moment, limit=limit)  # fmt: skip
     return None
 
 
-def edge_torque_limit(thickness: float) -> float:
+def _solid_end(t: ObjectType, depth: float) -> list[Member]:
+    """The members at `t`'s back end the pads close on `depth` inside it: spanning the
+    whole thickness, `hand.PAD_WIDTH` wide and the pads' reach deep."""
+    box = t.bbox
+    x0, top = float(box.min[0]), float(box.max[2])
+    return [
+        m
+        for m in t.members.values()
+        if m.box.min[0] <= x0 + 1e-6
+        and m.box.min[2] <= box.min[2] + 1e-6
+        and m.box.max[2] >= top - 1e-6
+        and m.box.size[1] >= PAD_WIDTH - 1e-9
+        and m.box.size[0] >= depth + PAD_DEPTH - PAD_IN - 1e-9
+    ]
+
+
+def _lever(t: ObjectType, depth: float) -> float:
+    """m from a pinch `depth` inside `t`'s back end to its centre of mass, horizontally."""
+    cx, cy = centre_of_mass(t)
+    solid = _solid_end(t, depth) or _solid_end(t, PAD_IN)
+    pinch_y = float(solid[0].box.center_xy[1]) if solid else cy
+    return math.hypot(cx - (float(t.bbox.min[0]) + depth), cy - pinch_y)
+
+
+def edge_depth(t: ObjectType) -> float:
+    """m inside `t`'s back end the pads close (the skill, `utamp_gym.sim.edge`, and the
+    rule agree on it): `PAD_IN`, or `DEEP_PAD_IN` where the weight's moment about a
+    `PAD_IN` pinch exceeds what it bears (`edge_torque_limit`), the end is solid that deep
+    and the centre of mass stays `COM_MARGIN` on the table with the longer overhang."""
+    thick = float(t.bbox.size[2])
+    if t.mass * G * _lever(t, PAD_IN) <= edge_torque_limit(thick):
+        return PAD_IN
+    x0 = float(t.bbox.min[0])
+    inside = centre_of_mass(t)[0] - x0 - edge_overhang(DEEP_PAD_IN)
+    if not _solid_end(t, DEEP_PAD_IN) or inside < COM_MARGIN:
+        return PAD_IN
+    return DEEP_PAD_IN
+
+
+def edge_overhang(depth: float) -> float:
+    """m the board's back end overhangs the table's edge for a pinch `depth` inside it."""
+    return OVERHANG + depth - PAD_IN
+
+
+def edge_torque_limit(thickness: float, share: float = EDGE_COUPLE_SHARE) -> float:
     """N m about an edge pinch a board `thickness` m thick bears: ``F (L / 2 + s mu h)``, F
-    the squeeze, L the pads' length, mu their friction, s `EDGE_COUPLE_SHARE`."""
-    return GRIP_FORCE * (PAD_HEIGHT / 2 + EDGE_COUPLE_SHARE * PAD_FRICTION * thickness)
+    the squeeze, L the pads' length, mu their friction, s `share` (`EDGE_COUPLE_SHARE`, or
+    `DEEP_COUPLE_SHARE` for a deep pinch)."""
+    return GRIP_FORCE * (PAD_HEIGHT / 2 + share * PAD_FRICTION * thickness)
 
 
 def edge_facts(t: ObjectType) -> set[Fact]:
@@ -161,12 +210,16 @@ def edge_slide_facts(types: Iterable[ObjectType], facts: Iterable[Fact]) -> set[
 
 __all__ = [
     "BASE_CLEARANCE",
+    "DEEP_COUPLE_SHARE",
+    "DEEP_PAD_IN",
     "EDGE_COUPLE_SHARE",
     "EDGE_GRASP",
     "EDGE_Y",
     "OVERHANG",
     "PAD_IN",
+    "edge_depth",
     "edge_facts",
+    "edge_overhang",
     "edge_pinch_refusal",
     "edge_slide_facts",
     "edge_torque_limit",

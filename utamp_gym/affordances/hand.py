@@ -78,6 +78,12 @@ TORQUE_LIMIT_ABOVE = 0.8  # N m when the object's centre lies above the grasp
 #: fingers closing along the lever slipped at 2.36-2.47 N m
 EXTENDED_TORQUE_LIMIT = 2.4
 ABOVE = 0.005  # m: a centre this much above the grasp point counts as above
+#: m above its target the hand may come to rest on the rim of an open body whose wall a
+#: finger goes down inside (`fingers_refusal`'s `rest`, the extended domain's): the guarded
+#: approach accepts a hand held up to 10 mm short (`utamp_gym.sim.grasp_phases.APPROACH_STOP`),
+#: and in MuJoCo the hand stops 4-5 mm less short than its box here says (v1 mugs taken
+#: by the handle across the wall: every one up to 15.4 mm lifted, from 15.6 mm none)
+HAND_REST_TOLERANCE = 0.013
 
 
 class FingerRoom(NamedTuple):
@@ -179,6 +185,13 @@ def hand_room(t: ObjectType, member: str, palm: str, finger: str) -> bool:
 
 def hand_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | None:
     """The member the hand would land on (`hand_room`), or None."""
+    landing = hand_landing(t, member, palm, finger)
+    return landing[0] if landing else None
+
+
+def hand_landing(t: ObjectType, member: str, palm: str, finger: str) -> tuple[str, float] | None:
+    """(member, m above its target the hand would rest on it) for the highest material the
+    hand above the fingers meets coming down (`hand_room`), or None: it meets nothing."""
     flipped = palm == "under"
     box = member_box(t, member, flipped)
     ax = axis_of(finger)
@@ -191,7 +204,11 @@ def hand_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | No
     rect = [(0.0, 0.0), (0.0, 0.0)]
     rect[ax] = (ca - reach, ca + reach)
     rect[lat] = (cl - HAND_HALF_THICKNESS, cl + HAND_HALF_THICKNESS)
-    return next((n for n, s in material if s.overlaps(rect[0], rect[1])), None)
+    met = [(n, s.hi[2]) for n, s in material if s.overlaps(rect[0], rect[1])]
+    if not met:
+        return None
+    name = met[0][0]
+    return name, max(h for _, h in met) - (tcp + HAND_ABOVE_TCP)
 
 
 def wrist_blocker(t: ObjectType, member: str, palm: str, finger: str) -> str | None:
@@ -220,18 +237,22 @@ def fingers_fit(t: ObjectType, member: str, palm: str, finger: str) -> bool:
 
 
 def fingers_refusal(
-    t: ObjectType, member: str, palm: str, finger: str, why: bool = True
+    t: ObjectType, member: str, palm: str, finger: str, why: bool = True, rest: str | None = None
 ) -> Refusal | None:
-    """Why `fingers_fit` refuses (None: the fingers fit; `REFUSED` if not `why`)."""
+    """Why `fingers_fit` refuses (None: the fingers fit; `REFUSED` if not `why`). `rest`
+    (the extended domain's): a member the hand may come to rest on, up to
+    `HAND_REST_TOLERANCE` above its target, the pads still on the grasped member."""
     m = t.members[member]
     fingers = f"{finger}/{_opposite_side(finger)}" if why else ""
     width = m.box.size[axis_of(finger)]
     if m.kind == "edge" and width < MIN_PINCH - 1e-9:
         values = {"member": member, "width": width, "fingers": fingers, "limit": MIN_PINCH}
         return Refusal("pinch", values) if why else REFUSED
-    other = hand_blocker(t, member, palm, finger)
-    if other is not None:
-        values = {"member": member, "other": other, "fingers": fingers}
+    landing = hand_landing(t, member, palm, finger)
+    if landing is not None and not _rests(t, member, palm, landing, rest):
+        values = {"member": member, "other": landing[0], "fingers": fingers}
+        if rest is not None and landing[0] == rest:
+            values.update(shortfall=landing[1], tolerance=HAND_REST_TOLERANCE)
         return Refusal("hand-room", values) if why else REFUSED
     room = finger_room(t, member, palm, finger)
     edge = realised_by_body(t, m)
@@ -254,6 +275,18 @@ def fingers_refusal(
             }
             return Refusal("finger-room", values)
     return None
+
+
+def _rests(
+    t: ObjectType, member: str, palm: str, landing: tuple[str, float], rest: str | None
+) -> bool:
+    """The hand may rest where it lands (`fingers_refusal`'s `rest`): on `rest`, at most
+    `HAND_REST_TOLERANCE` above its target, the pads keeping `MIN_PAD_OVERLAP` on the member."""
+    other, short = landing
+    if rest is None or other != rest or short > HAND_REST_TOLERANCE:
+        return False
+    top = member_box(t, member, palm == "under").max[2]
+    return top - (tip_height(t, member, palm) + short) >= MIN_PAD_OVERLAP
 
 
 def width_fits(width: float, member: Member) -> bool:
@@ -310,6 +343,7 @@ def hold_refusal(
 
 __all__ = [
     "GRIPPER_OPENING",
+    "HAND_REST_TOLERANCE",
     "FingerRoom",
     "finger_room",
     "finger_side",
@@ -318,6 +352,7 @@ __all__ = [
     "grip_centre",
     "grip_limit",
     "hand_blocker",
+    "hand_landing",
     "hand_room",
     "hold_refusal",
     "holds",

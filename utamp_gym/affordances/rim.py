@@ -16,13 +16,16 @@ decide from geometry and mass alone, never from a family or a type name:
 * each finger reaches its place beside the wall (`hand.finger_room`): a finger may land on
   the object's own body up to `RIM_STOP_TOLERANCE` early (a plate's well beside its rim:
   the approach guard stops the hand 1 cm short at most, `sim.grasp_phases.APPROACH_STOP`) while
-  its pad keeps `hand.MIN_PAD_OVERLAP` on the rim; the hand above comes down freely;
+  its pad keeps `hand.MIN_PAD_OVERLAP` on the rim (calibrated: on a sibling as well, a
+  stock pot's lug just below the rim: 6 of 6 v1 pots within the torque limit lifted); the
+  hand above comes down freely;
 * the wall stands upright: its foot (the ``under`` surface) lies at most `FLARE_LIMIT`
   inside its rim;
 * the object weighs at most `RIM_LIFT_LIMIT` and the moment of its weight about the pinch
   stays within `THIN_TORQUE_LIMIT`, for a wall squeezed with the reduced `PINCH_FORCE`; a
   wall at least `hand.MIN_PINCH` thick, squeezed with the full force, carries
-  `calibrated.EXTENDED_LIFT_LIMIT` and `THICK_TORQUE_LIMIT`.
+  `calibrated.EXTENDED_LIFT_LIMIT` and `THICK_TORQUE_LIMIT`, or `rim_couple_limit` of its
+  thickness if more.
 """
 
 from __future__ import annotations
@@ -30,11 +33,13 @@ from __future__ import annotations
 import math
 
 from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT
+from utamp_gym.affordances.edge import EDGE_COUPLE_SHARE, GRIP_FORCE, PAD_FRICTION
 from utamp_gym.affordances.hand import (
     GRIPPER_OPENING,
     MIN_PAD_OVERLAP,
     MIN_PINCH,
     PAD_HEIGHT,
+    PAD_WIDTH,
     TORQUE_LIMIT,
     TOUCH,
     G,
@@ -48,11 +53,18 @@ from utamp_gym.scene.geometry import axis_of
 from utamp_gym.scene.shapes import rim_strip
 
 RIM_MIN_WIDTH = 0.001  # m: the thinnest wall pinched (steel bowls of 1.1 mm held)
+#: m: the thinnest wall the calibrated rules pinch (0.8-0.9 mm pot walls were lifted: 7 of
+#: 7 v1 saucepan and stock-pot pinches within the torque limit), if it bows across the pads
+#: less than it is thick (`wall_bow`)
+CALIBRATED_MIN_WIDTH = 0.0008
 RIM_STOP_TOLERANCE = 0.005  # m a finger may land early on the object's own body
 RIM_LIFT_LIMIT = 1.1  # kg a rim pinch carries (plates of 1.05 kg were lifted and placed)
 #: N m about the pinch for a wall thinner than `hand.MIN_PINCH`, squeezed with the reduced
 #: force (the heaviest bowl measured, 0.57 N m, held)
 THIN_TORQUE_LIMIT = 0.6
+#: N m the calibrated rules allow a thin wall (v1 pots pinched at the rim: every one up to
+#: 0.66 N m lifted, from 0.72 N m they slipped or pivoted)
+CALIBRATED_THIN_TORQUE_LIMIT = 0.665
 #: m a wall may slope out from its foot to its rim: flat pads meet a flared wall (a frying
 #: pan's) along a line and it pivots between them (6 of 6 light frying pans fell)
 FLARE_LIMIT = 0.003
@@ -63,6 +75,12 @@ THICK_TORQUE_LIMIT = 2.3
 #: `THICK_TORQUE_LIMIT`; a lower one `hand.TORQUE_LIMIT` (sheet pans with 19.9 mm rims slipped
 #: at 2.1 N m, 22-26 mm ones held 1.9-2.1 N m)
 FULL_PAD_RIM = PAD_HEIGHT + 0.002
+#: N m the calibrated rules add to the squeeze's share for such a rim: the pads' friction
+#: couple across the rim's thickness adds ``GRIP_FORCE * EDGE_COUPLE_SHARE * PAD_FRICTION``
+#: per metre of it (`rim_couple_limit`, as `utamp_gym.affordances.edge.edge_torque_limit`):
+#: v1 trays pinched at a side rim 16.6-19.7 mm thick held 2.32-2.48 N m, rims 13.5-15.2 mm
+#: thick slipped from 2.41 N m
+RIM_COUPLE_BASE = 1.38
 PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
 
 
@@ -157,9 +175,14 @@ def _rim_refusal(
     width, lateral = float(m.box.size[ax]), float(m.box.size[1 - ax])
     if width > lateral + 1e-9:
         return no("rim-across", width=width, lateral=lateral, fingers=f"{f1}/{f2}")
-    if not RIM_MIN_WIDTH <= width <= GRIPPER_OPENING:
-        limits = (RIM_MIN_WIDTH, GRIPPER_OPENING)
+    thinnest = CALIBRATED_MIN_WIDTH if calibrated else RIM_MIN_WIDTH
+    if not thinnest - 1e-9 <= width <= GRIPPER_OPENING:
+        limits = (thinnest, GRIPPER_OPENING)
         return no("rim-width", width=width, limits=limits, fingers=f"{f1}/{f2}")
+    if width < RIM_MIN_WIDTH - 1e-9 and t.body.geom == "cylinder":
+        bow = wall_bow(float(body.size[ax]) / 2)  # the round wall across the pads
+        if bow > width:
+            return no("rim-curved", width=width, bow=bow, fingers=f"{f1}/{f2}")
     blocker = hand_blocker(t, member, palm, f1)
     if blocker is not None:
         return no("hand-room", other=blocker, fingers=f"{f1}/{f2}")
@@ -167,7 +190,8 @@ def _rim_refusal(
     for short, body, overlap in zip(room.shortfall, room.on_body, room.overlap, strict=True):
         if short <= TOUCH:
             continue
-        if not (body and short <= RIM_STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
+        lands = body or calibrated  # calibrated: on a sibling too (a lug below the rim)
+        if not (lands and short <= RIM_STOP_TOLERANCE and overlap >= MIN_PAD_OVERLAP):
             values = {"shortfall": short, "tolerance": RIM_STOP_TOLERANCE, "pad_overlap": overlap}
             return no("rim-finger-room", fingers=f"{f1}/{f2}", **values)
     thin = width < MIN_PINCH
@@ -179,10 +203,28 @@ def _rim_refusal(
     lever = math.hypot(gx - bx, gy - by)
     moment = t.mass * G * lever
     full_pad = calibrated and m.box.size[2] >= FULL_PAD_RIM - 1e-9
-    limit = THIN_TORQUE_LIMIT if thin else THICK_TORQUE_LIMIT if full_pad else TORQUE_LIMIT
+    thin_limit = CALIBRATED_THIN_TORQUE_LIMIT if calibrated else THIN_TORQUE_LIMIT
+    limit = thin_limit if thin else THICK_TORQUE_LIMIT if full_pad else TORQUE_LIMIT
+    if full_pad and not thin:  # calibrated: the thicker the rim, the more it bears
+        limit = max(limit, rim_couple_limit(width))
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None
+
+
+def wall_bow(radius: float) -> float:
+    """m a round wall of `radius` m bows across the flat pads' width (`hand.PAD_WIDTH`): a
+    wall thinner than that bow is not straddled by pads facing each other through it (the
+    inner pad touches it at its two ends, the outer at its middle) and the calibrated rules
+    refuse a sub-millimetre wall so bowed (a 7.7 cm tumbler of 0.9 mm slipped out, pots of
+    14-19 cm held)."""
+    return (PAD_WIDTH / 2) ** 2 / (2 * radius)
+
+
+def rim_couple_limit(width: float) -> float:
+    """N m a rim `width` m thick, taking the whole pad, bears in the calibrated rules:
+    `RIM_COUPLE_BASE` and the pads' friction couple across its thickness."""
+    return RIM_COUPLE_BASE + GRIP_FORCE * EDGE_COUPLE_SHARE * PAD_FRICTION * width
 
 
 def rim_pinches(t: ObjectType, calibrated: bool = True) -> list[tuple[str, str, str, str]]:
@@ -198,9 +240,14 @@ def rim_pinches(t: ObjectType, calibrated: bool = True) -> list[tuple[str, str, 
 
 
 __all__ = [
+    "CALIBRATED_MIN_WIDTH",
+    "CALIBRATED_THIN_TORQUE_LIMIT",
+    "RIM_COUPLE_BASE",
     "RIM_LIFT_LIMIT",
     "RIM_MIN_WIDTH",
     "RIM_STOP_TOLERANCE",
+    "rim_couple_limit",
     "rim_pinch_refusal",
     "rim_pinches",
+    "wall_bow",
 ]

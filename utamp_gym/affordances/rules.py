@@ -153,17 +153,19 @@ def _fingers_refusal(
         values.update(limit=grip_limit(m), opening=GRIPPER_OPENING, how=how)
         return Refusal("grip-width", values)
     excused = set()  # what the extended domain's grasps let a finger or the hand pass
+    rest = None  # what the hand may come to rest on (`hand.HAND_REST_TOLERANCE`)
     for side in (f1, f2):
         other = _blocker(t, member, side)
         if other is not None and extended and lug_wall(t, member, palm, side, other):
             excused.add(("finger-room", other))  # the pads close on the lug and the wall
+            rest = other  # the hand above may rest on that wall's rim
             continue
         if other is not None:
             if not why:
                 return REFUSED
             values = {"member": member, "side": side, "other": other, "gap": BLOCKING_GAP}
             return Refusal("finger-blocked", values)
-    refusal = fingers_refusal(t, member, palm, f1, why or extended)
+    refusal = fingers_refusal(t, member, palm, f1, why or extended, rest)
     if extended and refusal is not None:
         other = refusal.values.get("other")
         if other is not None and low_cover(t, member, palm, other):

@@ -10,13 +10,15 @@ edge (behind its base, ``docs/results/edge_reach.md``), between `EDGE_Y` from it
    board's top, `PRESS` below it (the servos then press with several tens of newtons, and the
    pads' friction, `affordances.edge.PAD_FRICTION`, beats the table's), and drag it first
    sideways to the target line `EDGE_Y` from the base's axis, then back until its back side
-   overhangs the near edge by `OVERHANG` (each leg a press of its own, the fingers closing
-   across the drag); where it lagged the hand (a few centimetres), a drag of the measured
-   error corrects it (`DRAG_ROUNDS`). The sweep must be clear of every other object.
+   overhangs the near edge by `OVERHANG` (`edge_overhang` of a deeper pinch; each leg a press
+   of its own, the fingers closing across the drag); where it lagged the hand (a few
+   centimetres), a drag of the measured error corrects it (`DRAG_ROUNDS`). The sweep must be
+   clear of every other object.
 2. Pinch (`edge_pinch`): the hand approaches horizontally from outside the table (its z
    along +x, towards the robot), the fingers open `MAX_OPENING` and closing vertically on the
-   board's thickness, the pads `PAD_IN` inside the board's back end, clear of the table's
-   edge; it closes and lifts, and the lift is measured as a pick's (`grasp_phases.verify_lift`).
+   board's thickness, the pads `PAD_IN` inside the board's back end (or deeper: the rule's
+   `utamp_gym.affordances.edge.edge_depth`), clear of the table's edge; it closes and lifts,
+   and the lift is measured as a pick's (`grasp_phases.verify_lift`).
 
 The action's grasp symbols are the board's body, palm ``back`` (the side facing the near edge at
 the scene's yaw) and fingers ``on``/``under``; after it the hand holds the board.
@@ -29,7 +31,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from utamp_gym.affordances.edge import BASE_CLEARANCE, EDGE_Y, OVERHANG, PAD_IN
+from utamp_gym.affordances.edge import (
+    BASE_CLEARANCE,
+    EDGE_Y,
+    OVERHANG,
+    PAD_IN,
+    edge_depth,
+    edge_overhang,
+)
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim import relook
 from utamp_gym.sim.control import ignoring
@@ -60,6 +69,7 @@ PAD_HALF = 0.00925  # m: half the pads' length along the approach
 PAD_CLEAR = 0.003  # m the pads stay short of the table's edge
 RELEASE_DROP = (0.01, 0.005, 0.0)  # m the open hand goes down before backing off, in turn
 #: m it then backs off by, in turn: the pads (`PAD_IN` + `PAD_HALF` in) clear the board's end
+#: (and by as much more as a deeper pinch went in)
 RELEASE_BACKOFF = (0.05, 0.04, 0.035)
 PINCH_BACKOFF = (0.06, 0.04, 0.03)  # m the horizontal approach starts back from the pinch
 DRAG = (0.12, 0.3)  # m/s, m/s^2
@@ -185,17 +195,18 @@ def _drag(st: SimState, obj: str, leg: np.ndarray, speed: tuple[float, float]) -
 
 def drag_to_edge(st: SimState, obj: str) -> None:
     """Drag `obj` (`press_drag`, sideways first) until its back end overhangs the near edge
-    by `OVERHANG`, on the first line `target_y` the arm and the scene allow; raises
-    `GroundingError` / `SkillFailure`."""
+    by `OVERHANG` (`edge_overhang` of its pinch's depth), on the first line `target_y` the
+    arm and the scene allow; raises `GroundingError` / `SkillFailure`."""
     lo, hi = _aabb(st, obj)
     start = _true_lo(st, obj)
     edge = near_edge(st)
+    over = edge_overhang(edge_depth(st.world.scene.type_of(obj)))
     tried = []
     for y in target_y(lo, hi):
-        goal = np.array([edge - OVERHANG + (hi[0] - lo[0]) / 2, y])
+        goal = np.array([edge - over + (hi[0] - lo[0]) / 2, y])
 
         def aim(lo: np.ndarray, hi: np.ndarray, y: float = y) -> np.ndarray:
-            return np.array([edge - OVERHANG - lo[0], y - (lo[1] + hi[1]) / 2])
+            return np.array([edge - over - lo[0], y - (lo[1] + hi[1]) / 2])
 
         try:
             press_drag(st, obj, goal, y_first=True, aim=aim)
@@ -204,7 +215,7 @@ def drag_to_edge(st: SimState, obj: str) -> None:
                 raise  # the drag began: no other line is tried
             tried.append(f"y {y:+.2f}: {exc}")
             continue
-        _check_overhang(st, obj, edge)
+        _check_overhang(st, obj, edge, over)
         return
     raise GroundingError(f"cannot slide {obj} to the table's edge ({'; '.join(tried)})")
 
@@ -214,20 +225,22 @@ def _true_lo(st: SimState, obj: str) -> np.ndarray:
     return world_aabb(st.world.scene.type_of(obj).bbox, obj_pose(st, obj))[0][:2]
 
 
-def _check_overhang(st: SimState, obj: str, edge: float) -> None:
+def _check_overhang(st: SimState, obj: str, edge: float, wanted: float = OVERHANG) -> None:
     if st.estimator is not None:
         st.estimator.forget(obj)
     lo, _ = world_aabb(st.world.scene.type_of(obj).bbox, obj_pose(st, obj))
     over = edge - float(lo[0])
-    if abs(over - OVERHANG) > OVERHANG_TOL:
+    if abs(over - wanted) > OVERHANG_TOL:
         raise SkillFailure(
             f"{obj} overhangs the table's edge by {over * 100:.1f} cm after the slide "
-            f"(wanted {OVERHANG * 100:.1f} cm)"
+            f"(wanted {wanted * 100:.1f} cm)"
         )
 
 
-def pinch_pose(lo: np.ndarray, hi: np.ndarray, roll: float, edge: float) -> np.ndarray:
-    """TCP pose pinching the overhang of a board with world extent `lo`..`hi`: `PAD_IN`
+def pinch_pose(
+    lo: np.ndarray, hi: np.ndarray, roll: float, edge: float, depth: float = PAD_IN
+) -> np.ndarray:
+    """TCP pose pinching the overhang of a board with world extent `lo`..`hi`: `depth`
     inside its back end (or less, the pads `PAD_CLEAR` short of the table's edge at x =
     `edge`), at its mid-height, approaching along +x, the fingers closing vertically (`roll`
     +1 or -1: which way up the hand is)."""
@@ -235,7 +248,7 @@ def pinch_pose(lo: np.ndarray, hi: np.ndarray, roll: float, edge: float) -> np.n
     x = np.array([0.0, roll, 0.0])
     out = np.eye(4)
     out[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-    x = min(lo[0] + PAD_IN, edge - PAD_HALF - PAD_CLEAR)
+    x = min(lo[0] + depth, edge - PAD_HALF - PAD_CLEAR)
     out[:3, 3] = [x, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2]
     return out
 
@@ -252,12 +265,13 @@ def edge_pinch(
         st.estimator.forget(obj)
     lo, hi = _aabb(st, obj)
     lift = lift_height(st, obj)
+    depth = edge_depth(st.world.scene.type_of(obj))
     tried = []
     near = arm.sync(arm.near, gap=MAX_OPENING)
     plan = None
     with ignoring(near, geoms):
         for roll in (1.0, -1.0):
-            pinch = pinch_pose(lo, hi, roll, near_edge(st))
+            pinch = pinch_pose(lo, hi, roll, near_edge(st), depth)
             for q in arm.ik_solutions(pinch, near.is_valid, restarts=10):
                 for dist in PINCH_BACKOFF:
                     try:
@@ -319,7 +333,7 @@ def place_edge(st: SimState, act: MacroAction) -> None:
     arm.move_line(down, *APPROACH)
     arm.open_gripper(MAX_OPENING)
     st.held = None
-    _let_go(st, obj)
+    _let_go(st, obj, edge_depth(t) - PAD_IN)
     settle_objects(st)
     if st.estimator is not None:
         st.estimator.forget(obj)
@@ -334,11 +348,11 @@ def place_edge(st: SimState, act: MacroAction) -> None:
         raise SkillFailure(f"placing {obj} on {act.support} disturbed the scene: {moved}")
 
 
-def _let_go(st: SimState, obj: str) -> None:
+def _let_go(st: SimState, obj: str, deeper: float = 0.0) -> None:
     """With the fingers open around the board's overhang: lower the hand by one of
     `RELEASE_DROP` (the lower finger clear of the board's underside, the upper still above
-    its top), then back it off along -x by one of `RELEASE_BACKOFF` (the pads clear of the
-    board's end), the first pair the arm reaches."""
+    its top), then back it off along -x by one of `RELEASE_BACKOFF` and `deeper` (the pads
+    clear of the board's end), the first pair the arm reaches."""
     arm = st.arm
     near = arm.sync(arm.near, gap=arm.gap())
     tried = []
@@ -347,7 +361,7 @@ def _let_go(st: SimState, obj: str) -> None:
             try:
                 drop = arm.line(arm.q(), arm.tcp(), np.array([0.0, 0.0, -drop_by]),
                                 near.is_valid, what="lowering the open hand")  # fmt: skip
-                back = arm.line(drop.end, arm.kin.fk(drop.end), np.array([-dist, 0.0, 0.0]),
+                back = arm.line(drop.end, arm.kin.fk(drop.end), np.array([-dist - deeper, 0, 0]),
                                 near.is_valid, what="backing off the board")  # fmt: skip
                 break
             except GroundingError as exc:
