@@ -8,6 +8,7 @@ from collections import Counter
 
 import pytest
 
+from utamp_gym.affordances.rules import derive_affordances
 from utamp_gym.cli import main
 from utamp_gym.scene.io import scene_to_toml
 from utamp_gym.suites import get_scene
@@ -229,3 +230,19 @@ def test_select_takes_a_relax_seed_without_a_log(monkeypatch, tmp_path) -> None:
     ]
     assert json.loads(out.read_text()) == {"split": "test-count"}
     assert selection.main(["select", "test-count"]) == 2
+
+
+def test_goals_are_drawn_with_the_calibrated_rules_the_labeller_plans_with(monkeypatch) -> None:
+    """The quick checks use the final (calibrated) extended rules, as the labeller does."""
+    from utamp_gym.suites.procedural_v2 import scenes
+
+    seen = []
+
+    def spy(types, extended=False, calibrated=True):
+        seen.append((extended, calibrated))
+        return derive_affordances(types, extended, calibrated)
+
+    monkeypatch.setattr(scenes, "derive_affordances", spy)
+    seed = next(s for s in range(50) if _has_layout("test-tasks", s))
+    scenes.generate_scene("test-tasks", seed)
+    assert seen and set(seen) == {(True, True)}
