@@ -98,14 +98,21 @@ def _support_height(local: np.ndarray, others: np.ndarray, bg: np.ndarray, grid:
 
 
 def wall_fit(
-    wall: np.ndarray, centre: np.ndarray, radius: float, band: float = 0.01
+    wall: np.ndarray,
+    centre: np.ndarray,
+    radius: float,
+    band: float = 0.01,
+    rays: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float] | None:
     """Centre and top radius of a round wall, which may flare: circles with one shared
     centre and a radius per height band of `band` m, fitted by linear least squares, the
-    points farther than 4 mm from their band's circle dropped and the fit repeated; the top
-    radius is the third quartile of the upper bands' points' distances (each band needs 12
-    points; the largest or the 90th percentile read a 7.0 cm mug as 7.4 cm, too wide for the
-    hand with the rules' clearance)."""
+    points farther than 4 mm from their band's circle dropped and the fit repeated (each
+    band needs 12 points). The top radius is the median distance of the upper bands' points
+    on the outer face: with the points' viewing `rays` (xy), those seen from outside (the
+    ray points towards the axis; a wall's inner face, seen over the rim, looks outwards).
+    Without rays, the third quartile of all of them (the inner face pulls the median in;
+    the largest or the 90th percentile read a 7.0 cm mug as 7.4 cm, too wide for the hand
+    with the rules' clearance, and the third quartile read tumblers 2 mm too wide)."""
     if len(wall) < 20:
         return None
     keep = np.ones(len(wall), dtype=bool)
@@ -142,6 +149,10 @@ def wall_fit(
     upper = (bands >= top - 1) & keep
     if upper.sum() < 5:
         upper = keep
+    if rays is not None:
+        outer = upper & (np.sum(rays[:, :2] * (wall[:, :2] - c), axis=1) < 0.0)
+        if outer.sum() >= 10:
+            return c, float(np.median(dist[outer]))
     return c, float(np.percentile(dist[upper], 75))
 
 
@@ -206,6 +217,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         return np.column_stack([rotate(p[:, :2] - c0, -yaw), p[:, 2]])
 
     local = local_of(pts)
+    rays_xy = rotate(cloud.rays[:, :2], -yaw)  # viewing directions in the seen frame
     lo, hi = local[:, :2].min(axis=0) - MARGIN, local[:, :2].max(axis=0) + MARGIN
 
     reach = float(np.max(hi - lo)) * 0.75 + MARGIN
@@ -263,7 +275,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         zt = float(np.percentile(body_pts[:, 2], 98)) if len(body_pts) else 0.0
         near_wall = np.abs(np.linalg.norm(local[:, :2] - centre, axis=1) - radius) < 0.35 * radius
         wall = near_wall & (local[:, 2] > 0.003) & (local[:, 2] < zt - 0.002)
-        fit = wall_fit(local[wall], centre, radius)
+        fit = wall_fit(local[wall], centre, radius, rays=rays_xy[wall])
         if fit is not None:
             centre, radius = fit
         body_lo, body_hi = centre - radius, centre + radius
