@@ -11,17 +11,19 @@ pixels (`material.classify_material`), mass and robustness from both.
 orientation: the frame of an inverted object is turned a half turn about x). What the rules
 then need and no camera sees is filled in by stated assumptions:
 
-* the face an object rests on is never seen: it is **flat** under an upright object and an
-  **open** rim under an inverted one (objects are turned over onto their opening: a mug, a
-  pot; an inverted box is then misread);
+* the face an object rests on is never seen: it is **flat** under an upright object or an
+  inverted box (packages are closed), and an **open** rim under an inverted round one
+  (turned over onto its opening: a mug, a pot), inside walls as thick as its material's;
 * a flat top at least `FOOD_SURFACE` wide both ways is a **food surface** (boards, trays,
   plates: never put face-down);
 * a body thinner than `THIN_TOP` has a **thin** top (a spatula's blade: nothing rests on
   it); a box body lower than `THIN_SIDE` has **thin** sides, a round body round ones;
 * a narrow part standing on the body's top (a bottle's neck) makes the top **pointy**;
-* a rim (an open, concave or well top) is offered as **edges** only where it is the only
-  grip: on a body too wide for the hand, with no handles or too heavy to lift by them (a
-  tray); on the two sides across from the handles, else front and back;
+* a rim (an open, concave or well top) on a body too wide for the hand is offered as
+  **edges**: a box's (a tray's sides, standing on the table) on the two sides across from
+  its handles, else front and back; a round body's (a plate's, a bowl's band from its
+  floor up) front and back, only where it has no handles (a pot or a pan is held by
+  them). An edge ends where the opening or well inside the rim begins;
 * a bare flat slab (no members, lower than `THIN_SIDE`, wider than the hand: a board
   without a handle) has the end strips of its longer axis as **edges**, as the catalogues
   declare them (the rules judge whether a finger fits beside them);
@@ -62,7 +64,7 @@ from utamp_gym.perception.material import (
     estimate_mass,
     shape_class,
 )
-from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape
+from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.shape import fit_shape
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
@@ -139,7 +141,7 @@ class PerceivedObject:
             members[key] = Member(key, "edge" if m.kind == "edge" else m.kind, box, m.geom)
         bbox = _union([m.box for m in members.values()])
         seen_top = _top_part(self, members["body"].box, bbox, inverted)
-        hidden = PartAttrs("open" if inverted else "flat", _fit2(sh.bottom_size, bbox, "on"))
+        hidden = _hidden_part(self, bbox, inverted)
         parts = {"on": hidden, "under": seen_top} if inverted else {"on": seen_top, "under": hidden}
         if inverted:  # the seen top is the canonical bottom: never a food surface
             parts["under"] = parts["under"]._replace(food_surface=False)
@@ -162,6 +164,18 @@ class PerceivedObject:
             parts=parts,
             description=f"perceived from RGB-D views (instance {self.instance})",
         )
+
+
+def _hidden_part(obj: PerceivedObject, bbox: Box, inverted: bool) -> PartAttrs:
+    """The face the object rests on (module docstring): flat under an upright object or an
+    inverted box (packages are closed); the opening of an inverted round body, inside walls
+    as thick as its material's (`Material.wall`)."""
+    size = _fit2(obj.shape.bottom_size, bbox, "on")
+    if not inverted or obj.shape.body.geom != "cylinder":
+        return PartAttrs("flat", size)
+    wall = material(obj.material.name).wall or 0.0
+    inner = tuple(round(max(v - 2 * wall, 0.0), 4) for v in size)
+    return PartAttrs("open", inner, center=(0.0, 0.0))  # type: ignore[arg-type]
 
 
 def _top_part(obj: PerceivedObject, body: Box, bbox: Box, inverted: bool) -> PartAttrs:
@@ -216,7 +230,7 @@ def _union(boxes: list[Box]) -> Box:
     return out
 
 
-def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
+def _edges(shape: SeenShape) -> tuple[SeenMember, ...]:
     """Rim members where the rim is the only grip (module docstring)."""
     top, body = shape.top, shape.body.box
     rimmed = top.visible and (top.shape in ("open", "concave") or top.rim > 0)
@@ -225,21 +239,24 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
     if not rimmed:
         return _slab_edges(shape)
     handles = [m.side for m in shape.members if m.kind == "handle" and m.side != "on"]
-    if handles and mass <= LIFTABLE:
+    round_ = shape.body.geom == "cylinder"
+    if handles and round_:  # a pot or pan is held by its handles
         return ()
     sides = ACROSS[handles[0]] if handles else ("front", "back")
     rim = max(top.rim, 0.004)
-    z0 = min(max(top.floor, 0.0), body.hi[2] - 0.005)
+    # a box's rim stands on the table (a tray's sides); a round one's band starts at the floor
+    z0 = 0.0 if not round_ else min(max(top.floor, 0.0), body.hi[2] - 0.005)
     out = []
     for side in sides:
         ax = 0 if side in ("front", "back") else 1
         across = 1 - ax
         lo, hi = np.asarray(body.lo, float), np.asarray(body.hi, float)
         elo, ehi = lo.copy(), hi.copy()
+        inner = _inner_face(top, ax, side in ("front", "left"))
         if side in ("front", "left"):
-            elo[ax] = hi[ax] - rim
+            elo[ax] = hi[ax] - rim if inner is None else min(inner, hi[ax] - 0.004)
         else:
-            ehi[ax] = lo[ax] + rim
+            ehi[ax] = lo[ax] + rim if inner is None else max(inner, lo[ax] + 0.004)
         if shape.body.geom == "cylinder":
             half = min(max(0.3 * body.size[across], EDGE_SPAN / 2), body.size[across] / 2)
             mid = (lo[across] + hi[across]) / 2
@@ -247,6 +264,17 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
         elo[2] = z0
         out.append(SeenMember("edge", side, SeenBox(tuple(elo.tolist()), tuple(ehi.tolist()))))  # type: ignore[arg-type]
     return tuple(out)
+
+
+def _inner_face(top: SeenTop, ax: int, high: bool) -> float | None:
+    """Where the opening or well inside a rim ends on one side along axis `ax` (the rim's
+    inner face: the edge member ends where the surface inside it begins, so that a finger
+    beside the rim lands on that surface, as it does on the declared types), or None if
+    the top shows no opening."""
+    if not top.visible or top.rim <= 0 or top.center is None:
+        return None
+    half = top.size[ax] / 2
+    return float(top.center[ax] + half if high else top.center[ax] - half)
 
 
 def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
@@ -366,7 +394,7 @@ def perceive_instance(
         mapped = ("members", "mass") if model and model.mass_head == "rule" else ("members",)
         conf = {**conf, **calibration.apply({a: conf[a] for a in mapped})} if model else \
             calibration.apply(conf)  # fmt: skip
-    return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape, high),
+    return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape),
                            conf, alts)  # fmt: skip
 
 

@@ -108,11 +108,12 @@ def wall_fit(
     centre and a radius per height band of `band` m, fitted by linear least squares, the
     points farther than 4 mm from their band's circle dropped and the fit repeated (each
     band needs 12 points). The top radius is the median distance of the upper bands' points
-    on the outer face: with the points' viewing `rays` (xy), those seen from outside (the
-    ray points towards the axis; a wall's inner face, seen over the rim, looks outwards).
-    Without rays, the third quartile of all of them (the inner face pulls the median in;
-    the largest or the 90th percentile read a 7.0 cm mug as 7.4 cm, too wide for the hand
-    with the rules' clearance, and the third quartile read tumblers 2 mm too wide)."""
+    on the outer face (a flared wall's along a line in height, taken at the top): with the
+    points' viewing `rays` (xy), those seen from outside (the ray points towards the axis;
+    a wall's inner face, seen over the rim, looks outwards). Without rays, the third
+    quartile of all of them (the inner face pulls the median in; the largest or the 90th
+    percentile read a 7.0 cm mug as 7.4 cm, too wide for the hand with the rules'
+    clearance, and the third quartile read tumblers 2 mm too wide)."""
     if len(wall) < 20:
         return None
     keep = np.ones(len(wall), dtype=bool)
@@ -152,7 +153,11 @@ def wall_fit(
     if rays is not None:
         outer = upper & (np.sum(rays[:, :2] * (wall[:, :2] - c), axis=1) < 0.0)
         if outer.sum() >= 10:
-            return c, float(np.median(dist[outer]))
+            z, d = wall[outer, 2], dist[outer]
+            slope = 0.0  # a flared wall (a pan's) widens to its top: a line through the bands
+            if float(np.ptp(z)) > 0.005:
+                slope = max(float(np.polyfit(z, d, 1)[0]), 0.0)
+            return c, float(np.median(d - slope * z) + slope * float(wall[:, 2].max()))
     return c, float(np.percentile(dist[upper], 75))
 
 
@@ -321,6 +326,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         disc = np.linalg.norm(grid.centres(np.ones(grid.shape, bool)) - centre, axis=1)
         body_mask = (disc <= radius).reshape(grid.shape)
     rest = seen_foot & ~dilate_disc(body_mask, 2.0)
+    attached = np.zeros_like(body_mask)  # the attached handles' cells
     for piece in components(rest):
         if piece.sum() < MIN_MEMBER_CELLS:
             break
@@ -345,6 +351,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         mz = in_bar[:, 2]
         zlo, zhi = float(np.percentile(mz, 1)), float(np.percentile(mz, 99))
         if not trimmed:  # an attached handle reaches the body's box
+            attached |= piece
             ax = 0 if side in ("front", "back") else 1
             if geom == "box":  # the body's face from its points beside the handle
                 face_beside(body_pts, side, mlo[1 - ax], mhi[1 - ax], body_lo, body_hi)
@@ -356,6 +363,11 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
 
     if geom == "box":
         centre = (body_lo + body_hi) / 2
+    if attached.any() and not neck_mask.any():  # a handle rising above the body (a
+        # spatula's grip over its blade) leaves its root's heights in the body's cells
+        away = top[visible & ~dilate_disc(attached, 3.0)]
+        if len(away) >= 10 and float(np.max(away)) < body_top - 0.003:
+            body_top = float(np.max(away))
 
     # ---- top surface of the body
     top_shape = classify_top(
@@ -367,6 +379,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         geom,
         body_lo,
         body_hi,
+        over=other_top > body_top + FLAT_TOL,
     )
     if geom == "cylinder" and top_shape.visible and top_shape.shape in ("open", "concave"):
         top_shape = round_opening(top_shape, local[in_body], centre, radius)

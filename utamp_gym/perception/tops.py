@@ -40,8 +40,11 @@ def classify_top(
     geom: str,
     lo: np.ndarray,
     hi: np.ndarray,
+    over: np.ndarray | None = None,
 ) -> SeenTop:
-    """The body's top surface (module docstring)."""
+    """The body's top surface (module docstring). `over`: cells where another object stands
+    above the body's top; an inside mostly under them is hidden, not a cavity (a tumbler
+    standing on an inverted mug's base left a ring around it)."""
     full = tuple((hi - lo).tolist())
     centre = tuple(((hi + lo) / 2).tolist())
     if visible.sum() < max(8, 0.15 * body.sum()):
@@ -64,6 +67,8 @@ def classify_top(
         return SeenTop("round", full, rim_level, centre)  # type: ignore[arg-type]
     if not inner.any():
         return SeenTop("flat", full, rim_level, centre)  # type: ignore[arg-type]
+    if over is not None and (inner & over).sum() >= 0.5 * inner.sum():
+        return SeenTop("flat", full, rim_level, centre, visible=False)  # type: ignore[arg-type]
     ilo, ihi = grid.bounds(inner)
     opening = ihi - ilo
     width = float(min(opening)) if geom == "box" else float(np.mean(opening))
