@@ -73,6 +73,9 @@ from utamp_gym.perception.tops import (
 BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box ...
 ROUND_RESIDUAL = 0.003  # m ... and so is one whose wall a circle does not fit this well
 OPEN_FRACTION = 0.6  # of the largest inscribed radius: the disc that keeps only the body
+#: ... and the half side of a box's square (a spatula's grip, 0.45 of its blade's width,
+#: survived a square of 0.42 of the blade's width and was read as part of it)
+SQUARE_FRACTION = 0.75
 MIN_MEMBER_CELLS = 12  # cells (about 1 cm^2): smaller leftovers are noise or a corner
 NECK_RISE = 0.02  # m a narrow part must stand above the body's top
 NECK_AREA = 0.35  # of the body's area, at most
@@ -269,7 +272,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     fill = body_mask.sum() * grid.cell**2 / float(np.prod(bhi - blo))
     geom = "box" if fill > BOX_FILL or not _round_wall(grid, local, body_mask) else "cylinder"
     if geom == "box":
-        sq = open_square(foot, int(OPEN_FRACTION * rmax / math.sqrt(2)))
+        sq = open_square(foot, int(SQUARE_FRACTION * rmax))
         if sq.any():
             body_mask = components(sq)[0]
     in_body = _cells_of(grid, local, dilate_disc(body_mask, 1.0))
@@ -365,9 +368,9 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         centre = (body_lo + body_hi) / 2
     if attached.any() and not neck_mask.any():  # a handle rising above the body (a
         # spatula's grip over its blade) leaves its root's heights in the body's cells
-        away = top[visible & ~dilate_disc(attached, 3.0)]
-        if len(away) >= 10 and float(np.max(away)) < body_top - 0.003:
-            body_top = float(np.max(away))
+        away = top[visible & ~dilate_disc(attached, 5.0)]
+        if len(away) >= 10 and float(np.percentile(away, 98)) < body_top - 0.003:
+            body_top = float(np.percentile(away, 98))
 
     # ---- top surface of the body
     top_shape = classify_top(
