@@ -39,6 +39,7 @@ from utamp_gym.perception.cloud import Cloud, Scene3D
 from utamp_gym.perception.grid import (
     CELL,
     Grid,
+    cells_of,
     components,
     dilate_disc,
     erode_disc,
@@ -69,9 +70,10 @@ from utamp_gym.perception.tops import (
     round_opening,
     wall_flare,
 )
+from utamp_gym.perception.walls import round_wall, wall_fit
 
-BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box ...
-ROUND_RESIDUAL = 0.003  # m ... and so is one whose wall a circle does not fit this well
+BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box (or one
+#: whose wall is not round: `walls.ROUND_RESIDUAL`)
 OPEN_FRACTION = 0.6  # of the largest inscribed radius: the disc that keeps only the body
 #: ... and the half side of a box's square (a spatula's grip, 0.45 of its blade's width,
 #: survived a square of 0.42 of the blade's width and was read as part of it)
@@ -98,92 +100,6 @@ def _support_height(local: np.ndarray, others: np.ndarray, bg: np.ndarray, grid:
         if ok.sum() >= 3:
             best = max(best, float(np.median(top[ok])))
     return best if best > -math.inf else zmin
-
-
-def wall_fit(
-    wall: np.ndarray,
-    centre: np.ndarray,
-    radius: float,
-    band: float = 0.01,
-    rays: np.ndarray | None = None,
-) -> tuple[np.ndarray, float] | None:
-    """Centre and top radius of a round wall, which may flare: circles with one shared
-    centre and a radius per height band of `band` m, fitted by linear least squares, the
-    points farther than 4 mm from their band's circle dropped and the fit repeated (each
-    band needs 12 points). The top radius is the median distance of the upper bands' points
-    on the outer face (a flared wall's along a line in height, taken at the top): with the
-    points' viewing `rays` (xy), those seen from outside (the ray points towards the axis;
-    a wall's inner face, seen over the rim, looks outwards). Without rays, the third
-    quartile of all of them (the inner face pulls the median in; the largest or the 90th
-    percentile read a 7.0 cm mug as 7.4 cm, too wide for the hand with the rules'
-    clearance, and the third quartile read tumblers 2 mm too wide)."""
-    if len(wall) < 20:
-        return None
-    keep = np.ones(len(wall), dtype=bool)
-    for _ in range(3):
-        pts = wall[keep]
-        bands = np.floor(pts[:, 2] / band).astype(int)
-        ids, inverse, counts = np.unique(bands, return_inverse=True, return_counts=True)
-        good = counts[inverse] >= 12
-        if good.sum() < 20:
-            return None
-        pts, inverse = pts[good], inverse[good]
-        used = np.unique(inverse)
-        col = np.searchsorted(used, inverse)
-        a = np.zeros((len(pts), 2 + len(used)))
-        a[:, :2] = 2 * pts[:, :2]
-        a[np.arange(len(pts)), 2 + col] = 1.0
-        sol, *_ = np.linalg.lstsq(a, (pts[:, :2] ** 2).sum(axis=1), rcond=None)
-        c = sol[:2]
-        r2 = sol[2:] + c @ c
-        if np.any(r2 <= 0) or np.linalg.norm(c - centre) > 0.5 * radius:
-            return None
-        radii = np.sqrt(r2)
-        dist = np.linalg.norm(wall[:, :2] - c, axis=1)
-        all_bands = np.floor(wall[:, 2] / band).astype(int)
-        expected = np.interp(all_bands, ids[used], radii)
-        new = np.abs(dist - expected) < 0.004
-        if new.sum() < 20 or np.array_equal(new, keep):
-            break
-        keep = new
-    # the outer surface: a wall's inner face (seen over a rim) is no part of the footprint
-    dist = np.linalg.norm(wall[:, :2] - c, axis=1)
-    bands = np.floor(wall[:, 2] / band).astype(int)
-    top = bands.max()
-    upper = (bands >= top - 1) & keep
-    if upper.sum() < 5:
-        upper = keep
-    if rays is not None:
-        outer = upper & (np.sum(rays[:, :2] * (wall[:, :2] - c), axis=1) < 0.0)
-        if outer.sum() >= 10:
-            z, d = wall[outer, 2], dist[outer]
-            slope = 0.0  # a flared wall (a pan's) widens to its top: a line through the bands
-            if float(np.ptp(z)) > 0.005:
-                slope = max(float(np.polyfit(z, d, 1)[0]), 0.0)
-            return c, float(np.median(d - slope * z) + slope * float(wall[:, 2].max()))
-    return c, float(np.percentile(dist[upper], 75))
-
-
-def _round_wall(grid: Grid, local: np.ndarray, body: np.ndarray) -> bool:
-    """Whether the side wall around `body` is round: a circle fitted to its points (mid
-    height, near the outline) leaves them within `ROUND_RESIDUAL` of it (a rectangle's
-    wall, or a body with a handle block fused to it, does not)."""
-    outline = dilate_disc(body, 5.0) & ~erode_disc(body, 5.0)
-    near = _cells_of(grid, local, outline)
-    zmax = float(np.percentile(local[:, 2], 98)) if len(local) else 0.0
-    wall = local[near & (local[:, 2] > 0.2 * zmax) & (local[:, 2] < 0.8 * zmax)]
-    blo, bhi = grid.bounds(body)
-    fit = wall_fit(wall, (blo + bhi) / 2, float(np.mean(bhi - blo)) / 2)
-    if fit is None:
-        return True  # nothing to tell: keep the footprint's verdict
-    centre, radius = fit
-    dist = np.linalg.norm(wall[:, :2] - centre, axis=1)
-    bands = np.floor(wall[:, 2] / 0.01).astype(int)
-    resid = np.empty(len(dist))
-    for b in np.unique(bands):  # per height band: a flared wall is round at every height
-        sel = bands == b
-        resid[sel] = np.abs(dist[sel] - np.median(dist[sel]))
-    return float(np.median(resid)) <= max(ROUND_RESIDUAL, 0.03 * radius)
 
 
 def fit_shape(cloud: Cloud, scene: Scene3D, instance: int, *, prior_yaw: float = 0.0) -> SeenShape:
@@ -270,12 +186,12 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     body_mask = components(opened)[0] if opened.any() else foot
     blo, bhi = grid.bounds(body_mask)
     fill = body_mask.sum() * grid.cell**2 / float(np.prod(bhi - blo))
-    geom = "box" if fill > BOX_FILL or not _round_wall(grid, local, body_mask) else "cylinder"
+    geom = "box" if fill > BOX_FILL or not round_wall(grid, local, body_mask) else "cylinder"
     if geom == "box":
         sq = open_square(foot, int(SQUARE_FRACTION * rmax))
         if sq.any():
             body_mask = components(sq)[0]
-    in_body = _cells_of(grid, local, dilate_disc(body_mask, 1.0))
+    in_body = cells_of(grid, local, dilate_disc(body_mask, 1.0))
     body_pts = local[in_body]
     if geom == "cylinder":
         blo, bhi = grid.bounds(body_mask)
@@ -343,7 +259,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
             covered_gap = (gap & (other_top > 0.003)).sum() > 0.3 * max(1, int(gap.sum()))
             if covered_gap or not (see_through & gap).any():
                 bar, trimmed = piece, False
-        in_bar = local[_cells_of(grid, local, bar)]
+        in_bar = local[cells_of(grid, local, bar)]
         if len(in_bar) < 3:
             continue
         # the bar's extent is its points' (a cell's edge lies up to a cell beyond them: a
@@ -448,14 +364,6 @@ def _hull_mask(grid: Grid, xy: np.ndarray) -> np.ndarray:
     centres = grid.lo + (np.stack([ii.ravel(), jj.ravel()], axis=1) + 0.5) * grid.cell
     inside = np.all(centres @ hull.equations[:, :2].T + hull.equations[:, 2] <= 1e-9, axis=1)
     return inside.reshape(grid.shape)
-
-
-def _cells_of(grid: Grid, pts: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Which points fall into the cells of `mask`."""
-    i, j, inside = grid.index(pts[:, :2])
-    out = np.zeros(len(pts), dtype=bool)
-    out[inside] = mask[i[inside], j[inside]]
-    return out
 
 
 def _surface_area(body: SeenMember, members: list[SeenMember]) -> float:
