@@ -71,7 +71,8 @@ from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
 
 FOOD_SURFACE = 0.12  # m: a flat top at least this wide both ways is a food surface
-THIN_TOP = 0.015  # m: a body thinner than this has a thin top
+THIN_TOP = 0.0125  # m: a body thinner than this has a thin top (a spatula's blade, 6-12 mm;
+#: chopping boards are 12-40 mm thick)
 THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
