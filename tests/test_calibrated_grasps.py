@@ -135,7 +135,7 @@ def test_the_extended_rules_only_add_to_the_paper_rules_on_the_calibrated_famili
             assert object_facts(t) <= object_facts(t, True), (fam, seed)
 
 
-def test_procedural_v2_draws_its_goals_with_the_rules_before_the_calibration():
+def test_the_rules_before_the_calibration_lack_its_grants():
     pot, tray = generate("stock-pot", "v1", 1), generate("tray", "v1", 2)
     lug = ("canGraspFrom", pot.name, "handle-left", "on", "left", "right")
     rim = ("canLift", tray.name, "edge-left")

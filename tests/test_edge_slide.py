@@ -61,7 +61,7 @@ def test_a_handleless_board_is_granted_the_edge_pinch_only_in_the_calibrated_ext
     assert edge_pinch_refusal(board) is None
     assert ("canEdgePinch", board.name, *EDGE_GRASP) in object_facts(board, True)
     assert not any(f[0] == "canEdgePinch" for f in object_facts(board, False))
-    # procedural-v2's labels were drawn without the calibrated grasps: none there
+    # the rules before the calibration (calibrated=False) have none
     assert not any(f[0] == "canEdgePinch" for f in object_facts(board, True, calibrated=False))
 
 

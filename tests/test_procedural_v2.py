@@ -8,6 +8,7 @@ from collections import Counter
 
 import pytest
 
+from utamp_gym.affordances.rules import derive_affordances
 from utamp_gym.cli import main
 from utamp_gym.scene.io import scene_to_toml
 from utamp_gym.suites import get_scene
@@ -118,17 +119,39 @@ def test_sampled_scenes_regenerate_byte_identically(split: str) -> None:
     assert split_digest(split, SAMPLE_STEP) == sample_hash(split)
 
 
+def _label_sample(split: str) -> list[int]:
+    """The first achievable and the first unachievable scene of each template of a split, and
+    every 25th scene: what a rule change that moves labels is likely to move."""
+    first: dict[tuple[str, bool], int] = {}
+    for i in range(len(split_seeds(split))):
+        g = split_scene(split, i)
+        first.setdefault((g.template, g.achievable), i)
+    return sorted({*first.values(), *range(0, len(split_seeds(split)), 25)})
+
+
 @needs_file
 @pytest.mark.parametrize("split", SPLITS)
 def test_labels_agree_with_the_planner_and_fast_downwards_translator(split: str) -> None:
+    """A sample of the labels (`_label_sample`) against the planner as the code is now, so a
+    rule change that moves a label fails here (the whole file: the slow test below)."""
     entry = _seed_table()[split]
-    n = len(split_seeds(split))
-    for i in range(0, n, max(1, n // 3)):
+    wrong = []
+    for i in _label_sample(split):
         g = split_scene(split, i)
         lab = label(g.scene)
-        assert (lab.achievable, lab.plan_length) == (g.achievable, g.plan_length), g.scene.name
+        if (lab.achievable, lab.plan_length) != (g.achievable, g.plan_length):
+            wrong.append((g.scene.name, g.template, g.achievable, g.plan_length, lab.achievable))
+    assert not wrong, f"labels the planner no longer gives (regenerate the split file): {wrong}"
     for i in [i for i, a in enumerate(entry["achievable"]) if not a][:1]:
         assert fd_agrees(split_scene(split, i).scene, False) is True
+
+
+@needs_file
+def test_the_label_sample_covers_every_template_both_ways() -> None:
+    split = "test-tasks" if "test-tasks" in SPLITS else SPLITS[0]
+    sample = [split_scene(split, i) for i in _label_sample(split)]
+    assert {g.template for g in sample} == set(_seed_table()[split]["templates"])
+    assert {g.achievable for g in sample} == {True, False}
 
 
 @needs_file
@@ -176,7 +199,7 @@ def test_whole_splits_regenerate_byte_identically(split: str) -> None:
 @needs_file
 @pytest.mark.parametrize("split", SPLITS)
 def test_every_label_is_the_planners_in_a_fresh_process(split: str) -> None:
-    """Every kept scene's label and plan length, not only a sample (about 20 s in all)."""
+    """Every kept scene's label and plan length, not only a sample (about 90 s in all)."""
     wrong = []
     for i in range(len(split_seeds(split))):
         g = split_scene(split, i)
@@ -184,3 +207,42 @@ def test_every_label_is_the_planners_in_a_fresh_process(split: str) -> None:
         if (lab.achievable, lab.plan_length) != (g.achievable, g.plan_length):
             wrong.append((i, g.template, g.achievable, g.plan_length, lab.achievable))
     assert not wrong, wrong
+
+
+def test_select_takes_a_relax_seed_without_a_log(monkeypatch, tmp_path) -> None:
+    """``select SPLIT OUT N RELAX_AFTER``: the quotas relaxed, nothing resumed; with LOG the run
+    it records goes on."""
+    from utamp_gym.suites.procedural_v2 import selection
+
+    calls = []
+    monkeypatch.setattr(selection, "select_seeds", lambda *a, **k: calls.append((a, k)) or {})
+    out = tmp_path / "out.json"
+    assert selection.main(["select", "test-count", str(out), "100", "778"]) == 0
+    log = tmp_path / "log"
+    log.write_text(
+        "test-count 1 4 clear Label(achievable=True, plan_length=6, timed_out=False, "
+        "planning_time_s=0.1)\n"
+    )
+    assert selection.main(["select", "test-count", str(out), "100", "778", str(log)]) == 0
+    assert [(a[1], k["relax_after"], k["resume"]) for a, k in calls] == [
+        (100, 778, []),
+        (100, 778, [(4, "clear", True, 6)]),
+    ]
+    assert json.loads(out.read_text()) == {"split": "test-count"}
+    assert selection.main(["select", "test-count"]) == 2
+
+
+def test_goals_are_drawn_with_the_calibrated_rules_the_labeller_plans_with(monkeypatch) -> None:
+    """The quick checks use the final (calibrated) extended rules, as the labeller does."""
+    from utamp_gym.suites.procedural_v2 import scenes
+
+    seen = []
+
+    def spy(types, extended=False, calibrated=True):
+        seen.append((extended, calibrated))
+        return derive_affordances(types, extended, calibrated)
+
+    monkeypatch.setattr(scenes, "derive_affordances", spy)
+    seed = next(s for s in range(50) if _has_layout("test-tasks", s))
+    scenes.generate_scene("test-tasks", seed)
+    assert seen and set(seen) == {(True, True)}

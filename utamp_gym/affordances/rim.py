@@ -124,8 +124,7 @@ def rim_pinch_refusal(
     (None: it can; `REFUSED` if not `why`). A body too wide for the hand with an open top
     is judged by the wall strip the decoder pinches (`utamp_gym.scene.shapes.rim_strip`).
     See the module docstring; not `calibrated`: a thick wall carries only `RIM_LIFT_LIMIT`
-    and `hand.TORQUE_LIMIT`, as before issue #39's calibration (procedural-v2's goals were
-    drawn with those rules)."""
+    and `hand.TORQUE_LIMIT`, as before issue #39's calibration."""
     if t.members[member].kind == "body":
         strip = _strip_type(t, member, palm, f1)
         if strip is None:

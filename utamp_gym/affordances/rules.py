@@ -268,7 +268,7 @@ def object_facts(t: ObjectType, extended: bool = False, calibrated: bool = True)
     """Unary facts of one type: supportive/supportable parts, grasps, lifting. `extended`:
     with the grasps of the extended domain ``utamp2x`` (`utamp_gym.affordances.rim`), and
     if `calibrated` those issue #39 calibrated in physics (`utamp_gym.affordances.calibrated`;
-    procedural-v2's goals were drawn without them)."""
+    procedural-v2's goals are drawn and labelled with them)."""
     facts: set[Fact] = set()
     for part in SIDES:
         if is_supportive(t, part):

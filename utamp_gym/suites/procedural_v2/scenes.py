@@ -62,10 +62,8 @@ def generate_scene(split: str, seed: int, index: int = 0) -> GoalScene:
     options = SPLIT_TEMPLATES[split]
     template_id = options[int(rng.integers(len(options)))]
     facts = derive_affordances(
-        [_catalogue()[TABLE_TYPE], *scene.custom_types.values()],
-        DOMAIN in EXTENDED_DOMAINS,
-        calibrated=False,  # the rules its goals were drawn with: the split files stay as chosen
-    )
+        [_catalogue()[TABLE_TYPE], *scene.custom_types.values()], DOMAIN in EXTENDED_DOMAINS
+    )  # the final (calibrated) rules, the ones the labeller plans with
     initial = scene_facts(scene, (), DOMAIN)
     first: Goal | None = None
     for _ in range(RESTACK_DRAWS if template_id == "restack" else GOAL_DRAWS):

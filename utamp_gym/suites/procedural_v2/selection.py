@@ -1,6 +1,7 @@
 """Choosing procedural-v2's seeds and writing its split file:
-``python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json [N]`` (one split, its labels
-checked), then ``write OUT.json ...`` (the split file with digests) and ``check``.
+``python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json [N [RELAX_AFTER [LOG]]]`` (one
+split, its labels checked; `select_seeds`' `relax_after` and `resume`), then ``write OUT.json
+...`` (the split file with digests) and ``check``.
 
 `select_seeds` walks the seeds 0, 1, ... and keeps a seed when its scene has a layout and a
 goal, the planner labels the goal (`labels.label`, no time-out), Fast Downward's translator
@@ -166,11 +167,11 @@ def _log_entry(line: str) -> tuple[int, str, bool, int]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
-    if len(args) in (3, 4, 6) and args[0] == "select" and args[1] in SPLITS:
+    if 3 <= len(args) <= 6 and args[0] == "select" and args[1] in SPLITS:
         n = int(args[3]) if len(args) >= 4 else SIZES[args[1]]
-        relax, resume = None, []
+        relax = int(args[4]) if len(args) >= 5 else None  # ... N RELAX_AFTER
+        resume = []
         if len(args) == 6:  # ... N RELAX_AFTER LOG: continue the run that LOG records
-            relax = int(args[4])
             resume = [_log_entry(line) for line in Path(args[5]).read_text().splitlines()]
         chosen = select_seeds(args[1], n, log=sys.stderr, relax_after=relax, resume=resume)
         with open(args[2], "w") as f:
@@ -184,7 +185,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("ok" if not bad else f"differ: {', '.join(bad)}")
         return 1 if bad else 0
     print(
-        "usage: python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json [N] | "
+        "usage: python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json "
+        "[N [RELAX_AFTER [LOG]]] | "
         "write OUT.json ... | check",
         file=sys.stderr,
     )
