@@ -28,13 +28,12 @@ confidences; writes ``docs/results/attribute-model.{md,json}``.
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 from pathlib import Path
 
 import numpy as np
+from perceiver_data import cached_rows, reliability_table  # benchmarks/ is on sys.path
 
-from utamp_gym.backend import DEFAULT_BACKEND, backend_factory
 from utamp_gym.perception.confidence import mass_class, packaged_calibration, raw_confidences
 from utamp_gym.perception.learned import (
     MATERIAL_NAMES,
@@ -58,13 +57,11 @@ from utamp_gym.perception.objects import (
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.materials import material
 from utamp_gym.seeding import run_seed
-from utamp_gym.suites import suite_scenes
 
 ROOT = Path(__file__).resolve().parents[1]
 TRAIN = "procedural-v1/train"
 PAPER = ("pick-place", "sliding")  # the paper's objects: development data too
 L2_GRID = (1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0)
-BINS = (0.0, 0.5, 0.7, 0.8, 0.9, 0.95, 0.99, 1.0001)
 HEADS = ("material", "robustness", "mass")
 
 
@@ -95,22 +92,7 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
 
 def collect(suite: str, cache: Path, part: tuple[int, int] = (1, 1)) -> list[dict[str, object]]:
     """The rows of every scene of `suite` (rendered once, then read from `cache`)."""
-    folder = cache / suite.replace("/", "_")
-    folder.mkdir(parents=True, exist_ok=True)
-    i, n = part
-    sim = None
-    out: list[dict[str, object]] = []
-    for k, scene in enumerate(suite_scenes(suite)):
-        if k % n != i - 1:
-            continue
-        path = folder / (scene.name.rsplit("/", 1)[-1] + ".json")
-        if not path.exists():
-            sim = sim or backend_factory(DEFAULT_BACKEND)()
-            path.write_text(json.dumps(scene_rows(scene, sim)))
-        out += json.loads(path.read_text())
-    if sim is not None:
-        sim.close()
-    return out
+    return cached_rows(suite, cache / suite.replace("/", "_"), scene_rows, part=part)
 
 
 def cached(suite: str, cache: Path) -> list[dict[str, object]]:
@@ -245,20 +227,10 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
 
 def reliability(ev: dict[str, object]) -> dict[str, list[dict[str, float]]]:
     """Per head and confidence bin: objects, mean confidence, share right; and the ECE."""
-    out: dict[str, list[dict[str, float]]] = {}
-    for a in HEADS:
-        conf = np.array(ev["confidence"][a])  # type: ignore[index]
-        ok = np.array(ev["right"][a], dtype=float)  # type: ignore[index]
-        table = []
-        for lo, hi in itertools.pairwise(BINS):
-            sel = (conf >= lo) & (conf < hi)
-            if sel.any():
-                table.append({"bin": [lo, min(hi, 1.0)], "n": int(sel.sum()),
-                              "confidence": float(conf[sel].mean()),
-                              "accuracy": float(ok[sel].mean())})  # fmt: skip
-        ece = sum(t["n"] * abs(t["confidence"] - t["accuracy"]) for t in table) / max(len(ok), 1)
-        out[a] = [*table, {"ece": float(ece)}]
-    return out
+    return {
+        a: reliability_table(ev["confidence"][a], ev["right"][a])  # type: ignore[index]
+        for a in HEADS
+    }
 
 
 def _rule_mass(material_name: str, m: dict[str, float]) -> float:

@@ -19,13 +19,12 @@ shipped only for an attribute whose held-out calibration error it lowers.
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 from pathlib import Path
 
 import numpy as np
+from perceiver_data import cached_rows, reliability_table  # benchmarks/ is on sys.path
 
-from utamp_gym.backend import DEFAULT_BACKEND, backend_factory
 from utamp_gym.methods.perceived import align_members, attribute_accuracy
 from utamp_gym.perception.confidence import (
     CALIBRATION_FILE,
@@ -36,12 +35,10 @@ from utamp_gym.perception.confidence import (
 from utamp_gym.perception.objects import _shell_area, _solid_volume, perceive_objects
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.seeding import run_seed
-from utamp_gym.suites import suite_scenes
 
 ROOT = Path(__file__).resolve().parents[1]
 SUITE = "procedural-v1/train"
 CALIBRATED = ("material", "robustness", "mass", "members")
-BINS = (0.0, 0.5, 0.7, 0.8, 0.9, 0.95, 0.99, 1.0001)
 
 
 def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untyped-def]
@@ -79,19 +76,9 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
 
 
 def collect(cache: Path, limit: int | None) -> list[dict[str, object]]:
-    cache.mkdir(parents=True, exist_ok=True)
-    scenes = suite_scenes(SUITE)[:limit]
-    sim = None
-    out: list[dict[str, object]] = []
-    for scene in scenes:
-        path = cache / (scene.name.replace("/", "_") + ".json")
-        if not path.exists():
-            sim = sim or backend_factory(DEFAULT_BACKEND)()
-            path.write_text(json.dumps(scene_rows(scene, sim)))
-        out += json.loads(path.read_text())
-    if sim is not None:
-        sim.close()
-    return out
+    return cached_rows(
+        SUITE, cache, scene_rows, limit=limit, file_name=lambda n: n.replace("/", "_")
+    )
 
 
 def _index(row: dict[str, object]) -> int:
@@ -102,20 +89,13 @@ def reliability(
     rows: list[dict[str, object]], cal: Calibration | None
 ) -> dict[str, list[dict[str, float]]]:
     """Per attribute and confidence bin: count, mean confidence, accuracy."""
-    out: dict[str, list[dict[str, float]]] = {}
-    for a in CALIBRATED:
-        conf = np.array([cal(a, r["raw"][a]) if cal else r["raw"][a] for r in rows])  # type: ignore[index]
-        ok = np.array([r["right"][a] for r in rows], dtype=float)  # type: ignore[index]
-        table = []
-        for lo, hi in itertools.pairwise(BINS):
-            sel = (conf >= lo) & (conf < hi)
-            if sel.any():
-                table.append({"bin": [lo, min(hi, 1.0)], "n": int(sel.sum()),
-                              "confidence": float(conf[sel].mean()),
-                              "accuracy": float(ok[sel].mean())})  # fmt: skip
-        ece = sum(t["n"] * abs(t["confidence"] - t["accuracy"]) for t in table) / max(len(rows), 1)
-        out[a] = [*table, {"ece": float(ece)}]
-    return out
+    return {
+        a: reliability_table(
+            [cal(a, r["raw"][a]) if cal else r["raw"][a] for r in rows],  # type: ignore[index]
+            [r["right"][a] for r in rows],  # type: ignore[index]
+        )
+        for a in CALIBRATED
+    }
 
 
 def accuracy(rows: list[dict[str, object]]) -> dict[str, float]:

@@ -79,10 +79,10 @@ def _slab(members: tuple = (), top: str = "flat") -> SeenShape:
 
 
 def test_a_bare_board_is_offered_its_end_strips_as_edges() -> None:
-    edges = _edges(_slab(), 0.8)
+    edges = _edges(_slab())
     assert [e.side for e in edges] == ["front", "back"]
     front = edges[0].box
     assert np.isclose(front.hi[0], 0.15) and np.isclose(front.size[0], SLAB_EDGE)
     assert np.isclose(front.size[1], 0.2 - 2 * SLAB_EDGE_INSET)
     handle = SeenMember("handle", "back", SeenBox((-0.22, -0.02, 0.0), (-0.15, 0.02, 0.02)))
-    assert _edges(_slab((handle,)), 0.8) == ()  # a board with a handle is held by it
+    assert _edges(_slab((handle,))) == ()  # a board with a handle is held by it

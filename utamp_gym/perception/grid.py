@@ -150,9 +150,18 @@ def estimate_yaw(xy: np.ndarray, prior: float = 0.0) -> float:
     return prior if prior_area <= best_area * 1.02 else float(best)
 
 
+def cells_of(grid: Grid, pts: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Which points fall into the cells of `mask`."""
+    i, j, inside = grid.index(pts[:, :2])
+    out = np.zeros(len(pts), dtype=bool)
+    out[inside] = mask[i[inside], j[inside]]
+    return out
+
+
 __all__ = [
     "CELL",
     "Grid",
+    "cells_of",
     "components",
     "dilate_disc",
     "erode_disc",

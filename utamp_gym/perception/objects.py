@@ -11,17 +11,19 @@ pixels (`material.classify_material`), mass and robustness from both.
 orientation: the frame of an inverted object is turned a half turn about x). What the rules
 then need and no camera sees is filled in by stated assumptions:
 
-* the face an object rests on is never seen: it is **flat** under an upright object and an
-  **open** rim under an inverted one (objects are turned over onto their opening: a mug, a
-  pot; an inverted box is then misread);
+* the face an object rests on is never seen: it is **flat** under an upright object or an
+  inverted box (packages are closed), and an **open** rim under an inverted round one
+  (turned over onto its opening: a mug, a pot), inside walls as thick as its material's;
 * a flat top at least `FOOD_SURFACE` wide both ways is a **food surface** (boards, trays,
   plates: never put face-down);
 * a body thinner than `THIN_TOP` has a **thin** top (a spatula's blade: nothing rests on
   it); a box body lower than `THIN_SIDE` has **thin** sides, a round body round ones;
 * a narrow part standing on the body's top (a bottle's neck) makes the top **pointy**;
-* a rim (an open, concave or well top) is offered as **edges** only where it is the only
-  grip: on a body too wide for the hand, with no handles or too heavy to lift by them (a
-  tray); on the two sides across from the handles, else front and back;
+* a rim (an open, concave or well top) on a body too wide for the hand is offered as
+  **edges**: a box's (a tray's sides, standing on the table) on the two sides across from
+  its handles, else front and back; a round body's (a plate's, a bowl's band from its
+  floor up) front and back, only where it has no handles (a pot or a pan is held by
+  them). An edge ends where the opening or well inside the rim begins;
 * a bare flat slab (no members, lower than `THIN_SIDE`, wider than the hand: a board
   without a handle) has the end strips of its longer axis as **edges**, as the catalogues
   declare them (the rules judge whether a finger fits beside them);
@@ -62,14 +64,15 @@ from utamp_gym.perception.material import (
     estimate_mass,
     shape_class,
 )
-from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape
+from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.shape import fit_shape
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
 
 FOOD_SURFACE = 0.12  # m: a flat top at least this wide both ways is a food surface
-THIN_TOP = 0.015  # m: a body thinner than this has a thin top
+THIN_TOP = 0.0125  # m: a body thinner than this has a thin top (a spatula's blade, 6-12 mm;
+#: chopping boards are 12-40 mm thick)
 THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
@@ -139,7 +142,7 @@ class PerceivedObject:
             members[key] = Member(key, "edge" if m.kind == "edge" else m.kind, box, m.geom)
         bbox = _union([m.box for m in members.values()])
         seen_top = _top_part(self, members["body"].box, bbox, inverted)
-        hidden = PartAttrs("open" if inverted else "flat", _fit2(sh.bottom_size, bbox, "on"))
+        hidden = _hidden_part(self, bbox, inverted)
         parts = {"on": hidden, "under": seen_top} if inverted else {"on": seen_top, "under": hidden}
         if inverted:  # the seen top is the canonical bottom: never a food surface
             parts["under"] = parts["under"]._replace(food_surface=False)
@@ -162,6 +165,18 @@ class PerceivedObject:
             parts=parts,
             description=f"perceived from RGB-D views (instance {self.instance})",
         )
+
+
+def _hidden_part(obj: PerceivedObject, bbox: Box, inverted: bool) -> PartAttrs:
+    """The face the object rests on (module docstring): flat under an upright object or an
+    inverted box (packages are closed); the opening of an inverted round body, inside walls
+    as thick as its material's (`Material.wall`)."""
+    size = _fit2(obj.shape.bottom_size, bbox, "on")
+    if not inverted or obj.shape.body.geom != "cylinder":
+        return PartAttrs("flat", size)
+    wall = material(obj.material.name).wall or 0.0
+    inner = tuple(round(max(v - 2 * wall, 0.0), 4) for v in size)
+    return PartAttrs("open", inner, center=(0.0, 0.0))  # type: ignore[arg-type]
 
 
 def _top_part(obj: PerceivedObject, body: Box, bbox: Box, inverted: bool) -> PartAttrs:
@@ -216,7 +231,7 @@ def _union(boxes: list[Box]) -> Box:
     return out
 
 
-def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
+def _edges(shape: SeenShape) -> tuple[SeenMember, ...]:
     """Rim members where the rim is the only grip (module docstring)."""
     top, body = shape.top, shape.body.box
     rimmed = top.visible and (top.shape in ("open", "concave") or top.rim > 0)
@@ -225,21 +240,24 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
     if not rimmed:
         return _slab_edges(shape)
     handles = [m.side for m in shape.members if m.kind == "handle" and m.side != "on"]
-    if handles and mass <= LIFTABLE:
+    round_ = shape.body.geom == "cylinder"
+    if handles and round_:  # a pot or pan is held by its handles
         return ()
     sides = ACROSS[handles[0]] if handles else ("front", "back")
     rim = max(top.rim, 0.004)
-    z0 = min(max(top.floor, 0.0), body.hi[2] - 0.005)
+    # a box's rim stands on the table (a tray's sides); a round one's band starts at the floor
+    z0 = 0.0 if not round_ else min(max(top.floor, 0.0), body.hi[2] - 0.005)
     out = []
     for side in sides:
         ax = 0 if side in ("front", "back") else 1
         across = 1 - ax
         lo, hi = np.asarray(body.lo, float), np.asarray(body.hi, float)
         elo, ehi = lo.copy(), hi.copy()
+        inner = _inner_face(top, ax, side in ("front", "left"))
         if side in ("front", "left"):
-            elo[ax] = hi[ax] - rim
+            elo[ax] = hi[ax] - rim if inner is None else min(inner, hi[ax] - 0.004)
         else:
-            ehi[ax] = lo[ax] + rim
+            ehi[ax] = lo[ax] + rim if inner is None else max(inner, lo[ax] + 0.004)
         if shape.body.geom == "cylinder":
             half = min(max(0.3 * body.size[across], EDGE_SPAN / 2), body.size[across] / 2)
             mid = (lo[across] + hi[across]) / 2
@@ -247,6 +265,17 @@ def _edges(shape: SeenShape, mass: float) -> tuple[SeenMember, ...]:
         elo[2] = z0
         out.append(SeenMember("edge", side, SeenBox(tuple(elo.tolist()), tuple(ehi.tolist()))))  # type: ignore[arg-type]
     return tuple(out)
+
+
+def _inner_face(top: SeenTop, ax: int, high: bool) -> float | None:
+    """Where the opening or well inside a rim ends on one side along axis `ax` (the rim's
+    inner face: the edge member ends where the surface inside it begins, so that a finger
+    beside the rim lands on that surface, as it does on the declared types), or None if
+    the top shows no opening."""
+    if not top.visible or top.rim <= 0 or top.center is None:
+        return None
+    half = top.size[ax] / 2
+    return float(top.center[ax] + half if high else top.center[ax] - half)
 
 
 def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
@@ -308,6 +337,17 @@ def _shell_area(shape: SeenShape) -> float:
     return float(area)
 
 
+def _mass_area(shape: SeenShape) -> float:
+    """The area of material a walled piece's mass is reckoned from (`estimate_mass`): its
+    `_shell_area`, but a round body with a flat well inside a rim (a plate) is one dish-shaped
+    sheet, its well's floor its underside: its footprint, a fifth more for the rim's slope
+    (counting the top and the underside and the outer wall read a 0.45 kg plate as 1.0 kg)."""
+    top, b = shape.top, shape.body.box.size
+    if shape.body.geom == "cylinder" and top.shape == "flat" and top.visible and top.rim > 0:
+        return float(1.2 * math.pi * (b[0] / 2) * (b[1] / 2))
+    return _shell_area(shape)
+
+
 def perceive_objects(bundle: ViewBundle, *, prior_yaw: float = 0.0) -> dict[int, PerceivedObject]:
     """Every object instance seen in `bundle`, perceived (module docstring)."""
     scene = fuse(bundle)
@@ -347,7 +387,7 @@ def perceive_instance(
             measurements(shape, appearance_features(colours), mat.posterior, cls, volume, area)
         )
         mat = MaterialEstimate(max(pred.material, key=pred.material.__getitem__), pred.material)
-        mass, low, high = estimate_mass(mat.name, volume, area)
+        mass, low, high = estimate_mass(mat.name, volume, _mass_area(shape))
         if model.mass_head == "rule":  # volume x density of the learned material
             reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
             conf, alts = raw_confidences(
@@ -358,7 +398,7 @@ def perceive_instance(
             reported, low, high = pred.mass, low * scale, high * scale
             conf, alts = learned_confidences(pred, mat.name, shape.covered)
     else:
-        mass, low, high = estimate_mass(mat.name, volume, area)
+        mass, low, high = estimate_mass(mat.name, volume, _mass_area(shape))
         reported = lift_mass(mass, high)
         conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
     calibration = packaged_calibration()
@@ -366,7 +406,7 @@ def perceive_instance(
         mapped = ("members", "mass") if model and model.mass_head == "rule" else ("members",)
         conf = {**conf, **calibration.apply({a: conf[a] for a in mapped})} if model else \
             calibration.apply(conf)  # fmt: skip
-    return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape, high),
+    return PerceivedObject(instance, shape, mat, reported, low, high, _edges(shape),
                            conf, alts)  # fmt: skip
 
 

@@ -13,7 +13,7 @@ z and heading); without, a fit of the shape's features (`feature_pose`):
 * heading — a round body's from where its protrusion sticks out (a handle), else the
   previous belief's (it is symmetric); a box's from its footprint's smallest bounding
   rectangle, taken within 45 deg of the previous belief;
-* body position — a round body's centre is a circle fitted to its side wall (`shape.wall_fit`),
+* body position — a round body's centre is a circle fitted to its side wall (`walls.wall_fit`),
   a box's the placement of its known footprint along each axis that holds the most points;
 * height — the object's highest visible point less its known height above its origin;
   upright or inverted as believed (pick and place keep the orientation).
@@ -33,7 +33,7 @@ import numpy as np
 
 from utamp_gym.perception.cloud import voxel_keep
 from utamp_gym.perception.grid import estimate_yaw, rotate
-from utamp_gym.perception.shape import wall_fit
+from utamp_gym.perception.walls import wall_fit
 from utamp_gym.scene.catalogue import ObjectType
 
 MIN_POINTS = 25

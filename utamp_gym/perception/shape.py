@@ -39,6 +39,7 @@ from utamp_gym.perception.cloud import Cloud, Scene3D
 from utamp_gym.perception.grid import (
     CELL,
     Grid,
+    cells_of,
     components,
     dilate_disc,
     erode_disc,
@@ -69,10 +70,14 @@ from utamp_gym.perception.tops import (
     round_opening,
     wall_flare,
 )
+from utamp_gym.perception.walls import round_wall, wall_fit
 
-BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box ...
-ROUND_RESIDUAL = 0.003  # m ... and so is one whose wall a circle does not fit this well
+BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box (or one
+#: whose wall is not round: `walls.ROUND_RESIDUAL`)
 OPEN_FRACTION = 0.6  # of the largest inscribed radius: the disc that keeps only the body
+#: ... and the half side of a box's square (a spatula's grip, 0.45 of its blade's width,
+#: survived a square of 0.42 of the blade's width and was read as part of it)
+SQUARE_FRACTION = 0.75
 MIN_MEMBER_CELLS = 12  # cells (about 1 cm^2): smaller leftovers are noise or a corner
 NECK_RISE = 0.02  # m a narrow part must stand above the body's top
 NECK_AREA = 0.35  # of the body's area, at most
@@ -95,76 +100,6 @@ def _support_height(local: np.ndarray, others: np.ndarray, bg: np.ndarray, grid:
         if ok.sum() >= 3:
             best = max(best, float(np.median(top[ok])))
     return best if best > -math.inf else zmin
-
-
-def wall_fit(
-    wall: np.ndarray, centre: np.ndarray, radius: float, band: float = 0.01
-) -> tuple[np.ndarray, float] | None:
-    """Centre and top radius of a round wall, which may flare: circles with one shared
-    centre and a radius per height band of `band` m, fitted by linear least squares, the
-    points farther than 4 mm from their band's circle dropped and the fit repeated; the top
-    radius is the third quartile of the upper bands' points' distances (each band needs 12
-    points; the largest or the 90th percentile read a 7.0 cm mug as 7.4 cm, too wide for the
-    hand with the rules' clearance)."""
-    if len(wall) < 20:
-        return None
-    keep = np.ones(len(wall), dtype=bool)
-    for _ in range(3):
-        pts = wall[keep]
-        bands = np.floor(pts[:, 2] / band).astype(int)
-        ids, inverse, counts = np.unique(bands, return_inverse=True, return_counts=True)
-        good = counts[inverse] >= 12
-        if good.sum() < 20:
-            return None
-        pts, inverse = pts[good], inverse[good]
-        used = np.unique(inverse)
-        col = np.searchsorted(used, inverse)
-        a = np.zeros((len(pts), 2 + len(used)))
-        a[:, :2] = 2 * pts[:, :2]
-        a[np.arange(len(pts)), 2 + col] = 1.0
-        sol, *_ = np.linalg.lstsq(a, (pts[:, :2] ** 2).sum(axis=1), rcond=None)
-        c = sol[:2]
-        r2 = sol[2:] + c @ c
-        if np.any(r2 <= 0) or np.linalg.norm(c - centre) > 0.5 * radius:
-            return None
-        radii = np.sqrt(r2)
-        dist = np.linalg.norm(wall[:, :2] - c, axis=1)
-        all_bands = np.floor(wall[:, 2] / band).astype(int)
-        expected = np.interp(all_bands, ids[used], radii)
-        new = np.abs(dist - expected) < 0.004
-        if new.sum() < 20 or np.array_equal(new, keep):
-            break
-        keep = new
-    # the outer surface: a wall's inner face (seen over a rim) is no part of the footprint
-    dist = np.linalg.norm(wall[:, :2] - c, axis=1)
-    bands = np.floor(wall[:, 2] / band).astype(int)
-    top = bands.max()
-    upper = (bands >= top - 1) & keep
-    if upper.sum() < 5:
-        upper = keep
-    return c, float(np.percentile(dist[upper], 75))
-
-
-def _round_wall(grid: Grid, local: np.ndarray, body: np.ndarray) -> bool:
-    """Whether the side wall around `body` is round: a circle fitted to its points (mid
-    height, near the outline) leaves them within `ROUND_RESIDUAL` of it (a rectangle's
-    wall, or a body with a handle block fused to it, does not)."""
-    outline = dilate_disc(body, 5.0) & ~erode_disc(body, 5.0)
-    near = _cells_of(grid, local, outline)
-    zmax = float(np.percentile(local[:, 2], 98)) if len(local) else 0.0
-    wall = local[near & (local[:, 2] > 0.2 * zmax) & (local[:, 2] < 0.8 * zmax)]
-    blo, bhi = grid.bounds(body)
-    fit = wall_fit(wall, (blo + bhi) / 2, float(np.mean(bhi - blo)) / 2)
-    if fit is None:
-        return True  # nothing to tell: keep the footprint's verdict
-    centre, radius = fit
-    dist = np.linalg.norm(wall[:, :2] - centre, axis=1)
-    bands = np.floor(wall[:, 2] / 0.01).astype(int)
-    resid = np.empty(len(dist))
-    for b in np.unique(bands):  # per height band: a flared wall is round at every height
-        sel = bands == b
-        resid[sel] = np.abs(dist[sel] - np.median(dist[sel]))
-    return float(np.median(resid)) <= max(ROUND_RESIDUAL, 0.03 * radius)
 
 
 def fit_shape(cloud: Cloud, scene: Scene3D, instance: int, *, prior_yaw: float = 0.0) -> SeenShape:
@@ -206,6 +141,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         return np.column_stack([rotate(p[:, :2] - c0, -yaw), p[:, 2]])
 
     local = local_of(pts)
+    rays_xy = rotate(cloud.rays[:, :2], -yaw)  # viewing directions in the seen frame
     lo, hi = local[:, :2].min(axis=0) - MARGIN, local[:, :2].max(axis=0) + MARGIN
 
     reach = float(np.max(hi - lo)) * 0.75 + MARGIN
@@ -250,12 +186,12 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
     body_mask = components(opened)[0] if opened.any() else foot
     blo, bhi = grid.bounds(body_mask)
     fill = body_mask.sum() * grid.cell**2 / float(np.prod(bhi - blo))
-    geom = "box" if fill > BOX_FILL or not _round_wall(grid, local, body_mask) else "cylinder"
+    geom = "box" if fill > BOX_FILL or not round_wall(grid, local, body_mask) else "cylinder"
     if geom == "box":
-        sq = open_square(foot, int(OPEN_FRACTION * rmax / math.sqrt(2)))
+        sq = open_square(foot, int(SQUARE_FRACTION * rmax))
         if sq.any():
             body_mask = components(sq)[0]
-    in_body = _cells_of(grid, local, dilate_disc(body_mask, 1.0))
+    in_body = cells_of(grid, local, dilate_disc(body_mask, 1.0))
     body_pts = local[in_body]
     if geom == "cylinder":
         blo, bhi = grid.bounds(body_mask)
@@ -263,7 +199,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         zt = float(np.percentile(body_pts[:, 2], 98)) if len(body_pts) else 0.0
         near_wall = np.abs(np.linalg.norm(local[:, :2] - centre, axis=1) - radius) < 0.35 * radius
         wall = near_wall & (local[:, 2] > 0.003) & (local[:, 2] < zt - 0.002)
-        fit = wall_fit(local[wall], centre, radius)
+        fit = wall_fit(local[wall], centre, radius, rays=rays_xy[wall])
         if fit is not None:
             centre, radius = fit
         body_lo, body_hi = centre - radius, centre + radius
@@ -309,6 +245,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         disc = np.linalg.norm(grid.centres(np.ones(grid.shape, bool)) - centre, axis=1)
         body_mask = (disc <= radius).reshape(grid.shape)
     rest = seen_foot & ~dilate_disc(body_mask, 2.0)
+    attached = np.zeros_like(body_mask)  # the attached handles' cells
     for piece in components(rest):
         if piece.sum() < MIN_MEMBER_CELLS:
             break
@@ -322,7 +259,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
             covered_gap = (gap & (other_top > 0.003)).sum() > 0.3 * max(1, int(gap.sum()))
             if covered_gap or not (see_through & gap).any():
                 bar, trimmed = piece, False
-        in_bar = local[_cells_of(grid, local, bar)]
+        in_bar = local[cells_of(grid, local, bar)]
         if len(in_bar) < 3:
             continue
         # the bar's extent is its points' (a cell's edge lies up to a cell beyond them: a
@@ -333,6 +270,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         mz = in_bar[:, 2]
         zlo, zhi = float(np.percentile(mz, 1)), float(np.percentile(mz, 99))
         if not trimmed:  # an attached handle reaches the body's box
+            attached |= piece
             ax = 0 if side in ("front", "back") else 1
             if geom == "box":  # the body's face from its points beside the handle
                 face_beside(body_pts, side, mlo[1 - ax], mhi[1 - ax], body_lo, body_hi)
@@ -344,6 +282,11 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
 
     if geom == "box":
         centre = (body_lo + body_hi) / 2
+    if attached.any() and not neck_mask.any():  # a handle rising above the body (a
+        # spatula's grip over its blade) leaves its root's heights in the body's cells
+        away = top[visible & ~dilate_disc(attached, 5.0)]
+        if len(away) >= 10 and float(np.percentile(away, 98)) < body_top - 0.003:
+            body_top = float(np.percentile(away, 98))
 
     # ---- top surface of the body
     top_shape = classify_top(
@@ -355,6 +298,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         geom,
         body_lo,
         body_hi,
+        over=other_top > body_top + FLAT_TOL,
     )
     if geom == "cylinder" and top_shape.visible and top_shape.shape in ("open", "concave"):
         top_shape = round_opening(top_shape, local[in_body], centre, radius)
@@ -420,14 +364,6 @@ def _hull_mask(grid: Grid, xy: np.ndarray) -> np.ndarray:
     centres = grid.lo + (np.stack([ii.ravel(), jj.ravel()], axis=1) + 0.5) * grid.cell
     inside = np.all(centres @ hull.equations[:, :2].T + hull.equations[:, 2] <= 1e-9, axis=1)
     return inside.reshape(grid.shape)
-
-
-def _cells_of(grid: Grid, pts: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Which points fall into the cells of `mask`."""
-    i, j, inside = grid.index(pts[:, :2])
-    out = np.zeros(len(pts), dtype=bool)
-    out[inside] = mask[i[inside], j[inside]]
-    return out
 
 
 def _surface_area(body: SeenMember, members: list[SeenMember]) -> float:

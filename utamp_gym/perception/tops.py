@@ -40,8 +40,12 @@ def classify_top(
     geom: str,
     lo: np.ndarray,
     hi: np.ndarray,
+    over: np.ndarray | None = None,
 ) -> SeenTop:
-    """The body's top surface (module docstring)."""
+    """The body's top surface (module docstring). `over`: cells where another object stands
+    above the body's top: a cavity or dish whose inside is mostly under them was not seen,
+    it is hidden (a tumbler standing on an inverted mug's base left a ring around it, read
+    as an opening); a flat well shows around what stands in it (a pan in a tray)."""
     full = tuple((hi - lo).tolist())
     centre = tuple(((hi + lo) / 2).tolist())
     if visible.sum() < max(8, 0.15 * body.sum()):
@@ -64,6 +68,23 @@ def classify_top(
         return SeenTop("round", full, rim_level, centre)  # type: ignore[arg-type]
     if not inner.any():
         return SeenTop("flat", full, rim_level, centre)  # type: ignore[arg-type]
+    hidden = over is not None and (inner & over).sum() >= 0.5 * inner.sum()
+    out = _inside(grid, top, inner, geom, rim_level, lo, hi)
+    if hidden and out.shape in ("open", "concave"):  # no cavity seen: one under an object
+        return SeenTop("flat", full, rim_level, centre, visible=False)  # type: ignore[arg-type]
+    return out
+
+
+def _inside(
+    grid: Grid,
+    top: np.ndarray,
+    inner: np.ndarray,
+    geom: str,
+    rim_level: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
+) -> SeenTop:
+    """What lies inside a rim: a flat well, a dish (concave) or a cavity (open)."""
     ilo, ihi = grid.bounds(inner)
     opening = ihi - ilo
     width = float(min(opening)) if geom == "box" else float(np.mean(opening))

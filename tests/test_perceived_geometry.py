@@ -1,0 +1,125 @@
+"""The perceiver's geometric readings that the rules decide at the millimetre: round walls
+measured on their outer face, rims that end where the well inside them begins, the faces no
+camera sees, a plate's mass (`perception.walls`, `perception.objects`, `perception.tops`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from utamp_gym.perception.grid import Grid
+from utamp_gym.perception.material import MaterialEstimate
+from utamp_gym.perception.objects import PerceivedObject, _edges, _mass_area, _shell_area
+from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
+from utamp_gym.perception.tops import classify_top
+from utamp_gym.perception.walls import wall_fit
+from utamp_gym.scene.materials import material
+
+
+def _ring(radius: float, n: int = 720, heights: tuple[float, ...] = (0.05, 0.06, 0.07)):
+    phi = np.linspace(0, 2 * math.pi, n, endpoint=False)
+    pts = [np.column_stack([radius * np.cos(phi), radius * np.sin(phi), np.full(n, z)])
+           for z in heights]  # fmt: skip
+    return np.concatenate(pts)
+
+
+def test_a_round_wall_is_measured_on_its_outer_face() -> None:
+    """A 7.2 cm tumbler with a 3 mm wall whose inner face is seen over the rim: the rays
+    tell the outer face (seen from outside) from the inner one."""
+    outer, inner = _ring(0.036), _ring(0.033, n=360)
+    wall = np.concatenate([outer, inner])
+    rays = np.concatenate([-outer[:, :2] / 0.036, inner[:, :2] / 0.033])  # towards / away
+    rays = np.column_stack([rays, np.full(len(rays), -0.5)])
+    _, r = wall_fit(wall, np.zeros(2), 0.036, rays=rays)
+    assert r == pytest.approx(0.036, abs=2e-4)
+
+
+def test_a_flared_wall_is_measured_at_its_top() -> None:
+    """A pan's wall widening 4 mm per centimetre of height: the radius at its top."""
+    heights = (0.005, 0.015, 0.025, 0.035, 0.045)
+    wall = np.concatenate([_ring(0.08 + 0.4 * z, heights=(z,)) for z in heights])
+    rays = np.column_stack([-wall[:, :2] / np.linalg.norm(wall[:, :2], axis=1)[:, None],
+                            np.full(len(wall), -0.5)])  # fmt: skip
+    _, r = wall_fit(wall, np.zeros(2), 0.09, rays=rays)
+    assert r == pytest.approx(0.08 + 0.4 * 0.045, abs=1e-3)
+
+
+def _rimmed(geom: str, handles: tuple[SeenMember, ...] = ()) -> SeenShape:
+    """A 40 x 30 cm tray (or a 21 cm plate) 4 cm high with a well 1.5 cm deep in a 1.5 cm
+    rim, the well 2 mm off centre along x."""
+    size = (0.4, 0.3) if geom == "box" else (0.21, 0.21)
+    lo, hi = (-size[0] / 2, -size[1] / 2, 0.0), (size[0] / 2, size[1] / 2, 0.04)
+    body = SeenMember("body", "", SeenBox(lo, hi), geom)
+    well = (size[0] - 0.03, size[1] - 0.03)
+    top = SeenTop("flat", well, 0.015, (0.002, 0.0), 0.015, 0.015)
+    return SeenShape(0.0, np.zeros(3), body, handles, top, size, 0.0, 0.001, 0.3, 0.0)
+
+
+def test_a_trays_rims_stand_on_the_table_and_end_at_its_well() -> None:
+    front = SeenMember("handle", "front", SeenBox((0.22, -0.06, 0.02), (0.24, 0.06, 0.04)))
+    back = SeenMember("handle", "back", SeenBox((-0.24, -0.06, 0.02), (-0.22, 0.06, 0.04)))
+    bars = (front, back)
+    edges = _edges(_rimmed("box", bars))  # offered whatever the tray weighs
+    assert [e.side for e in edges] == ["left", "right"]
+    left = edges[0].box
+    assert left.lo[2] == 0.0  # from the table up, as the catalogues declare a tray's rims
+    assert left.lo[1] == pytest.approx(0.15 - 0.015)  # where the well ends
+
+
+def test_a_plates_rim_ends_where_its_off_centre_well_begins() -> None:
+    front, back = _edges(_rimmed("cylinder"))
+    assert (front.side, back.side) == ("front", "back")
+    assert front.box.lo[0] == pytest.approx(0.002 + 0.09)  # the well's edge, not r - rim
+    assert back.box.hi[0] == pytest.approx(0.002 - 0.09)
+    assert front.box.lo[2] == pytest.approx(0.015)  # the band starts at the well's floor
+
+
+def test_a_round_body_with_handles_has_no_rim_edges() -> None:
+    lug = SeenMember("handle", "left", SeenBox((-0.02, 0.105, 0.02), (0.02, 0.13, 0.04)))
+    assert _edges(_rimmed("cylinder", (lug,))) == ()  # a pot is held by its handles
+
+
+def _cup(geom: str, mat: str) -> PerceivedObject:
+    body = SeenMember("body", "", SeenBox((-0.036, -0.036, 0.0), (0.036, 0.036, 0.1)), geom)
+    shape = SeenShape(0.0, np.zeros(3), body, (), SeenTop("flat", (0.072, 0.072), 0.1),
+                      (0.072, 0.072), 0.0, 0.0004, 0.03, 0.0)  # fmt: skip
+    return PerceivedObject(0, shape, MaterialEstimate(mat, {mat: 1.0}), 0.2, 0.1, 0.3, ())
+
+
+def test_the_face_an_inverted_object_rests_on() -> None:
+    """An inverted round body rests on its opening, inside its material's walls; an
+    inverted box (a package) on a flat face; an upright object on a flat one."""
+    glass = _cup("cylinder", "glass").as_type("t", "inverted").parts["on"]
+    wall = material("glass").wall
+    assert glass.shape == "open" and glass.size == pytest.approx((0.072 - 2 * wall,) * 2)
+    assert _cup("box", "cardboard").as_type("b", "inverted").parts["on"].shape == "flat"
+    assert _cup("cylinder", "glass").as_type("t", "upright").parts["under"].shape == "flat"
+
+
+def test_a_plate_is_weighed_as_one_dish_shaped_sheet() -> None:
+    plate = _rimmed("cylinder")
+    assert _mass_area(plate) == pytest.approx(1.2 * math.pi * 0.105**2)
+    assert _mass_area(plate) < 0.6 * _shell_area(plate)
+    tray = _rimmed("box")
+    assert _mass_area(tray) == _shell_area(tray)  # a moulded tray keeps its shell
+
+
+def test_a_cavity_under_another_object_is_hidden_but_a_well_still_shows() -> None:
+    """A ring seen around what stands on an inverted mug's base is not an opening; a tray's
+    well around a pan standing in it is still a well."""
+    grid = Grid(np.array([-0.05, -0.05]), (34, 34), 0.003)
+    ij = np.indices(grid.shape).transpose(1, 2, 0)
+    r = np.linalg.norm((ij + 0.5) * 0.003 - 0.05, axis=2)
+    body = r <= 0.036
+    over = r <= 0.028  # another object stands on it, above its top
+    top = np.where(body, 0.1, -np.inf)
+    top[body & (r <= 0.031)] = 0.09  # a lower ring seen between it and the rim
+    top[over] = -np.inf  # no point of the body seen under it
+    visible = body & ~over
+    lo, hi = np.array([-0.036, -0.036]), np.array([0.036, 0.036])
+    seen = classify_top(grid, top, visible, body, 0.1, "cylinder", lo, hi)
+    assert seen.shape == "open"  # what the ring alone says
+    hidden = classify_top(grid, top, visible, body, 0.1, "cylinder", lo, hi, over=over)
+    assert not hidden.visible and hidden.shape == "flat"
