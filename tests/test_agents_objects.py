@@ -54,7 +54,8 @@ def slot_agent(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_the_saved_agent_names_the_objects_interface(slot_agent: Path) -> None:
     meta = read_meta(slot_agent)
-    assert meta.env_options == {"masks": "geometric", "interface": "objects"}
+    # the slot count is recorded too (a model's slots default from it: tests/test_rl_slots.py)
+    assert meta.env_options == {"masks": "geometric", "interface": "objects", "slots": 6}
     assert meta.n_actions == N_ACTIONS and meta.n_fluents == 0
 
 

@@ -97,7 +97,10 @@ def pick(st: SimState, act: MacroAction) -> None:
     support, looked = st.stack().get(sym.obj), st.estimate(sym.obj)
     t = st.world.scene.type_of(sym.obj)
     sweeps = sweep_reach(t, sym.member) > SWEEP_REACH
-    lift = lift_height(st, sym.obj, turn_sink(t, sym.member) if sweeps else 0.0)
+    # the lift is judged at the usual height (`lift_height` without the room to turn): the
+    # room is climbed after, so a slow creep in the hand is not judged over a longer lift
+    judged = lift_height(st, sym.obj)
+    lift = lift_height(st, sym.obj, turn_sink(t, sym.member)) if sweeps else judged
     for attempt in range(1, GRASP_ATTEMPTS + 1):
         last = attempt == GRASP_ATTEMPTS
         try:
@@ -109,10 +112,11 @@ def pick(st: SimState, act: MacroAction) -> None:
             continue
         start_obj, start_tcp = obj_pose(st, sym.obj), st.arm.tcp()
         check_lift(st, held, path)
+        up, room = path.split(judged) if lift > judged else (path, None)
         if last:
-            st.arm.move_line(path, *APPROACH)
+            st.arm.move_line(up, *APPROACH)
             break
-        test, rest = path.split(TEST_LIFT)
+        test, rest = up.split(TEST_LIFT)
         st.arm.move_line(test, *APPROACH)
         trouble = lift_test_trouble(st, held)
         if trouble is None:
@@ -121,6 +125,8 @@ def pick(st: SimState, act: MacroAction) -> None:
         st.arm.move_line(test.reversed(), *PLACE)  # set it back down where it stood
         let_go_and_look_again(st, sym.obj, (support, looked), before, trouble)
     verify_lift(st, held, start_obj, start_tcp, before)
+    if room is not None and room.length > 0.0:
+        st.arm.move_line(room, *APPROACH)
 
 
 def place(st: SimState, act: MacroAction) -> None:
