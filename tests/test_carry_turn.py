@@ -12,20 +12,12 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from poses import DOWN, top_down
 
 from utamp_gym.affordances.solids import centre_of_mass
 from utamp_gym.kitchenware import generate
 from utamp_gym.sim.decode import box_corners
 from utamp_gym.sim.measure import CARRY_TILT_DEG, sweep_reach, turn_sink, turned_in_hand
-
-DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z axis pointing down
-
-
-def _top_down(pos) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, :3] = DOWN
-    out[:3, 3] = pos
-    return out
 
 
 def _held_by_handle(board) -> np.ndarray:
@@ -44,7 +36,7 @@ def _bottom(t, pose: np.ndarray) -> float:
 
 def test_a_board_held_by_its_handle_turns_its_far_end_down():
     board = generate("paddle-board", "v1", 688711848)  # 0086's obj2
-    tcp = _top_down([0.45, -0.2, 0.3])
+    tcp = top_down([0.45, -0.2, 0.3])
     held = _held_by_handle(board)
     turned = turned_in_hand(board, tcp, held)
     angle = math.degrees(math.acos((np.trace(held[:3, :3].T @ turned[:3, :3]) - 1) / 2))
@@ -68,7 +60,7 @@ def test_an_object_centred_under_the_hand_does_not_turn():
     held = np.eye(4)
     held[:3, :3] = DOWN.T
     held[:3, 3] = -DOWN.T @ np.array([cx, cy, mug.bbox.max[2]])  # its centre under the TCP
-    np.testing.assert_allclose(turned_in_hand(mug, _top_down([0.4, 0.0, 0.3]), held), held)
+    np.testing.assert_allclose(turned_in_hand(mug, top_down([0.4, 0.0, 0.3]), held), held)
 
 
 @pytest.fixture(scope="module")
@@ -98,7 +90,7 @@ def arm():
     checker.sync(data)
     q = (
         PandaKinematics()
-        .ik(_top_down([0.45, 0.0, 0.23]), np.array(HOME_Q), np.random.default_rng(1))
+        .ik(top_down([0.45, 0.0, 0.23]), np.array(HOME_Q), np.random.default_rng(1))
         .q
     )
     return model, checker, q

@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from poses import top_down
 
 from utamp_gym.robot.collision import CollisionChecker
 from utamp_gym.robot.kinematics import HOME_Q, PandaKinematics
@@ -58,13 +59,6 @@ def _build(recommended: bool):
     return model, handles.bind(model)
 
 
-def _top_down(pos) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, :3] = np.diag([1.0, -1.0, -1.0])
-    out[:3, 3] = pos
-    return out
-
-
 @pytest.mark.parametrize("recommended", [True, False], ids=["elliptic", "default-cone"])
 def test_gripper_lifts_box_by_friction(recommended):
     model, ids = _build(recommended)
@@ -96,9 +90,9 @@ def test_gripper_lifts_box_by_friction(recommended):
 
     settle(100)
     centre = data.xpos[box].copy()
-    q_pre = kin.ik(_top_down(centre + np.array([0, 0, 0.12])), np.array(HOME_Q), rng).q
-    q_grasp = kin.ik(_top_down(centre), q_pre, rng).q
-    q_lift = kin.ik(_top_down(centre + np.array([0, 0, 0.15])), q_grasp, rng).q
+    q_pre = kin.ik(top_down(centre + np.array([0, 0, 0.12])), np.array(HOME_Q), rng).q
+    q_grasp = kin.ik(top_down(centre), q_pre, rng).q
+    q_lift = kin.ik(top_down(centre + np.array([0, 0, 0.15])), q_grasp, rng).q
     move_to(q_pre)
     move_to(q_grasp)
     np.testing.assert_allclose(data.site_xpos[ids.tcp_site_id], centre, atol=3e-3)

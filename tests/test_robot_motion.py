@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from poses import top_down
 
 from utamp_gym.errors import GroundingError
 from utamp_gym.robot import motion
@@ -23,14 +24,6 @@ from utamp_gym.robot.panda_mjcf import add_panda, apply_recommended_options, set
 pytestmark = pytest.mark.physics
 
 TABLE_TOP = 0.3
-DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z axis pointing down
-
-
-def _top_down(pos) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, :3] = DOWN
-    out[:3, 3] = pos
-    return out
 
 
 @pytest.fixture(scope="module")
@@ -60,8 +53,8 @@ def scene():
     checker = CollisionChecker(model, ids, margin=0.01)
     checker.sync(data)
     rng = np.random.default_rng(0)
-    q_a = kin.ik(_top_down([0.5, -0.2, 0.45]), np.array(HOME_Q), rng, accept=checker.is_valid).q
-    q_b = kin.ik(_top_down([0.5, 0.2, 0.45]), np.array(HOME_Q), rng, accept=checker.is_valid).q
+    q_a = kin.ik(top_down([0.5, -0.2, 0.45]), np.array(HOME_Q), rng, accept=checker.is_valid).q
+    q_b = kin.ik(top_down([0.5, 0.2, 0.45]), np.array(HOME_Q), rng, accept=checker.is_valid).q
     return model, data, ids, kin, checker, q_a, q_b
 
 
@@ -118,7 +111,7 @@ def test_the_planner_limit_is_counted_in_checks_not_seconds(scene, monkeypatch):
 def test_free_straight_line_skips_the_sampler(scene):
     *_, kin, checker, q_a, _ = scene
     rng = np.random.default_rng(2)
-    q_near = kin.ik(_top_down([0.45, -0.25, 0.5]), q_a, rng, accept=checker.is_valid).q
+    q_near = kin.ik(top_down([0.45, -0.25, 0.5]), q_a, rng, accept=checker.is_valid).q
     plan = plan_motion(checker, q_a, q_near, np.random.default_rng(0))
     assert plan.direct and len(plan.vertices) == 2
 
@@ -127,7 +120,7 @@ def test_held_object_counts_in_collision_checks(scene):
     model, _, _, kin, checker, *_ = scene
     box = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box")
     q = kin.ik(
-        _top_down([0.45, -0.3, TABLE_TOP + 0.1]), np.array(HOME_Q), np.random.default_rng(1)
+        top_down([0.45, -0.3, TABLE_TOP + 0.1]), np.array(HOME_Q), np.random.default_rng(1)
     ).q
     assert checker.is_valid(q)  # bare arm: TCP 10 cm above the table
     tcp_t_box = np.eye(4)
@@ -151,8 +144,8 @@ def test_start_inside_margin_is_tolerated(scene):
     model, _, _, kin, checker, *_ = scene
     box = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box")
     rng = np.random.default_rng(3)
-    q_rest = kin.ik(_top_down([0.45, -0.3, TABLE_TOP + 0.03]), np.array(HOME_Q), rng).q
-    q_up = kin.ik(_top_down([0.45, -0.3, TABLE_TOP + 0.2]), q_rest, rng).q
+    q_rest = kin.ik(top_down([0.45, -0.3, TABLE_TOP + 0.03]), np.array(HOME_Q), rng).q
+    q_up = kin.ik(top_down([0.45, -0.3, TABLE_TOP + 0.2]), q_rest, rng).q
     checker.attach(box, np.eye(4))  # box bottom touches the table top
     try:
         assert not checker.is_valid(q_rest)
@@ -162,7 +155,7 @@ def test_start_inside_margin_is_tolerated(scene):
         with exact.tolerating(q_rest):  # the resting contact may stay, not deepen
             assert dense_check(plan.waypoints, exact, 0.005) is None
         assert checker.tolerance == {}  # relaxation only lasts for the call
-        too_deep = kin.ik(_top_down([0.45, -0.3, TABLE_TOP + 0.01]), q_rest, rng).q
+        too_deep = kin.ik(top_down([0.45, -0.3, TABLE_TOP + 0.01]), q_rest, rng).q
         with pytest.raises(GroundingError, match="in collision"):
             plan_motion(checker, too_deep, q_up, rng)
     finally:
