@@ -69,20 +69,30 @@ def achievable(split_suites: dict[str, str]) -> dict[str, list[int]]:
 def evaluate(
     method: str, suite: str, out: Path, workers: int, limit: int | None = None
 ) -> list[Any]:
-    """`utamp eval` rows of one method on one suite (symbolic grounding, seed 0), in the
-    suite's own folder under `out` (so the splits can be evaluated by separate processes)."""
+    """`utamp eval` rows of one method on one suite (`evaluate_all`)."""
+    return evaluate_all((method,), suite, out, workers, limit)[method]
+
+
+def evaluate_all(
+    methods: tuple[str, ...], suite: str, out: Path, workers: int, limit: int | None = None
+) -> dict[str, list[Any]]:
+    """`utamp eval` rows of every method on one suite (symbolic grounding, seed 0), by method:
+    one sweep (so its worker processes, and the env an ``rl:PATH`` method keeps per process,
+    serve every model), in the suite's own folder under `out` (so the splits can be evaluated
+    by separate processes); a rerun reuses the rows it finds there."""
     from utamp_gym.eval.sweep import SweepConfig, run_sweep
 
-    out = out / suite.rsplit("/", 1)[-1]
-
-    cfg = SweepConfig(suite=suite, methods=(method,), grounding="symbolic", explain=False,
+    cfg = SweepConfig(suite=suite, methods=methods, grounding="symbolic", explain=False,
                       limit=limit)  # fmt: skip
-    report = run_sweep(cfg, out, workers=workers, progress=False)
+    report = run_sweep(cfg, out / suite.rsplit("/", 1)[-1], workers=workers, progress=False)
     crashed = report.crashed
     if crashed:
-        raise RuntimeError(f"{len(crashed)} crashed rows for {method} on {suite}: "
+        raise RuntimeError(f"{len(crashed)} crashed rows for {crashed[0].method} on {suite}: "
                            f"{crashed[0].failure_reason}")  # fmt: skip
-    return report.rows
+    by_method: dict[str, list[Any]] = {m: [] for m in methods}
+    for r in report.rows:
+        by_method[r.method].append(r)
+    return by_method
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -50,7 +50,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from agents import fine_tune, flat_curve, load  # benchmarks/ is on sys.path when run
+from agents import evaluate_all, fine_tune, flat_curve, load  # benchmarks/ is on sys.path when run
 
 from utamp_gym.distributed import make_executor
 from utamp_gym.eval.intervals import t_interval, wilson_interval
@@ -216,28 +216,6 @@ def main() -> None:
     table["training_wall_time_s"] = round(train_wall, 1)
     table["total_wall_time_s"] = round(time.perf_counter() - start, 1)
     write(table, docs)
-
-
-def evaluate_all(
-    methods: tuple[str, ...], suite: str, out: Path, workers: int, limit: int | None
-) -> dict[str, list[Any]]:
-    """`utamp eval` rows of every method on one suite (symbolic grounding, seed 0), by method:
-    one sweep (so its worker processes, and the env an ``rl:PATH`` method keeps per process,
-    serve every model), in the suite's own folder under `out`; a rerun reuses the rows it
-    finds there (an interrupted evaluation continues)."""
-    from utamp_gym.eval.sweep import SweepConfig, run_sweep
-
-    cfg = SweepConfig(suite=suite, methods=methods, grounding="symbolic", explain=False,
-                      limit=limit)  # fmt: skip
-    report = run_sweep(cfg, out / suite.rsplit("/", 1)[-1], workers=workers, progress=False)
-    if report.crashed:
-        first = report.crashed[0]
-        raise RuntimeError(f"{len(report.crashed)} crashed rows on {suite}, e.g. {first.method}: "
-                           f"{first.failure_reason}")  # fmt: skip
-    by_method: dict[str, list[Any]] = {m: [] for m in methods}
-    for r in report.rows:
-        by_method[r.method].append(r)
-    return by_method
 
 
 def _rates(rows: list[Any]) -> dict[str, Any]:
