@@ -1,6 +1,6 @@
 """The procedural-v2 splits in physics: the rules-based planner on the extended domain.
 
-    nice -n 5 python benchmarks/v2_physics.py [--seeds 1] [--workers 2]
+    nice -n 5 python benchmarks/v2_physics.py [--seeds 1] [--workers 2] [--closed-loop]
         [--splits test-tasks,hard,test-count,test-instances,test-families,train]
         [--out out/v2_physics] [--results docs/results] [--summarize-only]
 
@@ -12,6 +12,14 @@ labels achievable, how many runs were planned and succeeded in physics, whether 
 unachievable goal was reported unsolvable; per goal template and per family the success of
 the planned runs; and every failed planned run with its physical reason. The targets (issue
 #38): planned runs succeed on >= 97 % of every split and >= 95 % of every template.
+
+Two protocols. By default the paper's, open loop: plan once, execute, and stop at the first
+failed step. With ``--closed-loop`` (``utamp eval --closed-loop``, written to
+``v2_physics_closed_loop.md`` / ``.json``) the planner acts as the env's planner policy: it
+perceives the state after every step, replans when it differs from the prediction and bans
+an action that failed from the state it failed in (`utamp_gym.agents.planner`), so a
+grasp the arm cannot reach or an object that slipped back onto its support is retried
+another way; the page counts the runs that replanned and the successes among them.
 """
 
 from __future__ import annotations
@@ -41,7 +49,7 @@ def eval_command(split: str, args: argparse.Namespace) -> list[str]:
         "eval", "--suite", f"procedural-v2/{split}", "--methods", METHOD,
         "--grounding", "physics", "--seeds", str(args.seeds),
         "--workers", str(args.workers), "--out", str(Path(args.out) / split), "--quiet",
-    ]  # fmt: skip
+    ] + (["--closed-loop"] if getattr(args, "closed_loop", False) else [])  # fmt: skip
 
 
 def _rate(c: Counter[str]) -> float | None:
@@ -82,6 +90,8 @@ def summarize_split(split: str, rows: Rows) -> dict[str, Any]:
             for r in rows
             if labels[r["scene"]].achievable and r["solved"] != "true"
         ],
+        "replanned": sum(int(r.get("n_replans") or 0) > 0 for r in planned),
+        "replanned_success": sum(int(r.get("n_replans") or 0) > 0 for r in ok),
         "unachievable_runs": len(unachievable),
         "unachievable_reported_unsolvable": sum(r["solved"] == "false" for r in unachievable),
         "by_template": {k: dict(c) for k, c in sorted(by_template.items())},
@@ -116,18 +126,28 @@ def _cell(c: dict[str, int] | None) -> str:
 
 def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> str:
     names = [s["split"] for s in summaries]
+    closed = getattr(args, "closed_loop", False)
+    protocol = (
+        "closed loop (`--closed-loop`: the planner policy perceives the state after every "
+        "step, replans when it differs from the plan's prediction and bans an action that "
+        "failed from that state; a run succeeds if the goal holds within "
+        "`utamp_gym.eval.closed_loop.MAX_STEPS` macro actions)"
+        if closed
+        else "open loop, the paper's protocol (plan once, execute, stop at the first failed step)"
+    )
     out = [
         "<!-- written by benchmarks/v2_physics.py from utamp eval's results.csv -->",
         "",
         f"`utamp eval --suite procedural-v2/<split> --methods {METHOD} --grounding physics "
-        f"--seeds {args.seeds}` (default pose noise), per split; targets: planned runs "
+        f"--seeds {args.seeds}{' --closed-loop' if closed else ''}` (default pose noise), per "
+        f"split, {protocol}; targets: planned runs "
         f"succeed on ≥ {TARGET:.0%} of every split and ≥ {TEMPLATE_TARGET:.0%} of every "
         "template, every unachievable goal reported unsolvable.",
         "",
         "| split | seeds | scenes (run) | achievable (split file) | runs | planned | "
         "succeeded in physics | unachievable runs reported unsolvable | "
-        "achievable but not planned |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "achievable but not planned |" + (" replanned (of them succeeded) |" if closed else ""),
+        "|---|---|---|---|---|---|---|---|---|" + ("---|" if closed else ""),
     ]
     for s in summaries:
         rate = s["success_rate_of_planned"]
@@ -138,6 +158,7 @@ def to_markdown(summaries: list[dict[str, Any]], args: argparse.Namespace) -> st
             f"{f' ({rate:.1%})' if rate is not None else ''}** | "
             f"{s['unachievable_reported_unsolvable']}/{s['unachievable_runs']} | "
             f"{len(s['achievable_not_planned'])} |"
+            + (f" {s['replanned']} ({s['replanned_success']}) |" if closed else "")
         )
     total = templates_total(summaries)
     out += [
@@ -208,7 +229,18 @@ def below_target(summaries: list[dict[str, Any]]) -> list[str]:
 
 def build_parser() -> argparse.ArgumentParser:
     """This script's options (tests check recorded result commands against them)."""
-    return sweep_parser(__doc__.splitlines()[0], seeds=1, splits=SPLITS, out="out/v2_physics")
+    ap = sweep_parser(__doc__.splitlines()[0], seeds=1, splits=SPLITS, out="out/v2_physics")
+    ap.add_argument(
+        "--closed-loop", action="store_true",
+        help="run the planner policy (replanning) instead of plan-then-execute; writes "
+        "v2_physics_closed_loop.md/.json",
+    )  # fmt: skip
+    return ap
+
+
+def page_stem(args: argparse.Namespace) -> str:
+    """The results page's file name without suffix: one per protocol."""
+    return "v2_physics_closed_loop" if args.closed_loop else "v2_physics"
 
 
 def main() -> None:
@@ -218,9 +250,10 @@ def main() -> None:
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     data = {"args": vars(args), "method": METHOD, "splits": summaries}
-    prov = write_json(results / "v2_physics.json", data, indent=1)
+    stem = page_stem(args)
+    prov = write_json(results / f"{stem}.json", data, indent=1)
     text = to_markdown(summaries, args)
-    write_markdown(results / "v2_physics.md", text, prov)
+    write_markdown(results / f"{stem}.md", text, prov)
     print(text)
     below = below_target(summaries)
     if below:

@@ -48,3 +48,21 @@ def test_eval_command_is_the_label_method_in_physics() -> None:
     cmd = bench.eval_command("hard", args)
     assert cmd[:5] == ["eval", "--suite", "procedural-v2/hard", "--methods", "utamp2x-rules"]
     assert "physics" in cmd and cmd[cmd.index("--out") + 1] == str(Path("o") / "hard")
+
+
+def test_closed_loop_runs_the_planner_policy_and_writes_its_own_page() -> None:
+    args = bench.build_parser().parse_args(["--closed-loop", "--out", "o"])
+    assert "--closed-loop" in bench.eval_command("test-tasks", args)
+    assert bench.page_stem(args) == "v2_physics_closed_loop"
+    plain = bench.build_parser().parse_args([])
+    assert "--closed-loop" not in bench.eval_command("test-tasks", plain)
+    assert bench.page_stem(plain) == "v2_physics"
+    scenes = split_scenes("test-tasks")
+    good = [s.scene.name for s in scenes if s.achievable][:2]
+    rows = [_row(good[0], True, True) | {"n_replans": "2"}, _row(good[1], True, True)]
+    rows[1]["n_replans"] = "0"
+    s = bench.summarize_split("test-tasks", rows)
+    assert (s["replanned"], s["replanned_success"]) == (1, 1)
+    text = bench.to_markdown([s], args)
+    assert "closed loop" in text and "--closed-loop" in text and "| 1 (1) |" in text
+    assert "closed loop" not in bench.to_markdown([s], plain)
