@@ -16,6 +16,7 @@ from utamp_gym.agents import PlannerPolicy
 from utamp_gym.contract.state import PhysicalState
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.errors import PlanningError
+from utamp_gym.eval.closed_loop import run_closed_loop
 from utamp_gym.eval.runner import EvalTask, run_task
 from utamp_gym.perception.abstraction import perceive
 from utamp_gym.planning.methods import plan_scene
@@ -278,3 +279,13 @@ def _salt_orientation(scene: Scene, state: PhysicalState) -> set[str]:
     """The shaker's perceived `force` and `base` atoms: which of its parts face up and back."""
     atoms = perceive(scene, state).atoms
     return {a for a in atoms if a.startswith(("(force salt", "(base salt"))}
+
+
+def test_a_planner_that_gives_up_names_the_physical_failure_that_led_there() -> None:
+    """procedural-v2/hard/0012, seed 0: lifting obj2 off obj1 would collide with obj4's handle
+    (the arm checks it), the policy bans that pick and no other plan exists from there; the
+    row says both."""
+    out = run_closed_loop("procedural-v2/hard/0012", "utamp2x-rules", seed=0)
+    assert not out.success and out.n_replans >= 1
+    assert out.failure.startswith("no plan from the current state")
+    assert "(last failed step: lifting obj2 would collide" in out.failure

@@ -110,8 +110,10 @@ def run_closed_loop(
     finally:
         env.close()
     failure = ""
-    if ep.ended == "policy":
-        failure = ep.stopped
+    if ep.ended == "policy":  # the planner gave up: say which physical failure led there
+        failure = ep.stopped + (
+            f" (last failed step: {ep.last_failure})" if ep.last_failure else ""
+        )
     elif ep.ended == "budget":
         failure = f"step budget of {max_steps} macro actions exhausted"
     elif not ep.success:
