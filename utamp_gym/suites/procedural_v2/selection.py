@@ -1,7 +1,7 @@
 """Choosing procedural-v2's seeds and writing its split file:
-``python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json [N [RELAX_AFTER [LOG]]]`` (one
-split, its labels checked; `select_seeds`' `relax_after` and `resume`), then ``write OUT.json
-...`` (the split file with digests) and ``check``.
+``python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json [N [RELAX_AFTER [LOG [ONLY]]]]``
+(one split, its labels checked; `select_seeds`' `relax_after`, `resume` and `only`), then
+``write OUT.json ...`` (the split file with digests) and ``check``.
 
 `select_seeds` walks the seeds 0, 1, ... and keeps a seed when its scene has a layout and a
 goal, the planner labels the goal (`labels.label`, no time-out), Fast Downward's translator
@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from utamp_gym.errors import UnknownNameError
 from utamp_gym.resources import assets_dir
 from utamp_gym.suites.procedural.spec import NoLayout
 from utamp_gym.suites.procedural_v2.labels import fd_agrees, label
@@ -52,12 +53,15 @@ def select_seeds(
     log: Any = None,
     relax_after: int | None = None,
     resume: Sequence[tuple[int, str, bool, int]] = (),
+    only: Sequence[str] = (),
 ) -> dict[str, Any]:
     """The first `n` seeds that fill the split's quotas (module docstring), with labels.
 
     After seed `relax_after` the per-template quotas no longer hold (a template whose goals
     are seldom achievable in a split, the tower of 6-8 objects in test-count, cannot stall
-    it); `resume` continues a run from its kept (seed, template, achievable, plan length)."""
+    it); `resume` continues a run from its kept (seed, template, achievable, plan length);
+    `only`: after the resumed seeds, keep goals of these templates alone (the hard suite's
+    ``restack``, seldom achievable, extended to `SIZES`' count after its first 24 scenes)."""
     templates = SPLIT_TEMPLATES[split]
     share = 0.0 if split == "hard" else UNACHIEVABLE_SHARE
     want_bad = round(n * share)
@@ -71,6 +75,10 @@ def select_seeds(
         kept.append((seed, ok, length))
         good[template] += ok
         bad += not ok
+    unknown = sorted(set(only) - set(templates))
+    if unknown:
+        raise UnknownNameError(f"template of split {split}", unknown[0], templates)
+    extended_after = seed if only else None
     while len(kept) < n:
         seed += 1
         if relax_after is not None and seed > relax_after:
@@ -80,7 +88,9 @@ def select_seeds(
         except NoLayout:
             skipped["layout"] += 1
             continue
-        if good[g.template] >= per_template and bad >= want_bad:
+        if (good[g.template] >= per_template and bad >= want_bad) or (
+            only and g.template not in only
+        ):
             skipped["share full"] += 1
             continue
         lab = label(g.scene)
@@ -113,6 +123,7 @@ def select_seeds(
         "skipped": skipped,
         "fd_checked": check_fd,
         "relaxed_after_seed": relax_after,
+        **({"only": list(only), "only_after_seed": extended_after} if only else {}),
     }
 
 
@@ -144,6 +155,14 @@ def write_split_file(parts: Sequence[dict[str, Any]]) -> None:
                 if part.get("relaxed_after_seed") is not None
                 else {}
             ),
+            **(
+                {
+                    "only_templates_after_seed": part["only_after_seed"],
+                    "only_templates": part["only"],
+                }
+                if part.get("only")
+                else {}
+            ),
             "templates": list(SPLIT_TEMPLATES[split]),
             "seeds": list(seeds),
             "achievable": part["achievable"],
@@ -167,13 +186,16 @@ def _log_entry(line: str) -> tuple[int, str, bool, int]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
-    if 3 <= len(args) <= 6 and args[0] == "select" and args[1] in SPLITS:
+    if 3 <= len(args) <= 7 and args[0] == "select" and args[1] in SPLITS:
         n = int(args[3]) if len(args) >= 4 else SIZES[args[1]]
         relax = int(args[4]) if len(args) >= 5 else None  # ... N RELAX_AFTER
         resume = []
-        if len(args) == 6:  # ... N RELAX_AFTER LOG: continue the run that LOG records
+        if len(args) >= 6:  # ... N RELAX_AFTER LOG: continue the run that LOG records
             resume = [_log_entry(line) for line in Path(args[5]).read_text().splitlines()]
-        chosen = select_seeds(args[1], n, log=sys.stderr, relax_after=relax, resume=resume)
+        only = args[6].split(",") if len(args) == 7 else []  # ... LOG ONLY: these templates
+        chosen = select_seeds(
+            args[1], n, log=sys.stderr, relax_after=relax, resume=resume, only=only
+        )
         with open(args[2], "w") as f:
             json.dump({"split": args[1], **chosen}, f)
         return 0
@@ -186,7 +208,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1 if bad else 0
     print(
         "usage: python -m utamp_gym.suites.procedural_v2 select SPLIT OUT.json "
-        "[N [RELAX_AFTER [LOG]]] | "
+        "[N [RELAX_AFTER [LOG [ONLY]]]] | "
         "write OUT.json ... | check",
         file=sys.stderr,
     )
