@@ -12,8 +12,19 @@ from typing import Any
 import numpy as np
 import pytest
 
-from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, LOW_COVER_LIMIT
-from utamp_gym.affordances.hand import HAND_REST_TOLERANCE, hand_landing
+from utamp_gym.affordances.calibrated import (
+    EXTENDED_LIFT_LIMIT,
+    LOW_COVER_LIMIT,
+    SHOULDER_RELEASE,
+    SHOULDER_TOLERANCE,
+    shoulder_rest,
+)
+from utamp_gym.affordances.hand import (
+    HAND_REST_TOLERANCE,
+    OPEN_CLEARANCE,
+    finger_room,
+    hand_landing,
+)
 from utamp_gym.affordances.rim import (
     CALIBRATED_MIN_WIDTH,
     CALIBRATED_THIN_TORQUE_LIMIT,
@@ -59,6 +70,24 @@ def test_a_body_under_a_low_lid_is_grasped_and_under_a_tall_one_not():
     assert not _grants("jar", 8, "body", "left", "right", False)
     assert _grants("jar", 8, "body", "left", "right", True)
     assert not _grants("jar", 1, "body", "left", "right", True)
+
+
+def test_a_lid_is_taken_with_the_fingers_on_the_shoulder_where_they_let_go_of_it():
+    # the fingers land 2 mm early on the jar's shoulder beside its lid (paper: refused)
+    for seed, granted in ((8, True), (2, True), (25, False)):
+        t = generate("jar", "v1", seed)
+        room = finger_room(t, "lid", "on", "left")
+        assert room.stopped_by == ("body", "body")
+        assert 0 < max(room.shortfall) <= SHOULDER_TOLERANCE, seed
+        refusal = pick_refusal(t, "lid", "on", "left", "right")
+        assert refusal.rule == "finger-room" and refusal.values["other"] == "body"
+        assert not _grants("jar", seed, "lid", "left", "right", False)
+        assert _grants("jar", seed, "lid", "left", "right", True) == granted, seed
+        ledge = (t.body.box.size[0] - t.members["lid"].box.size[0]) / 2
+        assert (ledge <= OPEN_CLEARANCE - SHOULDER_RELEASE) == granted, seed
+        assert shoulder_rest(t, "lid", "on", "left") == granted, seed
+    # a body is no cap on itself
+    assert not shoulder_rest(generate("jar", "v1", 8), "body", "on", "left")
 
 
 def test_a_thick_rim_carries_what_the_pads_friction_couple_bears():
@@ -206,6 +235,9 @@ def _pick_and_place(sim: Any, fam: str, seed: int, grasp: str) -> str:
         ("tray", 32, "edge-left", "left", "right"),  # refused: 2.62 N m, 14.3 mm rim
         ("sheet-pan", 9, "edge-left", "left", "right"),  # granted: 2.14 N m, 12.3 mm rim
         ("sheet-pan", 141, "edge-left", "left", "right"),  # refused: 2.06 N m, 8.2 mm rim
+        ("jar", 8, "lid", "left", "right"),  # granted: the shoulder 1.1 mm inside the fingers
+        ("jar", 2, "lid", "front", "back"),  # granted: 3.2 mm inside
+        ("jar", 25, "lid", "left", "right"),  # refused: 0.5 mm, wedged between the fingers
     ],
 )
 def test_the_rule_decides_as_physics_does(sim, fam, seed, member, f1, f2):
