@@ -20,7 +20,9 @@ rules allow is picked and placed on a slot the scene's rules grant it (the other
 back on its own: `symbolic.slots.admits`, whose reach geometry the placement shares; none:
 only picked) (precision: both succeed); every other grasp from above the hand could close on
 (each member, each finger pair) is picked (recall: the share of forbidden picks physics
-lifts). Writes ``<out>.json`` and ``<out>.md``.
+lifts), and a forbidden pick physics lifts is placed as an allowed one would be (a grant is
+right only if the placement succeeds too: "lifted and placed"). Writes ``<out>.json`` and
+``<out>.md``.
 """
 
 from __future__ import annotations
@@ -185,9 +187,11 @@ def physics_table(
                     if allowed and why:
                         cases.append({"family": fam, "seed": seed, "member": member,
                                       "fingers": f"{f1}/{f2}", "reason": why})  # fmt: skip
-                    if not allowed and not why:
+                    if not allowed and not why:  # lifted anyway: does it place too?
+                        placed = not slot or not try_grasp(sim, fam, seed, member, f1, f2, slot)
+                        row["forbidden_placed"] += placed
                         missed.append({"family": fam, "seed": seed, "member": member,
-                                       "fingers": f"{f1}/{f2}"})  # fmt: skip
+                                       "fingers": f"{f1}/{f2}", "placed": placed})  # fmt: skip
                     print(f"{fam:15s} {seed:3d} {member:12s} {f1}/{f2} "
                           f"{key:9s} {'ok' if not why else why[:80]}", flush=True)  # fmt: skip
             rows[fam] = dict(row)
@@ -231,24 +235,28 @@ def markdown(data: dict[str, Any]) -> str:
             "other slot, or back on its own where the scene's rules grant only that (placed "
             "back), or only picked where they grant neither (pick only) "
             f"(target ≥ {TARGET:.0%}); every other grasp from above, picked (physics lifting "
-            f"it is a pick the rules miss; target ≤ {FORBIDDEN_TARGET:.0%}).",
+            f"it is a pick the rules miss; target ≤ {FORBIDDEN_TARGET:.0%}), and each one "
+            "lifted is placed as an allowed one would be (lifted and placed: a pick the rules "
+            "could have granted).",
             "",
             "| family | allowed: picked and placed | of them placed back, pick only "
-            "| forbidden: lifted anyway |",
-            "|---|---|---|---|",
+            "| forbidden: lifted anyway | forbidden: lifted and placed anyway |",
+            "|---|---|---|---|---|",
         ]
         tot = defaultdict(int)
         for fam, r in data["physics"].items():
-            for k in ("allowed", "allowed_ok", "forbidden", "forbidden_ok"):
+            for k in ("allowed", "allowed_ok", "forbidden", "forbidden_ok", "forbidden_placed"):
                 tot[k] += r.get(k, 0)
             lines.append(
                 f"| {fam} | {share(r.get('allowed_ok', 0), r.get('allowed', 0))} | "
                 f"{r.get('placed_back', 0)}, {r.get('pick_only', 0)} | "
-                f"{share(r.get('forbidden_ok', 0), r.get('forbidden', 0))} |"
+                f"{share(r.get('forbidden_ok', 0), r.get('forbidden', 0))} | "
+                f"{share(r.get('forbidden_placed', 0), r.get('forbidden', 0))} |"
             )
         lines.append(
             f"| **all** | {share(tot['allowed_ok'], tot['allowed'])} | | "
-            f"{share(tot['forbidden_ok'], tot['forbidden'])} |"
+            f"{share(tot['forbidden_ok'], tot['forbidden'])} | "
+            f"{share(tot['forbidden_placed'], tot['forbidden'])} |"
         )
         if data["failures"]:
             lines += ["", "Allowed grasps physics failed:", ""]
@@ -257,10 +265,15 @@ def markdown(data: dict[str, Any]) -> str:
                 for c in data["failures"]
             ]
         if data.get("missed"):
-            lines += ["", "Forbidden grasps physics lifted (the picks the rules miss):", ""]
+            lines += ["", "Forbidden grasps physics lifted (the picks the rules miss; "
+                      "not placed: the placement failed):", ""]  # fmt: skip
             for fam in dict.fromkeys(c["family"] for c in data["missed"]):
                 cs = [c for c in data["missed"] if c["family"] == fam]
-                grasps = ", ".join(f"{c['seed']} {c['member']} ({c['fingers']})" for c in cs)
+                grasps = ", ".join(
+                    f"{c['seed']} {c['member']} ({c['fingers']}"
+                    f"{'' if c.get('placed', True) else ', not placed'})"
+                    for c in cs
+                )
                 lines.append(f"- {fam}: {grasps}")
     lines.append("")
     return "\n".join(lines)

@@ -12,13 +12,23 @@ from typing import Any
 import numpy as np
 import pytest
 
-from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, LOW_COVER_LIMIT
-from utamp_gym.affordances.hand import HAND_REST_TOLERANCE, hand_landing
+from utamp_gym.affordances.calibrated import (
+    EXTENDED_LIFT_LIMIT,
+    LOW_COVER_LIMIT,
+    SHOULDER_RELEASE,
+    SHOULDER_TOLERANCE,
+    shoulder_rest,
+)
+from utamp_gym.affordances.hand import (
+    HAND_REST_TOLERANCE,
+    OPEN_CLEARANCE,
+    finger_room,
+    hand_landing,
+)
 from utamp_gym.affordances.rim import (
     CALIBRATED_MIN_WIDTH,
     CALIBRATED_THIN_TORQUE_LIMIT,
     RIM_STOP_TOLERANCE,
-    THICK_TORQUE_LIMIT,
     rim_couple_limit,
     rim_pinch_refusal,
     wall_bow,
@@ -62,12 +72,45 @@ def test_a_body_under_a_low_lid_is_grasped_and_under_a_tall_one_not():
     assert not _grants("jar", 1, "body", "left", "right", True)
 
 
-def test_a_thick_rim_carries_up_to_the_thick_torque_limit():
+def test_a_lid_is_taken_with_the_fingers_on_the_shoulder_where_they_let_go_of_it():
+    # the fingers land 2 mm early on the jar's shoulder beside its lid (paper: refused)
+    for seed, granted in ((8, True), (2, True), (25, False)):
+        t = generate("jar", "v1", seed)
+        room = finger_room(t, "lid", "on", "left")
+        assert room.stopped_by == ("body", "body")
+        assert 0 < max(room.shortfall) <= SHOULDER_TOLERANCE, seed
+        refusal = pick_refusal(t, "lid", "on", "left", "right")
+        assert refusal.rule == "finger-room" and refusal.values["other"] == "body"
+        assert not _grants("jar", seed, "lid", "left", "right", False)
+        assert _grants("jar", seed, "lid", "left", "right", True) == granted, seed
+        ledge = (t.body.box.size[0] - t.members["lid"].box.size[0]) / 2
+        assert (ledge <= OPEN_CLEARANCE - SHOULDER_RELEASE) == granted, seed
+        assert shoulder_rest(t, "lid", "on", "left") == granted, seed
+    # a body is no cap on itself
+    assert not shoulder_rest(generate("jar", "v1", 8), "body", "on", "left")
+
+
+def test_a_thick_rim_carries_what_the_pads_friction_couple_bears():
     held = rim_pinch_refusal(generate("tray", "v1", 2), "edge-left", "on", "left", "right")
-    assert held is None  # 1.57 kg at 2.27 N m
+    assert held is None  # 1.57 kg at 2.27 N m on a 13.8 mm rim
     slips = rim_pinch_refusal(generate("tray", "v1", 6), "edge-left", "on", "left", "right")
     assert slips is not None and slips.rule == "torque"
-    assert slips.values["moment"] > THICK_TORQUE_LIMIT
+    assert slips.values["moment"] > slips.values["limit"]
+
+
+def test_a_thin_full_pad_rim_bears_less_than_a_tray_side_rim():
+    # 2.06 N m on an 8.2 mm sheet-pan rim: under the 2.3 N m the trays' side rims held, over
+    # its own couple (1.94 N m): it slips (procedural-v1/test-families/0040's sheet pan,
+    # 2.12 N m on 8.2 mm, pivoted 15 deg)
+    thin = generate("sheet-pan", "v1", 141)
+    slips = rim_pinch_refusal(thin, "edge-left", "on", "left", "right")
+    assert slips is not None and slips.rule == "torque"
+    assert slips.values["moment"] < 2.3
+    assert slips.values["limit"] == pytest.approx(rim_couple_limit(0.0082), abs=1e-3)
+    assert ("canLift", thin.name, "edge-left") not in object_facts(thin, True)
+    # a thicker one (12.3 mm) holds more: 2.14 N m
+    thick = rim_pinch_refusal(generate("sheet-pan", "v1", 9), "edge-left", "on", "left", "right")
+    assert thick is None
 
 
 def test_a_mug_handle_is_pinched_with_its_wall_the_hand_resting_a_little_on_the_rim():
@@ -119,7 +162,6 @@ def test_a_finger_may_land_on_a_lug_just_below_the_rim():
 
 
 def test_a_thicker_tray_rim_bears_more():
-    assert rim_couple_limit(0.0195) > THICK_TORQUE_LIMIT > rim_couple_limit(0.013)
     held = rim_pinch_refusal(generate("tray", "v1", 24), "edge-left", "on", "left", "right")
     assert held is None  # 2.32 N m on a 17.3 mm rim
     slips = rim_pinch_refusal(generate("tray", "v1", 32), "edge-left", "on", "left", "right")
@@ -191,6 +233,11 @@ def _pick_and_place(sim: Any, fam: str, seed: int, grasp: str) -> str:
         ("stock-pot", 16, "body", "left", "right"),  # refused: 6 mm early on the lug
         ("tray", 24, "edge-left", "left", "right"),  # granted: 2.32 N m, 17.3 mm rim
         ("tray", 32, "edge-left", "left", "right"),  # refused: 2.62 N m, 14.3 mm rim
+        ("sheet-pan", 9, "edge-left", "left", "right"),  # granted: 2.14 N m, 12.3 mm rim
+        ("sheet-pan", 141, "edge-left", "left", "right"),  # refused: 2.06 N m, 8.2 mm rim
+        ("jar", 8, "lid", "left", "right"),  # granted: the shoulder 1.1 mm inside the fingers
+        ("jar", 2, "lid", "front", "back"),  # granted: 3.2 mm inside
+        ("jar", 25, "lid", "left", "right"),  # refused: 0.5 mm, wedged between the fingers
     ],
 )
 def test_the_rule_decides_as_physics_does(sim, fam, seed, member, f1, f2):

@@ -24,8 +24,9 @@ decide from geometry and mass alone, never from a family or a type name:
 * the object weighs at most `RIM_LIFT_LIMIT` and the moment of its weight about the pinch
   stays within `THIN_TORQUE_LIMIT`, for a wall squeezed with the reduced `PINCH_FORCE`; a
   wall at least `hand.MIN_PINCH` thick, squeezed with the full force, carries
-  `calibrated.EXTENDED_LIFT_LIMIT` and `THICK_TORQUE_LIMIT`, or `rim_couple_limit` of its
-  thickness if more.
+  `calibrated.EXTENDED_LIFT_LIMIT` and, where its rim takes the whole pad, the moment the
+  pads bear on it: `rim_couple_limit` of its thickness (the squeeze's share and the pads'
+  friction couple across the rim; a thinner rim bears less).
 """
 
 from __future__ import annotations
@@ -68,18 +69,17 @@ CALIBRATED_THIN_TORQUE_LIMIT = 0.665
 #: m a wall may slope out from its foot to its rim: flat pads meet a flared wall (a frying
 #: pan's) along a line and it pivots between them (6 of 6 light frying pans fell)
 FLARE_LIMIT = 0.003
-#: N m about the pinch of a wall at least `hand.MIN_PINCH` thick (trays held by a side
-#: rim: every one up to 2.39 N m lifted, one of two at 2.41 N m and all beyond 2.6 slipped)
-THICK_TORQUE_LIMIT = 2.3
-#: m: a rim this tall takes the whole pad (`hand.PAD_HEIGHT` and 2 mm) and carries
-#: `THICK_TORQUE_LIMIT`; a lower one `hand.TORQUE_LIMIT` (sheet pans with 19.9 mm rims slipped
-#: at 2.1 N m, 22-26 mm ones held 1.9-2.1 N m)
+#: m: a rim this tall takes the whole pad (`hand.PAD_HEIGHT` and 2 mm) and bears
+#: `rim_couple_limit` of its thickness; a lower one `hand.TORQUE_LIMIT` (sheet pans with
+#: 19.9 mm rims slipped at 2.1 N m, 22-26 mm ones 11.5-12.3 mm thick held 1.9-2.1 N m)
 FULL_PAD_RIM = PAD_HEIGHT + 0.002
-#: N m the calibrated rules add to the squeeze's share for such a rim: the pads' friction
+#: N m the squeeze's share bears about the pinch of such a rim, to which the pads' friction
 #: couple across the rim's thickness adds ``GRIP_FORCE * EDGE_COUPLE_SHARE * PAD_FRICTION``
 #: per metre of it (`rim_couple_limit`, as `utamp_gym.affordances.edge.edge_torque_limit`):
 #: v1 trays pinched at a side rim 16.6-19.7 mm thick held 2.32-2.48 N m, rims 13.5-15.2 mm
-#: thick slipped from 2.41 N m
+#: thick slipped from 2.41 N m; a sheet pan's 8.2 mm rim pivoted 15 deg at 2.12 N m
+#: (procedural-v1/test-families/0040, 1.94 N m by the couple), where the flat 2.3 N m the
+#: trays' side rims held had granted it
 RIM_COUPLE_BASE = 1.38
 PINCH_FORCE = 30.0  # N: `utamp_gym.sim.control.PINCH_FORCE`, for a wall below `MIN_PINCH`
 
@@ -203,9 +203,8 @@ def _rim_refusal(
     moment = t.mass * G * lever
     full_pad = calibrated and m.box.size[2] >= FULL_PAD_RIM - 1e-9
     thin_limit = CALIBRATED_THIN_TORQUE_LIMIT if calibrated else THIN_TORQUE_LIMIT
-    limit = thin_limit if thin else THICK_TORQUE_LIMIT if full_pad else TORQUE_LIMIT
-    if full_pad and not thin:  # calibrated: the thicker the rim, the more it bears
-        limit = max(limit, rim_couple_limit(width))
+    # calibrated, a rim taking the whole pad: the thicker it is, the more it bears
+    limit = thin_limit if thin else rim_couple_limit(width) if full_pad else TORQUE_LIMIT
     if moment > limit:
         return no("torque", mass=t.mass, lever=lever, moment=moment, limit=limit)
     return None

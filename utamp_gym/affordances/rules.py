@@ -30,7 +30,12 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
-from utamp_gym.affordances.calibrated import EXTENDED_LIFT_LIMIT, low_cover, lug_wall
+from utamp_gym.affordances.calibrated import (
+    EXTENDED_LIFT_LIMIT,
+    low_cover,
+    lug_wall,
+    shoulder_rest,
+)
 from utamp_gym.affordances.edge import edge_facts, edge_slide_facts
 from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.hand import (
@@ -170,6 +175,8 @@ def _fingers_refusal(
         other = refusal.values.get("other")
         if other is not None and low_cover(t, member, palm, other):
             excused.add(("hand-room", other))  # the hand comes down around the cover
+        if other == t.body.name and shoulder_rest(t, member, palm, f1):
+            excused.add(("finger-room", other))  # the fingers land on a cap's shoulder
         if (refusal.rule, other) in excused:
             refusal = None
     if extended and refusal is None:  # the wrist above the hand (the paper's rules: the hand)
