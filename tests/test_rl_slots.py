@@ -18,9 +18,11 @@ pytest.importorskip("sb3_contrib")
 
 from utamp_gym.cli import main
 from utamp_gym.data.minari_io import episode_metadata, load_dataset
+from utamp_gym.env.object_goal import GOAL_KEYS
 from utamp_gym.env.object_space import MAX_SLOTS, n_actions, slots_for_actions
 from utamp_gym.rl import harness
-from utamp_gym.rl.cli import add_train_parser, env_option_flags
+from utamp_gym.rl.cli import add_train_parser, env_option_flags, train_config
+from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, OBJECT_OBS_KEYS
 from utamp_gym.rl.saved import META_NAME, ModelError, ModelMeta, read_meta
 from utamp_gym.rl.train import train
 
@@ -83,6 +85,25 @@ def test_train_flags_set_the_env_options() -> None:
     args = _train_args("--interface objects --slots 8 --domain utamp2x --affordances rules")
     assert env_option_flags(args, "objects") == {"slots": 8, **V2_OPTIONS}
     assert env_option_flags(_train_args(""), "grounded") == {}
+
+
+@pytest.mark.parametrize(
+    ("line", "interface", "keys"),
+    [
+        ("--env UTampKitchen-v0", "grounded", DEFAULT_OBS_KEYS),
+        ("--env UTampKitchen-v0 --interface objects", "objects", OBJECT_OBS_KEYS),
+        ("--env UTampKitchenProcedural-v0", "objects", OBJECT_OBS_KEYS),
+        (f"--env {GOALS} --interface objects --slots 8 --domain utamp2x --affordances rules",
+         "objects", OBJECT_OBS_KEYS + GOAL_KEYS),
+        ("--env UTampKitchenProcedural-v0 --algo ppo", "grounded", DEFAULT_OBS_KEYS),
+    ],
+)  # fmt: skip
+def test_a_train_parse_gives_one_config_with_its_interfaces_obs_keys(
+    line: str, interface: str, keys: tuple[str, ...]
+) -> None:
+    config, kwargs = train_config(_train_args(line))
+    assert (config.interface, config.obs_keys) == (interface, keys)
+    assert config.env_options == kwargs.get("env_options", {})
 
 
 @pytest.mark.parametrize(
