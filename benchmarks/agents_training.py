@@ -18,9 +18,10 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results
 from agents import flat_curve, load
 
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 
 #: the training runs of each learned row under --out (train.json of every finished seed)
 ROW_RUNS = {"MaskablePPO, slot transformer": "ppo/seed_*", "BC": "bc/seed_*",
@@ -80,8 +81,7 @@ def training_summary(out: Path, docs: Path) -> None:
         f"{load()} when this summary was written.",
     ]
     data = {"rows": rows, "load_average": load(), "out": str(out)}
-    prov = write_json(docs / "agents_training.json", data, indent=1, default=str)
-    write_markdown(docs / "agents_training.md", "\n".join(lines) + "\n", prov)
+    write_results(docs, "agents_training", data, "\n".join(lines) + "\n", indent=1, default=str)
     plot_learning_curves(curves, docs / "agents_training_curves.png",
                          "evaluation success on procedural-v1/train during training")  # fmt: skip
     print("\n".join(lines))

@@ -25,12 +25,17 @@ import argparse
 import math
 import os
 import statistics
+import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import save_success_plot
+
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
-from utamp_gym.provenance import commit, png_metadata, write_markdown
+from utamp_gym.provenance import commit, write_markdown
 from utamp_gym.suites import suite_scenes
 
 TARGET = 0.95  # closed-loop success at p = 0.1 on pick-place (Gaussian stand-in)
@@ -93,13 +98,7 @@ def plot(table: dict[tuple[str, float], dict], path: Path) -> None:
             ax.plot(ps, [table[(suite, p)][mode] for p in ps], style, label=f"{suite}, {mode} loop")
     ax.axhline(TARGET, color="grey", lw=0.8, ls=":")
     ax.set_xlabel("fault probability per macro action")
-    ax.set_ylabel("success rate")
-    ax.set_ylim(0, 1.02)
-    ax.set_title("UTAMP-2-GT in physics under injected faults")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120, metadata=png_metadata())
-    plt.close(fig)
+    save_success_plot(fig, ax, path, "UTAMP-2-GT in physics under injected faults")
 
 
 def build_parser() -> argparse.ArgumentParser:

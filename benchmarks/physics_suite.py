@@ -22,12 +22,17 @@ import argparse
 import collections
 import os
 import statistics
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import save_success_plot
 
 from utamp_gym.agents.runs import EpisodeResult, run_episode
 from utamp_gym.backend import DEFAULT_POSE_NOISE
 from utamp_gym.planning.crosscheck import affordance_violations
-from utamp_gym.provenance import commit, png_metadata, write_markdown
+from utamp_gym.provenance import commit, write_markdown
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import suite_scenes
 
@@ -119,13 +124,7 @@ def _plot_noise(table: dict[tuple[str, float], list[bool]], path: Path) -> None:
         ax.plot([1000 * n for n in noises], rates, "-o", label=suite)
     ax.axvline(1000 * DEFAULT_POSE_NOISE, color="grey", lw=0.8, ls=":", label="default")
     ax.set_xlabel("pose-estimation noise (mm, std per axis)")
-    ax.set_ylabel("success rate")
-    ax.set_ylim(0, 1.02)
-    ax.set_title("UTAMP-2-GT in physics vs pose-estimation noise")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120, metadata=png_metadata())
-    plt.close(fig)
+    save_success_plot(fig, ax, path, "UTAMP-2-GT in physics vs pose-estimation noise")
     print(f"\nwrote {path}")
 
 

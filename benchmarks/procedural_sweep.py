@@ -24,9 +24,10 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _common import write_results
 from sweeps import Rows, by_count, reason_kind, sweep_parser, sweep_splits
 
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 from utamp_gym.suites import procedural
 
 SPLITS = ("train", "test-instances", "test-families", "test-count")
@@ -149,12 +150,9 @@ def main() -> None:
     args = build_parser().parse_args()
     commit()  # the provenance of what this run writes: the code as it is now
     summaries = sweep_splits(args, eval_command, summarize_split)
-    results = Path(args.results)
-    results.mkdir(parents=True, exist_ok=True)
     data = {"args": vars(args), "splits": summaries}
-    prov = write_json(results / "procedural_eval.json", data, indent=1)
     text = to_markdown(summaries, args)
-    write_markdown(results / "procedural_eval.md", text, prov)
+    write_results(args.results, "procedural_eval", data, text, indent=1)
     print(text)
     below = [s["split"] for s in summaries if (s["success_rate_of_planned"] or 0) < TARGET]
     if below:

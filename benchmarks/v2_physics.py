@@ -32,9 +32,10 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _common import write_results
 from sweeps import Rows, by_count, reason_kind, sweep_parser, sweep_splits
 
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 from utamp_gym.suites import procedural_v2
 
 SPLITS = ("test-tasks", "hard", "test-count", "test-instances", "test-families", "train")
@@ -247,13 +248,9 @@ def main() -> None:
     args = build_parser().parse_args()
     commit()  # the provenance of what this run writes: the code as it is now
     summaries = sweep_splits(args, eval_command, summarize_split)
-    results = Path(args.results)
-    results.mkdir(parents=True, exist_ok=True)
     data = {"args": vars(args), "method": METHOD, "splits": summaries}
-    stem = page_stem(args)
-    prov = write_json(results / f"{stem}.json", data, indent=1)
     text = to_markdown(summaries, args)
-    write_markdown(results / f"{stem}.md", text, prov)
+    write_results(args.results, page_stem(args), data, text, indent=1)
     print(text)
     below = below_target(summaries)
     if below:

@@ -19,12 +19,17 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from utamp_gym.provenance import commit, write_json, write_markdown
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import write_results
+
+from utamp_gym.provenance import commit
 from utamp_gym.suites.procedural_v2 import available_splits, split_scene, split_seeds
 from utamp_gym.suites.procedural_v2.labels import fd_agrees, label
 from utamp_gym.suites.procedural_v2.seeds import _seed_table
@@ -175,14 +180,11 @@ def main() -> None:
         checks = list(pool.map(relabel, jobs, chunksize=8))
     rows = [split_row(s) for s in splits]
     lines = issue_lines(rows, checks, not args.no_fd)
-    results = Path(args.results)
-    results.mkdir(parents=True, exist_ok=True)
     data = {"args": vars(args), "splits": rows,
             "issue_lines": [{"line": a, "met": b, "measured": c} for a, b, c in lines],
             "differ": [c for c in checks if moved(c) or c["fd_agrees"] is False]}  # fmt: skip
-    prov = write_json(results / "procedural_splits_v2.json", data, indent=1)
     text = to_markdown(rows, lines, checks)
-    write_markdown(results / "procedural_splits_v2.md", text, prov)
+    write_results(args.results, "procedural_splits_v2", data, text, indent=1)
     print(text)
 
 

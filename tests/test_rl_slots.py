@@ -11,15 +11,18 @@ import shlex
 import zipfile
 from pathlib import Path
 
+import gymnasium as gym
 import pytest
 
 pytest.importorskip("sb3_contrib")
 
 from utamp_gym.cli import main
 from utamp_gym.data.minari_io import episode_metadata, load_dataset
+from utamp_gym.env.object_goal import GOAL_KEYS
 from utamp_gym.env.object_space import MAX_SLOTS, n_actions, slots_for_actions
 from utamp_gym.rl import harness
-from utamp_gym.rl.cli import add_train_parser, env_option_flags
+from utamp_gym.rl.cli import add_train_parser, env_option_flags, train_config
+from utamp_gym.rl.envs import DEFAULT_OBS_KEYS, OBJECT_OBS_KEYS
 from utamp_gym.rl.saved import META_NAME, ModelError, ModelMeta, read_meta
 from utamp_gym.rl.train import train
 
@@ -85,6 +88,25 @@ def test_train_flags_set_the_env_options() -> None:
 
 
 @pytest.mark.parametrize(
+    ("line", "interface", "keys"),
+    [
+        ("--env UTampKitchen-v0", "grounded", DEFAULT_OBS_KEYS),
+        ("--env UTampKitchen-v0 --interface objects", "objects", OBJECT_OBS_KEYS),
+        ("--env UTampKitchenProcedural-v0", "objects", OBJECT_OBS_KEYS),
+        (f"--env {GOALS} --interface objects --slots 8 --domain utamp2x --affordances rules",
+         "objects", OBJECT_OBS_KEYS + GOAL_KEYS),
+        ("--env UTampKitchenProcedural-v0 --algo ppo", "grounded", DEFAULT_OBS_KEYS),
+    ],
+)  # fmt: skip
+def test_a_train_parse_gives_one_config_with_its_interfaces_obs_keys(
+    line: str, interface: str, keys: tuple[str, ...]
+) -> None:
+    config, kwargs = train_config(_train_args(line))
+    assert (config.interface, config.obs_keys) == (interface, keys)
+    assert config.env_options == kwargs.get("env_options", {})
+
+
+@pytest.mark.parametrize(
     ("line", "message"),
     [
         ("train --slots 0 --out {out}", "argument --slots: must be an integer in 1..16, got 0"),
@@ -142,13 +164,50 @@ def test_saved_objects_models_record_their_slots(tiny_goals_model: Path) -> None
 def test_episodes_sharing_an_env_match_episodes_in_a_new_one(tiny_goals_model: Path) -> None:
     method = f"rl:{tiny_goals_model}"
     first, second = "procedural-v2/test-count/0000", "procedural-v2/test-count/0001"
-    harness._KEPT.clear()
-    fresh = harness.run_rl_episode(method, first, 0, "symbolic")
-    env = next(iter(harness._KEPT.values()))
-    harness.run_rl_episode(method, second, 1, "symbolic")
-    again = harness.run_rl_episode(method, first, 0, "symbolic")
-    assert list(harness._KEPT.values()) == [env]  # one env served all three episodes
-    assert (again.success, again.actions, again.reason) == (
-        fresh.success, fresh.actions, fresh.reason
-    )  # fmt: skip
+    fresh = harness.run_rl_episode(method, first, 0, "symbolic")  # its own env, closed
+    with harness.EnvCache() as envs:
+        shared = harness.run_rl_episode(method, first, 0, "symbolic", envs=envs)
+        env = envs.get(*_env_of(tiny_goals_model))
+        harness.run_rl_episode(method, second, 1, "symbolic", envs=envs)
+        again = harness.run_rl_episode(method, first, 0, "symbolic", envs=envs)
+        assert envs.get(*_env_of(tiny_goals_model)) is env  # one env served all three episodes
+    for ep in (shared, again):
+        assert (ep.success, ep.actions, ep.reason) == (fresh.success, fresh.actions, fresh.reason)
     assert fresh.actions  # it acted
+
+
+def _env_of(model: Path) -> tuple[str, str, dict[str, object]]:
+    """The (env id, grounding, options) `run_rl_episode` makes a symbolic episode's env with
+    for the procedural-v2 test-count scenes."""
+    meta = read_meta(model)
+    options = {**harness.model_env_options(meta), "disturbance": 0.0,
+               **harness.suite_options("procedural-v2/test-count/0000"),
+               "reward_shaping": False, "terminate_on_failure": False,
+               "record_timings": False}  # fmt: skip
+    return meta.env_id, "symbolic", options
+
+
+class _Closable(gym.Env):
+    """A real gymnasium env that says whether it was closed."""
+
+    observation_space = gym.spaces.Discrete(1)
+    action_space = gym.spaces.Discrete(1)
+
+    def __init__(self, grounding: str, size: int) -> None:
+        self.grounding, self.size, self.closed = grounding, size, False
+
+    def close(self) -> None:
+        self.closed = True
+
+
+def test_an_env_cache_reuses_its_env_for_equal_options_and_closes_it_on_new_ones() -> None:
+    if "TestClosable-v0" not in gym.registry:
+        gym.register("TestClosable-v0", entry_point=_Closable)
+    with harness.EnvCache() as envs:
+        first = envs.get("TestClosable-v0", "symbolic", {"size": 1})
+        assert envs.get("TestClosable-v0", "symbolic", {"size": 1}) is first
+        assert not first.unwrapped.closed
+        second = envs.get("TestClosable-v0", "symbolic", {"size": 2})
+        assert second.unwrapped.size == 2 and first.unwrapped.closed
+        assert not second.unwrapped.closed
+    assert second.unwrapped.closed  # the owner's close closed the last one

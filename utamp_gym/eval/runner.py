@@ -35,7 +35,7 @@ from utamp_gym.methods.vlm import RUNNERS, VLM_METHODS
 from utamp_gym.methods.vlm_client import VlmClient
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.planning.methods import METHODS, method_spec, plan_scene
-from utamp_gym.rl.harness import check_rl_method, run_rl_episode
+from utamp_gym.rl.harness import EnvCache, check_rl_method, run_rl_episode
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene, suite_of
 
@@ -147,7 +147,7 @@ def _noisy_accuracy(scene: Scene, seed: int, noise: float) -> dict[str, float]:
     return mean_accuracy(rows)
 
 
-def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
+def _run_rl(task: EvalTask, scene: Scene, start: float, envs: EnvCache | None) -> ResultRow:
     ep = run_rl_episode(
         task.method,
         scene.name,
@@ -155,6 +155,7 @@ def _run_rl(task: EvalTask, scene: Scene, start: float) -> ResultRow:
         task.grounding,
         pose_noise=task.pose_noise,
         disturbance=task.disturbance,
+        envs=envs,
     )
     return _row(
         task,
@@ -205,9 +206,9 @@ def _run_closed_loop(task: EvalTask, start: float) -> ResultRow:
     )
 
 
-def _run(task: EvalTask, start: float) -> ResultRow:
+def _run(task: EvalTask, start: float, envs: EnvCache | None) -> ResultRow:
     if task.method.startswith("rl:"):  # a saved agent acting in the env (always closed loop)
-        return _run_rl(task, resolve_scene(task.scene), start)
+        return _run_rl(task, resolve_scene(task.scene), start, envs)
     if task.closed_loop:
         return _run_closed_loop(task, start)
     scene = resolve_scene(task.scene)
@@ -343,11 +344,13 @@ def _row(
     )
 
 
-def run_task(task: EvalTask) -> ResultRow:
-    """Run one task; any exception becomes a failure row (`crashed`) with its reason."""
+def run_task(task: EvalTask, envs: EnvCache | None = None) -> ResultRow:
+    """Run one task; any exception becomes a failure row (`crashed`) with its reason.
+    `envs`: the caller's `EnvCache` an ``rl:PATH`` task in symbolic grounding takes its env
+    from (a loop over tasks in one process owns one); without it the task makes its own."""
     start = time.perf_counter()
     try:
-        return _run(task, start)
+        return _run(task, start, envs)
     except Exception as exc:
         where = traceback.extract_tb(exc.__traceback__)[-1]
         reason = f"crashed: {type(exc).__name__}: {exc} (at {where.name}:{where.lineno})"

@@ -26,6 +26,7 @@ from utamp_gym.errors import UtampError
 from utamp_gym.extras import require
 from utamp_gym.outputs import output_dir
 from utamp_gym.rl.config import GROUNDINGS, TRAIN_ALGOS, TrainConfig
+from utamp_gym.rl.envs import default_interface
 from utamp_gym.symbolic.problem import DOMAINS
 
 #: the env option ``masks`` (`utamp_gym.env.options.MASKS`; repeated here so that building
@@ -76,17 +77,10 @@ def env_option_flags(args: argparse.Namespace, interface: str) -> dict[str, Any]
     return options
 
 
-def _cmd_train(args: argparse.Namespace) -> int:
-    require("utamp train", "rl")
-    if args.algo == "bc":  # reads a Minari dataset
-        require("utamp train --algo bc", "data")
-    # the rl extra (torch, stable-baselines3) is checked above, before these load it
-    # lazy: utamp_gym.rl.seeds imports sb3_contrib, stable_baselines3, torch
-    from utamp_gym.rl.seeds import train_seeds
-
-    # lazy: utamp_gym.rl.train imports sb3_contrib, stable_baselines3, torch
-    from utamp_gym.rl.train import train
-
+def train_config(args: argparse.Namespace) -> tuple[TrainConfig, dict[str, Any]]:
+    """The run's `TrainConfig`, built once from parsed `utamp train` flags (bad options:
+    `UtampError`, one line), and the keyword arguments `train` and `train_seeds` take (its
+    fields as given, and ``progress``)."""
     kwargs: dict[str, Any] = {
         "env_id": args.env,
         "algo": args.algo,
@@ -103,14 +97,28 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "init_from": args.init_from or "",
         "demos": args.demos or "",
     }
-    try:  # every option checked before anything is built or trained
+    options = env_option_flags(args, args.interface or default_interface(args.env, args.algo))
+    if options:
+        kwargs["env_options"] = options
+    try:
         config = TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
     except ValueError as exc:
         raise UtampError(str(exc)) from None
-    options = env_option_flags(args, config.interface)
-    if options:
-        kwargs["env_options"] = options
-        config = TrainConfig(seed=args.seed, **{k: v for k, v in kwargs.items() if k != "progress"})
+    return config, kwargs
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    require("utamp train", "rl")
+    if args.algo == "bc":  # reads a Minari dataset
+        require("utamp train --algo bc", "data")
+    # the rl extra (torch, stable-baselines3) is checked above, before these load it
+    # lazy: utamp_gym.rl.seeds imports sb3_contrib, stable_baselines3, torch
+    from utamp_gym.rl.seeds import train_seeds
+
+    # lazy: utamp_gym.rl.train imports sb3_contrib, stable_baselines3, torch
+    from utamp_gym.rl.train import train
+
+    config, kwargs = train_config(args)  # every option checked before anything is built
     parallel = args.executor != "local" or args.workers is not None or args.ray_address
     if parallel and args.seeds == 1:
         raise UtampError("--executor, --workers and --ray-address need --seeds K > 1")

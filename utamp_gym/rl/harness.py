@@ -187,8 +187,11 @@ def run_rl_episode(
     *,
     pose_noise: float | None = None,
     disturbance: float = 0.0,
+    envs: EnvCache | None = None,
 ) -> RLEpisode:
-    """Run the ``rl:PATH`` agent on one scene (see the module docstring)."""
+    """Run the ``rl:PATH`` agent on one scene (see the module docstring). `envs`: in symbolic
+    grounding, the caller's `EnvCache` to take the env from (left open), else the episode
+    makes its own env and closes it."""
 
     register_envs()  # explicitly: a worker process may have skipped it on import
 
@@ -206,7 +209,13 @@ def run_rl_episode(
     if grounding == "physics" and pose_noise is not None:
         options["pose_noise"] = pose_noise
     options.update(reward_shaping=False, terminate_on_failure=False, record_timings=False)
-    env = _episode_env(meta.env_id, grounding, options)
+    kept = envs is not None and grounding == "symbolic"
+    if kept:
+        env = envs.get(meta.env_id, grounding, options)  # type: ignore[union-attr]
+    else:
+        import gymnasium as gym
+
+        env = gym.make(meta.env_id, grounding=grounding, **options)
     try:
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         check_spaces(meta, path, n_actions, n_fluents(env))
@@ -231,30 +240,44 @@ def run_rl_episode(
             ep.success, why, ep.actions, ep.n_failed, ep.decision_s, ep.step_s, ep.n_faults
         )
     finally:
-        if grounding != "symbolic":
+        if not kept:
             env.close()
 
 
-#: the symbolic env of the last ``rl:PATH`` episode in this process, by its options
-_KEPT: dict[str, Any] = {}
+class EnvCache:
+    """The symbolic env of the last ``rl:PATH`` episode, by its options, owned by its caller.
 
+    A sweep's episodes differ in scene and seed only, and every reset reseeds the env, so
+    one env serves them all (making it and deriving each scene anew cost more than the
+    episode). `get` returns the kept env for equal options and closes it on new ones; the
+    owner calls `close` (or uses it as a context manager) when done."""
 
-def _episode_env(env_id: str, grounding: str, options: dict[str, Any]) -> Any:
-    """The env of an episode: in symbolic grounding the one the previous episode of the same
-    options used (a sweep's episodes differ in scene and seed only; every reset reseeds it,
-    and making the env and deriving each scene anew cost more than the episode), else a new
-    one (the caller closes it)."""
-    import gymnasium as gym
+    def __init__(self) -> None:
+        self._key: str | None = None
+        self._env: Any = None
 
-    if grounding != "symbolic":
-        return gym.make(env_id, grounding=grounding, **options)
-    key = repr((env_id, sorted(options.items())))
-    if key not in _KEPT:
-        for old in _KEPT.values():
-            old.close()
-        _KEPT.clear()
-        _KEPT[key] = gym.make(env_id, grounding=grounding, **options)
-    return _KEPT[key]
+    def get(self, env_id: str, grounding: str, options: dict[str, Any]) -> Any:
+        """The env of `env_id` in `grounding` with `options`: the kept one if equal, else new."""
+        import gymnasium as gym
+
+        key = repr((env_id, grounding, sorted(options.items())))
+        if key != self._key:
+            self.close()
+            self._env = gym.make(env_id, grounding=grounding, **options)
+            self._key = key
+        return self._env
+
+    def close(self) -> None:
+        """Close the kept env, if any."""
+        if self._env is not None:
+            self._env.close()
+        self._key, self._env = None, None
+
+    def __enter__(self) -> EnvCache:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 def _terminal_reason(info: dict[str, Any], steps: int) -> str:
