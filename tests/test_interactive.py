@@ -115,3 +115,21 @@ def test_a_scene_that_affords_no_action_ends_unsolved_not_crashed(grounding: str
     out = run_closed_loop("procedural-v1/train/0040", "utamp2-perceived", grounding=grounding)
     assert not out.success and out.actions == ()
     assert out.failure.endswith(NO_ACTIONS) and out.failure.startswith("no plan")
+
+
+@pytest.mark.parametrize(
+    "reason",
+    [
+        "precondition (canLift cutting-board handle) of (pick-support board board-handle on "
+        "left right back on slot2 under on) is false (static)",  # the env's precondition check
+        "canLift(cutting-board, handle) is false (ground truth)",  # symbolic outcome model
+    ],
+)
+def test_a_refused_affordance_is_withdrawn(loop, reason: str) -> None:
+    ip, _, _ = loop
+    assert ("canLift", "cutting-board", "handle") in _believed(ip)
+    ip._revise(reason)
+    assert ("canLift", "cutting-board", "handle") not in _believed(ip)
+    assert ip.revisions[-1] == "refused: canLift(cutting-board, handle) withdrawn"
+    ip._revise(reason)  # withdrawn once
+    assert ip.revisions.count(ip.revisions[-1]) == 1

@@ -14,6 +14,8 @@ Then the robot's own actions are its measurements:
 * **topples** – a placement after which the object fell off, tipped over on its support or
   toppled the stack marks that support as not supportive for that object (its
   ``isP2PSupportive`` facts are withdrawn);
+* **refusals** – an action the world refused because an affordance it needs does not hold
+  (the failure names it) withdraws that fact, so no other state plans with it again;
 * **extra looks** – when no plan reaches the goal from what is believed, the robot looks
   again (a new survey, perceived afresh: what moved since may have uncovered members and
   rims) and the attributes that block the goal — the doubts planned cautiously — take their
@@ -56,6 +58,13 @@ _TOPPLES = (
     re.compile(r"^(?P<obj>\S+) fell off (?P<support>\S+):"),
     re.compile(r"^(?P<obj>\S+) tipped over on (?P<support>\S+)$"),
     re.compile(r"^placing (?P<obj>\S+) on (?P<support>\S+) toppled the stack"),
+)
+#: an action the world refused because an affordance it needs does not hold: the env's
+#: precondition check in physics, ``(canLift t m)``, or the outcome model in symbolic
+#: grounding, ``canLift(t, m) is false``
+_REFUSED = (
+    re.compile(r"^precondition \((?P<pred>\w+) (?P<args>[^()]*)\) of .* is false \(static\)$"),
+    re.compile(r"^(?P<pred>\w+)\((?P<args>[^()]*)\) is false"),
 )
 
 
@@ -196,6 +205,16 @@ class InteractivePerception:
                 )
                 self.revisions.append(f"{m['obj']} does not stand on {m['support']}")
                 self._believe()
+                return
+        for pattern in _REFUSED:
+            m = pattern.match(reason)
+            if m:
+                args = tuple(a.strip() for a in m["args"].replace(",", " ").split())
+                fact = (m["pred"], *args)
+                if fact in self._facts() and fact not in self.withdrawn:
+                    self.withdrawn.add(fact)
+                    self.revisions.append(f"refused: {fact[0]}({', '.join(args)}) withdrawn")
+                    self._believe()
                 return
 
     def _facts(self) -> frozenset[Fact]:
