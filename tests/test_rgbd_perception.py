@@ -296,6 +296,23 @@ def test_a_pans_open_top_is_a_dish() -> None:
     assert ("isSupportable", t.name, "on") not in facts
 
 
+@pytest.mark.parametrize(
+    ("scene_name", "obj"),
+    [("procedural-v1/train/0042", "obj3"), ("procedural-v1/train/0087", "obj2")],
+)
+def test_a_plates_rim_left_beside_its_fitted_circle_widens_the_body(
+    scene_name: str, obj: str
+) -> None:
+    """A plate's low rim gave the wall fit a circle centimetres short (17 cm for 23 cm) and a
+    crescent of the rim was read as a handle (no rim grasp, no lift): the body widens to the
+    arc (`walls.widen_to_arc`), and the plate is held by its two rim edges as declared."""
+    declared, t = _perceived_type(scene_name, obj)
+    assert not [m for m in t.members.values() if m.kind == "handle"]
+    assert sorted(m.kind for m in t.members.values()) == ["body", "edge", "edge"]
+    d, s = declared.body.box.size[0], t.body.box.size[0]
+    assert abs(s - d) <= 0.01, (s, d)
+
+
 @pytest.mark.parametrize("scene_name", ["pick-place/018", "pick-place/053"])
 def test_a_board_fits_a_trays_well_as_declared(scene_name: str) -> None:
     """A board (24 cm and its 7 cm handle) in a tray's 32 cm well fits with 2 mm to spare:

@@ -70,7 +70,7 @@ from utamp_gym.perception.tops import (
     round_opening,
     wall_flare,
 )
-from utamp_gym.perception.walls import round_wall, wall_fit
+from utamp_gym.perception.walls import round_wall, wall_fit, widen_to_arc
 
 BOX_FILL = 0.87  # opened body filling more of its bounding rectangle is a box (or one
 #: whose wall is not round: `walls.ROUND_RESIDUAL`)
@@ -202,6 +202,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         fit = wall_fit(local[wall], centre, radius, rays=rays_xy[wall])
         if fit is not None:
             centre, radius = fit
+        centre, radius = widen_to_arc(grid, seen_foot, centre, radius)
         body_lo, body_hi = centre - radius, centre + radius
     else:
         xy = body_pts[:, :2] if len(body_pts) else grid.centres(body_mask)

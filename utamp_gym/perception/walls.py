@@ -1,14 +1,17 @@
 """Round walls in an object's seen frame (`shape`): a circle fitted to a side wall's points
 (`wall_fit`: its centre and top radius; also the pose tracker's round-body centre), and
-whether a body's wall is round at all (`round_wall`)."""
+whether a body's wall is round at all (`round_wall`), and a round body widened to an arc of
+its own rim left outside the fitted circle (`widen_to_arc`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from utamp_gym.perception.grid import Grid, cells_of, dilate_disc, erode_disc
+from utamp_gym.perception.grid import Grid, cells_of, components, dilate_disc, erode_disc
 
 ROUND_RESIDUAL = 0.003  # m: a wall a circle does not fit this well is not round (a box's)
+ARC_SPAN = 1.0  # of the radius: a piece beside a round body wider across than this is its rim
+ARC_MIN_CELLS = 12  # cells: smaller leftovers are noise (`shape.MIN_MEMBER_CELLS`)
 
 
 def wall_fit(
@@ -97,4 +100,34 @@ def round_wall(grid: Grid, local: np.ndarray, body: np.ndarray) -> bool:
     return float(np.median(resid)) <= max(ROUND_RESIDUAL, 0.03 * radius)
 
 
-__all__ = ["ROUND_RESIDUAL", "round_wall", "wall_fit"]
+def widen_to_arc(
+    grid: Grid, foot: np.ndarray, centre: np.ndarray, radius: float
+) -> tuple[np.ndarray, float]:
+    """The circle widened to an arc of the body's own rim left outside it. A plate's low,
+    sloped rim gives the wall fit few points, and the circle can come out centimetres short
+    (a 23 cm plate read 17 cm), leaving a crescent of the rim beside it that would be read
+    as a handle. A handle is narrow across the direction it sticks out; a piece spanning
+    more than `ARC_SPAN` radii across is the rim: its far edge and the circle's opposite edge
+    bound the diameter, and its span across is a chord, at most the diameter."""
+    disc = np.linalg.norm(grid.centres(np.ones(grid.shape, bool)) - centre, axis=1)
+    rest = foot & ~dilate_disc((disc <= radius).reshape(grid.shape), 2.0)
+    for piece in components(rest):
+        if piece.sum() < ARC_MIN_CELLS:
+            break
+        cells = grid.centres(piece) - centre
+        u = cells.mean(axis=0)
+        if not np.linalg.norm(u):
+            continue
+        u = u / np.linalg.norm(u)
+        v = np.array([-u[1], u[0]])
+        across = cells @ v
+        span = float(across.max() - across.min())
+        if span <= ARC_SPAN * radius:
+            continue
+        far = float((cells @ u).max())
+        new_r = max((far + radius) / 2, span / 2)
+        return centre + u * (far - new_r), new_r
+    return centre, radius
+
+
+__all__ = ["ARC_SPAN", "round_wall", "ROUND_RESIDUAL", "wall_fit", "widen_to_arc"]
