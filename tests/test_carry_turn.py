@@ -141,19 +141,3 @@ def test_the_board_passes_over_the_stack_on_procedural_v1(monkeypatch):
     result = run_episode(scene, "utamp2-rules", 1)
     assert not result.success and result.failure is not None
     assert result.failure["step"] == 5 and "toppled" in result.failure["reason"]
-
-
-@pytest.mark.physics
-def test_the_board_is_measured_in_the_hand_after_the_room_to_turn_is_climbed(monkeypatch):
-    """pick-place/091 seed 0: the board held by its handle creeps while the pick climbs the
-    room to turn after the judged lift; planned with the pose measured before that climb,
-    it lands early at its slot, stays there as the hand backs up and the carry fails."""
-    from utamp_gym.agents.runs import run_episode
-    from utamp_gym.sim import skills
-
-    result = run_episode("pick-place/091", "utamp2-gt", 0)
-    assert result.success, result.failure
-    monkeypatch.setattr(skills, "measure_in_hand", lambda st, held: None)
-    result = run_episode("pick-place/091", "utamp2-gt", 0)
-    assert not result.success and result.failure is not None
-    assert result.failure["step"] == 1 and "board" in result.failure["reason"]

@@ -228,12 +228,6 @@ def verify_lift(
     moved = disturbed(st, before)
     if moved:
         raise SkillFailure(f"picking {obj} disturbed the scene: {moved}")
-    measure_in_hand(st, held)
-
-
-def measure_in_hand(st: SimState, held: Held) -> None:
-    """How `held` sits in the hand as carried: measured (`Held.tcp_t_obj`, what later drift
-    is judged against) and looked at again (`Held.belief`, what is planned with)."""
-    hand_t_world = np.linalg.inv(st.arm.tcp())
-    held.tcp_t_obj = hand_t_world @ obj_pose(st, held.obj)
-    held.belief = hand_t_world @ relook.in_hand(st, held.obj)
+    hand_t_world = np.linalg.inv(arm.tcp())  # as carried: measured, and looked at again
+    held.tcp_t_obj = hand_t_world @ obj_pose(st, obj)
+    held.belief = hand_t_world @ relook.in_hand(st, obj)

@@ -37,7 +37,6 @@ from utamp_gym.sim.grasp_phases import (
     grasp,
     let_go_and_look_again,
     lift_test_trouble,
-    measure_in_hand,
     release_and_retreat,
     verify_lift,
 )
@@ -128,7 +127,6 @@ def pick(st: SimState, act: MacroAction) -> None:
     verify_lift(st, held, start_obj, start_tcp, before)
     if room is not None and room.length > 0.0:
         st.arm.move_line(room, *APPROACH)
-        measure_in_hand(st, held)  # it may have turned in the hand on the way: as carried
 
 
 def place(st: SimState, act: MacroAction) -> None:
