@@ -130,4 +130,4 @@ def widen_to_arc(
     return centre, radius
 
 
-__all__ = ["ARC_SPAN", "round_wall", "ROUND_RESIDUAL", "wall_fit", "widen_to_arc"]
+__all__ = ["ARC_SPAN", "ROUND_RESIDUAL", "round_wall", "wall_fit", "widen_to_arc"]
