@@ -102,7 +102,7 @@ def test_an_out_of_range_number_gets_the_suite_range_and_nonsense_every_range() 
         "to 0107, procedural-v1/test-families/0000 to 0107, procedural-v1/test-count/0000 to "
         "0107, procedural-v2/train/0000 to 0399, procedural-v2/test-instances/0000 to 0099, "
         "procedural-v2/test-families/0000 to 0099, procedural-v2/test-count/0000 to 0099, "
-        "procedural-v2/test-tasks/0000 to 0099, procedural-v2/hard/0000 to 0023 or a scene file "
+        "procedural-v2/test-tasks/0000 to 0099, procedural-v2/hard/0000 to 0041 or a scene file "
         "(.toml)"
     )
     assert info.value.suggestions == [] and "pick-place/017" in info.value.valid

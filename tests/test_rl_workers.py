@@ -98,10 +98,10 @@ def test_a_sweep_with_crashed_runs_exits_1_and_says_so(
 
     real = runner._run
 
-    def crash_on_002(task, start):  # type: ignore[no-untyped-def]
+    def crash_on_002(task, start, envs):  # type: ignore[no-untyped-def]
         if task.scene == "pick-place/002":
             raise RuntimeError("boom")
-        return real(task, start)
+        return real(task, start, envs)
 
     monkeypatch.setattr(runner, "_run", crash_on_002)
     args = (
