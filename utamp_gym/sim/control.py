@@ -35,6 +35,7 @@ FREE_SCALE = (0.8, 0.5)  # fraction of the Panda's velocity / acceleration limit
 HELD_SCALE = (0.5, 0.3)  # ... while carrying an object
 LINE_STEP = 0.01  # m between IK waypoints of a Cartesian segment
 MIN_GAP = 0.004  # m, closed fingers below this gap hold nothing
+GUARD_EVERY = 4  # physics steps between two checks of a guarded motion's condition
 #: a pinched wall thinner than `MIN_GAP` + `THIN_MARGIN` (a steel bowl's 1.2 mm rim) is held
 #: when the gap stays at `THIN_FRACTION` of its width, at least `THIN_GAP`: fingers closed on
 #: nothing meet at a gap of 0 (the Franka Hand reads its width to 0.1 mm)
@@ -158,17 +159,24 @@ class ArmDriver:
         self.timings.sim_s += time.perf_counter() - t0
         self.timings.sim_time_s += max(n, 0) * self.dt
 
-    def track(self, setpoints: np.ndarray) -> None:
-        """Send one row of arm setpoints per physics step."""
+    def track(self, setpoints: np.ndarray, until: Callable[[int], bool] | None = None) -> int:
+        """Send one row of arm setpoints per physics step; return how many were sent.
+
+        With `until`, it is asked every `GUARD_EVERY` steps (with the index of the next
+        row) and tracking stops as soon as it answers True (a guarded motion)."""
         t0 = time.perf_counter()
         ctrl, act = self.data.ctrl, self.ids.arm_actuator_ids
-        for q in setpoints:
+        sent = 0
+        for sent, q in enumerate(setpoints, start=1):
             ctrl[act] = q
             mujoco.mj_step(self.model, self.data)
             if self.on_step is not None:
                 self.on_step()
+            if until is not None and sent % GUARD_EVERY == 0 and until(sent):
+                break
         self.timings.sim_s += time.perf_counter() - t0
-        self.timings.sim_time_s += len(setpoints) * self.dt
+        self.timings.sim_time_s += sent * self.dt
+        return sent
 
     def settle_arm(self, q_goal: np.ndarray, *, tol: float = 2e-3, max_s: float = 0.4) -> None:
         """Hold `q_goal` until the joints are within `tol` rad and nearly still."""
@@ -310,12 +318,28 @@ class ArmDriver:
         contacts = self.near.contacts(q)
         return self.near.describe(contacts) if contacts else "joint limits"
 
-    def move_line(self, line: LinePath, speed: float, acc: float) -> None:
-        """Follow a Cartesian line at up to `speed` m/s (trapezoidal, joint speeds capped)."""
+    def move_line(
+        self,
+        line: LinePath,
+        speed: float,
+        acc: float,
+        *,
+        until: Callable[[], bool] | None = None,
+    ) -> bool:
+        """Follow a Cartesian line at up to `speed` m/s (trapezoidal, joint speeds capped).
+
+        Guarded with `until` (asked every `GUARD_EVERY` physics steps): the arm stops where it
+        is as soon as it answers True, and holds that pose. Returns True if it stopped early.
+        """
         if line.length > 0:
             vel = PANDA_VEL_LIMITS * FREE_SCALE[0]
-            self.track(line_setpoints(line, speed, acc, vel, self.dt))
+            setpoints = line_setpoints(line, speed, acc, vel, self.dt)
+            sent = self.track(setpoints, None if until is None else lambda _: until())
+            if sent < len(setpoints):
+                self.settle_arm(self.q())
+                return True
         self.settle_arm(line.q[-1])
+        return False
 
     def transfer(
         self,

@@ -78,6 +78,24 @@ def external_torques(data: mujoco.MjData, ids: PandaIds) -> np.ndarray:
     return data.qfrc_actuator[ids.arm_dof_adr] - data.qfrc_gravcomp[ids.arm_dof_adr]
 
 
+def external_torques_moving(
+    model: mujoco.MjModel, data: mujoco.MjData, ids: PandaIds
+) -> np.ndarray:
+    """(7,) N·m: the external torques while the arm moves, from the robot's dynamic model
+    (as the Panda estimates its external wrench in motion): tau_J + tau_friction -
+    (M(q) qdd + c(q, qd) + g(q)), the terms of the last physics step."""
+    m_qacc = np.zeros(model.nv)
+    mujoco.mj_mulM(model, data, m_qacc, data.qacc)
+    adr = ids.arm_dof_adr
+    return data.qfrc_actuator[adr] + data.qfrc_passive[adr] - data.qfrc_bias[adr] - m_qacc[adr]
+
+
+def hand_force_now(arm: ArmDriver) -> np.ndarray:
+    """(3,) N: the load's force on the hand at this instant, moving or not (world frame)."""
+    tau = external_torques_moving(arm.model, arm.data, arm.ids)
+    return hand_wrench(arm.model, arm.data, arm.ids, tau)[:3]
+
+
 def hand_wrench(
     model: mujoco.MjModel, data: mujoco.MjData, ids: PandaIds, tau_ext: np.ndarray
 ) -> np.ndarray:

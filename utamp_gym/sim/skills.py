@@ -22,7 +22,7 @@ import numpy as np
 from utamp_gym.backend import MacroResult, yaw_noise_deg
 from utamp_gym.errors import GroundingError
 from utamp_gym.sim import relook
-from utamp_gym.sim.control import LinePath, Timings, ignoring
+from utamp_gym.sim.control import ArmDriver, LinePath, Timings, ignoring
 from utamp_gym.sim.decode import (
     MacroAction,
     footprint_centre,
@@ -57,7 +57,7 @@ from utamp_gym.sim.measure import (
     turned_in_hand,
     verify_on,
 )
-from utamp_gym.sim.payload import hold_and_measure, payload_failure
+from utamp_gym.sim.payload import LoadReading, hand_force_now, hold_and_measure, payload_failure
 from utamp_gym.sim.placement import plan_place
 
 PLACE = (0.15, 0.6)  # pre-place -> place
@@ -72,6 +72,19 @@ CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measur
 #: support may carry up to the whole weight unpressed: a pan held by its handle sags onto it.)
 CONTACT_N = 5.0
 PLACE_ATTEMPTS = 3
+#: the descent is guarded as it moves (`contact_guard`): it stops where the load on the hand,
+#: from the joint torques and the arm's dynamic model, shows the support carrying more than
+#: `GUARD_SHARE` of the object's weight (and at least `GUARD_MIN_N`) for `GUARD_CHECKS`
+#: checks in a row (`control.GUARD_EVERY` physics steps apart), more than `GUARD_MARGIN` m
+#: above the place pose (nearer, it is the usual landing). An object that sagged or slipped
+#: down in the pads on the way is then not pressed on down (a board pushed 1.6 cm further
+#: slips out of the pads): it is let go where it stopped if it rests within
+#: `LANDED_SHIFT` m / `LANDED_TURN_DEG` of its place pose (`_rests_at`), else the arm backs
+#: up, looks again and aims anew as after an early landing.
+GUARD_CHECKS = 3
+GUARD_MARGIN = 0.006
+GUARD_SHARE, GUARD_MIN_N = 0.5, 1.0
+LANDED_SHIFT, LANDED_TURN_DEG = 0.008, 3.0
 GRASP_ATTEMPTS = 2
 #: m: a held object reaching farther than this out of the hand (beyond the hand's own
 #: 10 cm half length) is lifted with room to turn in the hand (`measure.turn_sink`), carried
@@ -173,10 +186,15 @@ def place(st: SimState, act: MacroAction) -> None:
         return path
 
     up = relook.aim_place(st, act.support, up, aim_again)  # the wrist camera on the support
+    weight = -float(carried.force[2])
     for attempt in range(1, PLACE_ATTEMPTS + 1):  # a guarded descent
-        arm.move_line(up.reversed(), *PLACE)
+        target = arm.tcp() @ held.belief  # where the object is to come to rest
+        target[2, 3] -= up.length
+        stopped = arm.move_line(up.reversed(), *PLACE, until=contact_guard(arm, carried, up))
+        if stopped and _rests_at(st, name, target):  # it came to rest where it was to: let go
+            break
         push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]
-        if not landed_early(push, -carried.force[2]) or attempt == PLACE_ATTEMPTS:
+        if not (stopped or landed_early(push, weight)) or attempt == PLACE_ATTEMPTS:
             break
         # it landed early (on a rim, say): back up, look again, aim anew
         arm.move_line(up, *PLACE)
@@ -191,6 +209,40 @@ def place(st: SimState, act: MacroAction) -> None:
     moved = disturbed(st, before)
     if moved:
         raise SkillFailure(f"placing {name} on {act.support} toppled the stack: {moved}")
+
+
+def contact_guard(arm: ArmDriver, carried: LoadReading, up: LinePath) -> Callable[[], bool]:
+    """The condition that stops a place descent along `up` reversed (from its top, where the
+    arm is): the held object pushed up as `landed_early` says (the load on the hand from the
+    joint torques in motion, against the `carried` reading) for `GUARD_CHECKS` checks in a
+    row, more than `GUARD_MARGIN` above the place pose (nearer, the usual landing)."""
+    weight = -float(carried.force[2])
+    bottom = float(arm.tcp()[2, 3]) - up.length
+    count = 0
+
+    def touched() -> bool:
+        nonlocal count
+        if float(arm.tcp()[2, 3]) - bottom <= GUARD_MARGIN:
+            return False
+        push = float(hand_force_now(arm)[2] - carried.force[2])
+        count = count + 1 if push > max(GUARD_MIN_N, GUARD_SHARE * weight) else 0
+        return count >= GUARD_CHECKS
+
+    return touched
+
+
+def _rests_at(st: SimState, name: str, target: np.ndarray) -> bool:
+    """True if the wrist camera sees the held `name` within `LANDED_SHIFT` / `LANDED_TURN_DEG`
+    of `target` (beyond what estimation noise explains, as in `_looked_again`): a descent
+    stopped on contact has set it down where it was to go (it sagged or slipped down in the
+    pads on the way), not on something in between."""
+    shift, angle = pose_change(target, relook.in_hand(st, name))
+    noise = 0.0 if st.estimator is None else st.estimator.noise
+    explained = 3 * math.sqrt(2)
+    return (
+        shift <= LANDED_SHIFT + explained * noise
+        and angle <= LANDED_TURN_DEG + explained * yaw_noise_deg(noise)
+    )
 
 
 def landed_early(push: float, weight: float) -> bool:
