@@ -31,7 +31,7 @@ PAPER = {
     "sliding": {"UTAMP-2-GT": 1.00, "UTAMP-2-VLM": 0.81},
 }
 PAPER_F1 = 0.98
-TARGET_F1, TARGET_SUCCESS = 0.98, 0.90
+TARGET_F1, TARGET_SUCCESS = 0.98, 0.98  # #42: the paper suites stay at >= 0.98 and F1 >= 0.98
 
 
 def _mean(xs: list[float]) -> float | None:

@@ -37,10 +37,10 @@ def test_a_pan_sagging_onto_the_tray_is_placed_at_the_first_descent(monkeypatch)
     lowered: list[float] = []
     move_line = ArmDriver.move_line
 
-    def counting(self: ArmDriver, line, speed: float, acc: float) -> None:
+    def counting(self: ArmDriver, line, speed: float, acc: float, **kw) -> bool:
         if (speed, acc) == skills.PLACE:  # a descent, or the back-up before another one
             lowered.append(line.length)
-        move_line(self, line, speed, acc)
+        return move_line(self, line, speed, acc, **kw)
 
     monkeypatch.setattr(ArmDriver, "move_line", counting)
     sim = MujocoBackend(pose_noise=0.0)
@@ -51,4 +51,41 @@ def test_a_pan_sagging_onto_the_tray_is_placed_at_the_first_descent(monkeypatch)
     assert result.success, result.reason
     assert len(lowered) == 1
     assert sim.stacked_on_tray() == ["pan"]
+    sim.close()
+
+
+@pytest.mark.physics
+def test_a_board_that_slipped_down_in_the_pads_is_let_go_where_it_landed(monkeypatch):
+    """pick-place/091 seed 0: the board held by its handle slipped down in the pads on the
+    carry and rests on its slot 1.6 cm before the place pose. The guarded descent stops
+    there and lets go; pressed on down (no guard) it slips out of the pads, stays on the
+    table as the hand backs up, and the next aim starts in collision."""
+    from utamp_gym.agents.runs import run_episode
+
+    result = run_episode("pick-place/091", "utamp2-gt", 0)
+    assert result.success, result.failure
+    monkeypatch.setattr(skills, "contact_guard", lambda arm, carried, up: lambda: False)
+    result = run_episode("pick-place/091", "utamp2-gt", 0)
+    assert not result.success and result.failure is not None
+    assert result.failure["step"] == 1 and "board" in result.failure["reason"]
+
+
+@pytest.mark.physics
+def test_the_load_in_motion_matches_the_load_held_still():
+    """`hand_force_now` (joint torques minus the dynamic model) reads a held object's
+    weight while the arm lowers it, as `hold_and_measure` does with the arm still."""
+    from utamp_gym.sim.payload import hand_force_now, hold_and_measure
+
+    scene = resolve_scene("pick-place/003")
+    sim = MujocoBackend(pose_noise=0.0)
+    sim.reset(scene, np.random.default_rng(0))
+    assert sim.execute("(pick-support pan pan-handle on left right back on slot2 under on)").success
+    arm = sim.state.arm
+    still = hold_and_measure(arm, 0.1).force
+    readings: list[np.ndarray] = []
+    down = arm.line(arm.q(), arm.tcp(), np.array([0.0, 0.0, -0.05]), lambda q: True, what="down")
+    arm.move_line(down, *skills.PLACE, until=lambda: readings.append(hand_force_now(arm)) or False)
+    assert len(readings) > 10 and still[2] < -5.0  # the pan weighs about 0.8 kg
+    moving = np.array(readings[len(readings) // 4 : -len(readings) // 4])
+    assert np.abs(moving[:, 2] - still[2]).max() < 0.1 * abs(still[2])
     sim.close()
