@@ -72,18 +72,19 @@ CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measur
 #: support may carry up to the whole weight unpressed: a pan held by its handle sags onto it.)
 CONTACT_N = 5.0
 PLACE_ATTEMPTS = 3
-#: the descent is guarded as it moves (`contact_guard`): it stops where the load on the hand,
-#: from the joint torques and the arm's dynamic model, shows the support carrying more than
-#: `GUARD_SHARE` of the object's weight (and at least `GUARD_MIN_N`) for `GUARD_CHECKS`
-#: checks in a row (`control.GUARD_EVERY` physics steps apart), more than `GUARD_MARGIN` m
-#: above the place pose (nearer, it is the usual landing). An object that sagged or slipped
-#: down in the pads on the way is then not pressed on down (a board pushed 1.6 cm further
-#: slips out of the pads): it is let go where it stopped if it rests within
-#: `LANDED_SHIFT` m / `LANDED_TURN_DEG` of its place pose (`_rests_at`), else the arm backs
-#: up, looks again and aims anew as after an early landing.
+#: the descent is guarded as it moves (`contact_guard`): it stops where the hand carries
+#: nothing any more (the load on it, from the joint torques and the arm's dynamic model,
+#: below `GUARD_FREE` of the object's weight for `GUARD_CHECKS` checks in a row,
+#: `control.GUARD_EVERY` physics steps apart) more than `GUARD_MARGIN` m above the place pose:
+#: the object rests on something and the fingers slide down along it. One that slipped down
+#: in the pads on the way is then not pressed on down (a board pushed 1.6 cm further slips
+#: out of the pads and stays as the hand backs up): it is let go where it stopped if it rests
+#: within `LANDED_SHIFT` m / `LANDED_TURN_DEG` of its place pose (`_rests_at`), else the arm
+#: backs up, looks again and aims anew as after an early landing. A support pressed on (a
+#: rim) or carrying part of the weight (a pan sagging onto it) does not stop the descent.
 GUARD_CHECKS = 3
 GUARD_MARGIN = 0.006
-GUARD_SHARE, GUARD_MIN_N = 0.5, 1.0
+GUARD_FREE, GUARD_MIN_WEIGHT_N = 0.15, 2.0
 LANDED_SHIFT, LANDED_TURN_DEG = 0.008, 3.0
 GRASP_ATTEMPTS = 2
 #: m: a held object reaching farther than this out of the hand (beyond the hand's own
@@ -213,19 +214,20 @@ def place(st: SimState, act: MacroAction) -> None:
 
 def contact_guard(arm: ArmDriver, carried: LoadReading, up: LinePath) -> Callable[[], bool]:
     """The condition that stops a place descent along `up` reversed (from its top, where the
-    arm is): the held object pushed up as `landed_early` says (the load on the hand from the
-    joint torques in motion, against the `carried` reading) for `GUARD_CHECKS` checks in a
-    row, more than `GUARD_MARGIN` above the place pose (nearer, the usual landing)."""
+    arm is): the hand carries nothing any more (the load on it from the joint torques in
+    motion below `GUARD_FREE` of the `carried` weight) for `GUARD_CHECKS` checks in a row,
+    more than `GUARD_MARGIN` above the place pose; never for an object lighter than
+    `GUARD_MIN_WEIGHT_N` (its weight is within the estimate's noise in motion)."""
     weight = -float(carried.force[2])
     bottom = float(arm.tcp()[2, 3]) - up.length
     count = 0
 
     def touched() -> bool:
         nonlocal count
-        if float(arm.tcp()[2, 3]) - bottom <= GUARD_MARGIN:
+        if weight < GUARD_MIN_WEIGHT_N or float(arm.tcp()[2, 3]) - bottom <= GUARD_MARGIN:
             return False
-        push = float(hand_force_now(arm)[2] - carried.force[2])
-        count = count + 1 if push > max(GUARD_MIN_N, GUARD_SHARE * weight) else 0
+        free = float(np.linalg.norm(hand_force_now(arm))) < GUARD_FREE * weight
+        count = count + 1 if free else 0
         return count >= GUARD_CHECKS
 
     return touched
