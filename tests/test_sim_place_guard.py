@@ -1,4 +1,5 @@
-"""The guarded descent of a place: a push at the place pose means it landed early only if
+"""The guarded descent of a place. It stops where the hand carries nothing any more
+(`contact_guard`); at the place pose a push means it landed early only if
 it is stronger than `CONTACT_N` and than the object's own weight, which a support can carry
 without being pressed (a pan held by its handle sags until its far edge rests on the tray).
 """
@@ -89,3 +90,15 @@ def test_the_load_in_motion_matches_the_load_held_still():
     moving = np.array(readings[len(readings) // 4 : -len(readings) // 4])
     assert np.abs(moving[:, 2] - still[2]).max() < 0.1 * abs(still[2])
     sim.close()
+
+
+@pytest.mark.physics
+@pytest.mark.parametrize(("scene", "seed"), [("procedural-v1/test-count/0095", 0)])
+def test_a_pan_pressing_on_a_rim_is_not_stopped(scene, seed):
+    """The guard stops only a hand that carries nothing: a pan held by its handle that lands
+    on its support's rim 5.5 cm above its place pose presses on (1.8 times its weight) and
+    slides into place as the descent goes on; stopped and aimed anew, it fell off."""
+    from utamp_gym.agents.runs import run_episode
+
+    result = run_episode(scene, "utamp2-rules", seed)
+    assert result.success, result.failure
