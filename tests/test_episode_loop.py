@@ -17,6 +17,7 @@ from test_eval_vlm import Server, attributes, completion, fenced, vlm  # noqa: F
 from utamp_gym.agents import OpenLoopPolicy, PlannerPolicy, PlanStopped, run_policy
 from utamp_gym.agents.runs import execute_plan
 from utamp_gym.env.kitchen import UTampKitchenEnv
+from utamp_gym.errors import PlanningError
 from utamp_gym.eval.records import PLAN_SEPARATOR
 from utamp_gym.eval.runner import EVAL_METHODS, EvalTask, run_task
 from utamp_gym.eval.summary import failure_category
@@ -166,3 +167,27 @@ def test_rl_method_steps_the_env_once_per_action(
     assert not row.crashed, row.failure_reason
     assert spy.calls == row.plan_length > 0
     assert spy.last_info is not None and row.success == spy.last_info["is_success"]
+
+
+def test_planner_policy_replans_without_a_step_outside_the_env_action_space(monkeypatch) -> None:
+    """A plan step the env cannot take (a method believing other affordances than the env's,
+    e.g. perceived ones) is left out and the planner asked again; only when every plan needs
+    such steps does the policy give up, naming them."""
+    env = UTampKitchenEnv(suite="pick-place", grounding="symbolic", scene=SCENE)
+    policy = PlannerPolicy(env)
+    env.reset(seed=1)
+    good = plan_scene(resolve_scene(SCENE), "utamp2-gt").plan
+    bogus = "(pick-support tray tray-rim on front back back on slot1 under on)"
+    asked: list[frozenset[str]] = []
+
+    def steps(bits: int, exclude: frozenset[str]) -> tuple[str, ...]:
+        asked.append(exclude)
+        return tuple(good) if bogus in exclude else (bogus, *good[1:])
+
+    monkeypatch.setattr(policy, "_plan_steps", steps)
+    ids = policy._replan(0, frozenset())
+    assert [env.universe.actions[i] for i in ids] == list(good)
+    assert asked == [frozenset(), frozenset({bogus})]
+    monkeypatch.setattr(policy, "_plan_steps", lambda bits, exclude: (bogus,))
+    with pytest.raises(PlanningError, match="not in the env's action space"):
+        policy._replan(0, frozenset())

@@ -63,6 +63,8 @@ def state_problem(
 
 #: different failed actions from one state after which the policy gives up
 MAX_BANS = 3
+#: plans with steps outside the env's action space after which the policy gives up
+MAX_OUTSIDE = 8
 #: plans kept in the per-state cache
 PLAN_CACHE_SIZE = 4096
 _State = tuple[str, int, frozenset[str]]  # scene, fluent bits, static atoms
@@ -197,6 +199,31 @@ class PlannerPolicy:
         return plan
 
     def _replan(self, bits: int, exclude: frozenset[str]) -> tuple[int, ...]:
+        """A plan from state `bits` without the `exclude` steps, in the env's action space:
+        a step the env cannot take (a method planning with other affordances than the env's,
+        e.g. perceived ones) is left out and the planner asked again, `MAX_OUTSIDE` times."""
+        universe = self.env.universe
+        outside: set[str] = set()
+        for _ in range(MAX_OUTSIDE + 1):
+            steps = self._plan_steps(bits, exclude | outside)
+            ids: list[int] = []
+            for step in steps:
+                try:
+                    ids.append(universe.index(step))
+                except UnknownNameError:
+                    outside.add(step)
+            if len(ids) == len(steps):
+                self.plans.append(steps)
+                return tuple(ids)
+        shown = ", ".join(f"'{step}'" for step in sorted(outside)[:3])
+        raise PlanningError(
+            f"plan step {shown} is not in the env's action space (method {self.spec.name} vs "
+            f"env domain {self.env.options.domain}; {len(outside)} steps left out, replanned "
+            f"{MAX_OUTSIDE} times)"
+        )
+
+    def _plan_steps(self, bits: int, exclude: frozenset[str]) -> tuple[str, ...]:
+        """One plan (PDDL steps) from state `bits` without the `exclude` steps."""
         env, universe = self.env, self.env.universe
         scene = env.scene
         start = time.perf_counter()
@@ -225,11 +252,4 @@ class PlannerPolicy:
             )
         if not result.plan:
             raise PlanningError(f"the goal of {scene.name} already holds: nothing to do")
-        self.plans.append(result.plan)
-        try:
-            return tuple(universe.index(step) for step in result.plan)
-        except UnknownNameError as exc:
-            raise PlanningError(
-                f"plan step '{exc.name}' is not in the env's action space "
-                f"(method {self.spec.name} vs env domain {env.options.domain})"
-            ) from None
+        return result.plan
