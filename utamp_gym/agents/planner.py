@@ -217,9 +217,9 @@ class PlannerPolicy:
                 return tuple(ids)
         shown = ", ".join(f"'{step}'" for step in sorted(outside)[:3])
         raise PlanningError(
-            f"plan step {shown} is not in the env's action space (method {self.spec.name} vs "
-            f"env domain {self.env.options.domain}; {len(outside)} steps left out, replanned "
-            f"{MAX_OUTSIDE} times)"
+            f"every plan has a step not in the env's action space ({len(outside)} left out, "
+            f"e.g. {shown}; replanned {MAX_OUTSIDE} times; method {self.spec.name} vs env "
+            f"domain {self.env.options.domain})"
         )
 
     def _plan_steps(self, bits: int, exclude: frozenset[str]) -> tuple[str, ...]:

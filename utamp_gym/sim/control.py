@@ -159,24 +159,25 @@ class ArmDriver:
         self.timings.sim_s += time.perf_counter() - t0
         self.timings.sim_time_s += max(n, 0) * self.dt
 
-    def track(self, setpoints: np.ndarray, until: Callable[[int], bool] | None = None) -> int:
-        """Send one row of arm setpoints per physics step; return how many were sent.
+    def track(self, setpoints: np.ndarray, until: Callable[[], bool] | None = None) -> bool:
+        """Send one row of arm setpoints per physics step.
 
-        With `until`, it is asked every `GUARD_EVERY` steps (with the index of the next
-        row) and tracking stops as soon as it answers True (a guarded motion)."""
+        With `until`, it is asked every `GUARD_EVERY` steps and tracking stops as soon as it
+        answers True (a guarded motion); returns True if it did."""
         t0 = time.perf_counter()
         ctrl, act = self.data.ctrl, self.ids.arm_actuator_ids
-        sent = 0
+        sent, stopped = 0, False
         for sent, q in enumerate(setpoints, start=1):
             ctrl[act] = q
             mujoco.mj_step(self.model, self.data)
             if self.on_step is not None:
                 self.on_step()
-            if until is not None and sent % GUARD_EVERY == 0 and until(sent):
+            if until is not None and sent % GUARD_EVERY == 0 and until():
+                stopped = True
                 break
         self.timings.sim_s += time.perf_counter() - t0
         self.timings.sim_time_s += sent * self.dt
-        return sent
+        return stopped
 
     def settle_arm(self, q_goal: np.ndarray, *, tol: float = 2e-3, max_s: float = 0.4) -> None:
         """Hold `q_goal` until the joints are within `tol` rad and nearly still."""
@@ -333,9 +334,7 @@ class ArmDriver:
         """
         if line.length > 0:
             vel = PANDA_VEL_LIMITS * FREE_SCALE[0]
-            setpoints = line_setpoints(line, speed, acc, vel, self.dt)
-            sent = self.track(setpoints, None if until is None else lambda _: until())
-            if sent < len(setpoints):
+            if self.track(line_setpoints(line, speed, acc, vel, self.dt), until):
                 self.settle_arm(self.q())
                 return True
         self.settle_arm(line.q[-1])

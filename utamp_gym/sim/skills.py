@@ -219,12 +219,14 @@ def contact_guard(arm: ArmDriver, carried: LoadReading, up: LinePath) -> Callabl
     more than `GUARD_MARGIN` above the place pose; never for an object lighter than
     `GUARD_MIN_WEIGHT_N` (its weight is within the estimate's noise in motion)."""
     weight = -float(carried.force[2])
+    if weight < GUARD_MIN_WEIGHT_N:
+        return lambda: False
     bottom = float(arm.tcp()[2, 3]) - up.length
     count = 0
 
     def touched() -> bool:
         nonlocal count
-        if weight < GUARD_MIN_WEIGHT_N or float(arm.tcp()[2, 3]) - bottom <= GUARD_MARGIN:
+        if float(arm.tcp()[2, 3]) - bottom <= GUARD_MARGIN:
             return False
         free = float(np.linalg.norm(hand_force_now(arm))) < GUARD_FREE * weight
         count = count + 1 if free else 0
@@ -239,12 +241,16 @@ def _rests_at(st: SimState, name: str, target: np.ndarray) -> bool:
     stopped on contact has set it down where it was to go (it sagged or slipped down in the
     pads on the way), not on something in between."""
     shift, angle = pose_change(target, relook.in_hand(st, name))
+    return not _moved_beyond(st, shift, angle, LANDED_SHIFT, LANDED_TURN_DEG)
+
+
+def _moved_beyond(st: SimState, shift: float, angle: float, tol: float, tol_deg: float) -> bool:
+    """True if a pose difference of `shift` m / `angle` degrees between two wrist-camera
+    estimates exceeds `tol` / `tol_deg` beyond what the estimation noise explains (3 standard
+    deviations of a difference of two estimates)."""
     noise = 0.0 if st.estimator is None else st.estimator.noise
     explained = 3 * math.sqrt(2)
-    return (
-        shift <= LANDED_SHIFT + explained * noise
-        and angle <= LANDED_TURN_DEG + explained * yaw_noise_deg(noise)
-    )
+    return shift > tol + explained * noise or angle > tol_deg + explained * yaw_noise_deg(noise)
 
 
 def landed_early(push: float, weight: float) -> bool:
@@ -260,13 +266,7 @@ def _looked_again(st: SimState, held: Held, *, always: bool = False) -> bool:
     `always`."""
     new = np.linalg.inv(st.arm.tcp()) @ relook.in_hand(st, held.obj)
     shift, angle = pose_change(held.belief, new)
-    noise = 0.0 if st.estimator is None else st.estimator.noise
-    explained = 3 * math.sqrt(2)
-    if (
-        always
-        or shift > REGRASP_SLIP + explained * noise
-        or angle > REGRASP_TILT_DEG + explained * yaw_noise_deg(noise)
-    ):
+    if always or _moved_beyond(st, shift, angle, REGRASP_SLIP, REGRASP_TILT_DEG):
         held.belief = new
         return True
     return False
