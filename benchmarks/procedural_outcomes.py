@@ -40,10 +40,15 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from outcome_model import _physics_class, consistent, symbolic_supports
 
+from utamp_gym.affordances.rules import pick_refusal
 from utamp_gym.provenance import commit, write_json, write_markdown
-from utamp_gym.suites import procedural
+from utamp_gym.sim.decode import GraspSymbols, grasp_candidates
+from utamp_gym.suites import procedural, resolve_scene
+from utamp_gym.symbolic.outcome import truth_atoms
 
 TARGET = 0.98  # physics must succeed on this share of the actions the rules allow, per family
+_X = np.array([1.0, 0.0, 0.0])
+FORBIDDEN_PICKS = 0.05  # ... and on at most this share of the picks they forbid (issue #39)
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,29 @@ def _families(scene_name: str) -> dict[str, str]:
     assert parsed is not None, scene_name
     g = procedural.split_scene(*parsed)
     return {o.name: f for o, f in zip(g.scene.objects, g.families, strict=True)}
+
+
+def pick_refusal_kind(scene_name: str, action: str, reason: str, domain: str) -> str:
+    """Why the rules forbid a pick, as one word for the report: ``finger order`` when the
+    grasp is granted under its other finger order and both orders give the same grasp poses
+    (the hand tries both finger-axis signs, `sim.decode.grasp_candidates`; the measured grasp
+    is named in the canonical order, `sim.physical.measured_grasp`), else the rule that refuses it
+    (`affordances.rules.pick_refusal`: ``palm-never-up``, ``grip-width``, ...), ``payload``
+    for ``canLift``, ``facts`` when only `object_facts` leaves it out."""
+    if reason.startswith("canLift"):
+        return "payload"
+    _, obj, member, palm, f1, f2, *_ = action.strip("()").split()
+    scene = resolve_scene(scene_name)
+    t, part = scene.type_of(obj), member.removeprefix(f"{obj}-")
+    if f"(cangraspfrom {obj} {member} {palm} {f2} {f1})" in truth_atoms(scene, domain):
+        poses = [
+            grasp_candidates(t, GraspSymbols(obj, part, palm, a, b), np.eye(4), prefer_x=_X)
+            for a, b in ((f1, f2), (f2, f1))
+        ]
+        if all(any(np.allclose(g.tcp, h.tcp) for h in poses[1]) for g in poses[0]):
+            return "finger order"
+    refusal = pick_refusal(t, part, palm, f1, f2, domain == "utamp2x")
+    return "facts" if refusal is None else refusal.rule
 
 
 def sample_split(
@@ -161,7 +189,7 @@ def _rate(ok: int, n: int) -> str:
     return f"{ok}/{n} ({ok / n:.1%})" if n else "–"
 
 
-def summarize(pairs: list[Pair]) -> dict[str, Any]:
+def summarize(pairs: list[Pair], domain: str = "utamp2") -> dict[str, Any]:
     by_family: dict[str, Counter[str]] = defaultdict(Counter)
     by_support: dict[str, Counter[str]] = defaultdict(Counter)
     for p in pairs:
@@ -193,6 +221,12 @@ def summarize(pairs: list[Pair]) -> dict[str, Any]:
                 }
             )
     clean = [p for p in allowed if not p.after_forbidden]
+    picks: dict[str, Counter[str]] = defaultdict(Counter)
+    for p in pairs:
+        if p.kind == "pick-support" and not p.allowed:
+            kind = pick_refusal_kind(p.scene, p.action, p.rules_reason, domain)
+            picks[kind]["forbidden"] += 1
+            picks[kind]["forbidden_ok"] += p.physics
     return {
         "pairs": len(pairs),
         "allowed": len(allowed),
@@ -201,6 +235,11 @@ def summarize(pairs: list[Pair]) -> dict[str, Any]:
         "allowed_clean_physics_ok": sum(p.physics for p in clean),
         "forbidden": len(pairs) - len(allowed),
         "forbidden_physics_ok": sum(p.physics for p in pairs if not p.allowed),
+        "forbidden_picks": sum(c["forbidden"] for c in picks.values()),
+        "forbidden_picks_physics_ok": sum(c["forbidden_ok"] for c in picks.values()),
+        "forbidden_picks_by_refusal": {
+            k: dict(c) for k, c in sorted(picks.items(), key=lambda kc: -kc[1]["forbidden_ok"])
+        },
         "by_family": {f: dict(c) for f, c in sorted(by_family.items())},
         "by_support_family": {f: dict(c) for f, c in sorted(by_support.items())},
         "allowed_failures": dict(failures.most_common()),
@@ -222,7 +261,10 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         "",
         f"**Physics succeeded on {_rate(s['allowed_physics_ok'], s['allowed'])} of the actions "
         f"the rules allow**, and on {_rate(s['forbidden_physics_ok'], s['forbidden'])} of those "
-        "they forbid.",
+        "they forbid; "
+        f"of the picks they forbid, physics carried out "
+        f"{_rate(s['forbidden_picks_physics_ok'], s['forbidden_picks'])} (target ≤ "
+        f"{FORBIDDEN_PICKS:.0%}).",
         "",
         "An episode ends when the simulation no longer matches the symbolic state, after a "
         "failure or after an action physics carried out otherwise than its effects say (an "
@@ -274,6 +316,19 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
             f"| {fam} | {_rate(c.get('allowed_ok', 0), c.get('allowed', 0))} | "
             f"{_rate(c.get('forbidden_ok', 0), c.get('forbidden', 0))} |"
         )
+    out += [
+        "",
+        "Picks the rules forbid, by the rule that refuses them (`finger order`: the grasp is "
+        "granted under its other finger order, which gives the same grasp poses: the hand "
+        "tries both finger-axis signs and the measured grasp is named in the canonical order; "
+        "`palm-never-up`: the palm on a side the object never turns up, a side grasp; "
+        "`facts`: the rules refuse none of its parts, `object_facts` leaves it out):",
+        "",
+        "| refused by | picks | physics succeeds |",
+        "|---|---|---|",
+    ]
+    for kind, c in s["forbidden_picks_by_refusal"].items():
+        out.append(f"| {kind} | {c['forbidden']} | {_rate(c['forbidden_ok'], c['forbidden'])} |")
     out += ["", "Allowed actions physics failed, by kind:", ""]
     if not s["allowed_failures"]:
         out.append("none")
@@ -335,7 +390,7 @@ def main() -> None:
             parts = list(pool.map(sample_split, *zip(*jobs, strict=True)))
         pairs = [p for part in parts for p in part]
         wall = time.perf_counter() - start
-    summary = summarize(pairs)
+    summary = summarize(pairs, args.domain)
     out.parent.mkdir(parents=True, exist_ok=True)
     data = {
         **summary,
