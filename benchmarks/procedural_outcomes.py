@@ -40,7 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from outcome_model import _physics_class, consistent, symbolic_supports
 
-from utamp_gym.affordances.rules import pick_refusal
+from utamp_gym.affordances.rules import PALM_PARTS, pick_refusal
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.sim.decode import GraspSymbols, grasp_candidates
 from utamp_gym.suites import procedural, resolve_scene
@@ -84,9 +84,11 @@ def pick_refusal_kind(scene_name: str, action: str, reason: str, domain: str) ->
     """Why the rules forbid a pick, as one word for the report: ``finger order`` when the
     grasp is granted under its other finger order and both orders give the same grasp poses
     (the hand tries both finger-axis signs, `sim.decode.grasp_candidates`; the measured grasp
-    is named in the canonical order, `sim.physical.measured_grasp`), else the rule that refuses it
-    (`affordances.rules.pick_refusal`: ``palm-never-up``, ``grip-width``, ...), ``payload``
-    for ``canLift``, ``facts`` when only `object_facts` leaves it out."""
+    is named in the canonical order, `sim.physical.measured_grasp`); ``side grasp`` for the
+    palm on a side part (the rules grant the palm on the ``on`` / ``under`` part only,
+    `PALM_PARTS`: from above, upright or inverted); else the rule that refuses it
+    (`affordances.rules.pick_refusal`: ``grip-width``, ``covered``, ...), ``payload`` for
+    ``canLift``, ``facts`` when only `object_facts` leaves it out."""
     if reason.startswith("canLift"):
         return "payload"
     _, obj, member, palm, f1, f2, *_ = action.strip("()").split()
@@ -99,6 +101,8 @@ def pick_refusal_kind(scene_name: str, action: str, reason: str, domain: str) ->
         ]
         if all(any(np.allclose(g.tcp, h.tcp) for h in poses[1]) for g in poses[0]):
             return "finger order"
+    if palm not in PALM_PARTS:
+        return "side grasp"
     refusal = pick_refusal(t, part, palm, f1, f2, domain == "utamp2x")
     return "facts" if refusal is None else refusal.rule
 
@@ -321,8 +325,9 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         "Picks the rules forbid, by the rule that refuses them (`finger order`: the grasp is "
         "granted under its other finger order, which gives the same grasp poses: the hand "
         "tries both finger-axis signs and the measured grasp is named in the canonical order; "
-        "`palm-never-up`: the palm on a side the object never turns up, a side grasp; "
-        "`facts`: the rules refuse none of its parts, `object_facts` leaves it out):",
+        "`side grasp`: the palm on a side part, a horizontal approach; the rules grant the "
+        "palm on the part facing up only; `facts`: the rules refuse none of its parts, "
+        "`object_facts` leaves it out):",
         "",
         "| refused by | picks | physics succeeds |",
         "|---|---|---|",

@@ -24,8 +24,8 @@ SCENE = "procedural-v1/train/0192"  # obj3: a tumbler standing inverted on the t
     [
         # granted as (under, front, back): the same two grasp poses, fingers named the other way
         ("(pick-support obj3 obj3-body under back front back under base on on)", "finger order"),
-        # the palm on the round side: a side grasp the rules never grant
-        ("(pick-support obj3 obj3-body back left right back under base on on)", "palm-never-up"),
+        # the palm on the round side: a side grasp (the rules grant the palm on on/under only)
+        ("(pick-support obj3 obj3-body back left right back under base on on)", "side grasp"),
     ],
 )
 def test_a_forbidden_pick_is_put_down_to_the_rule_that_refuses_it(action, kind):
@@ -58,10 +58,10 @@ def test_the_report_counts_the_forbidden_picks_physics_carried_out():
     assert (summary["forbidden_picks"], summary["forbidden_picks_physics_ok"]) == (2, 1)
     by = summary["forbidden_picks_by_refusal"]
     assert by["finger order"] == {"forbidden": 1, "forbidden_ok": 1}
-    assert by["palm-never-up"] == {"forbidden": 1, "forbidden_ok": 0}
+    assert by["side grasp"] == {"forbidden": 1, "forbidden_ok": 0}
     args = argparse.Namespace(
         pairs=3, splits="train", seed=0, max_steps=12, workers=1, domain="utamp2x"
     )
     text = outcomes.to_markdown(summary, args, 1.0)
     assert "of the picks they forbid, physics carried out 1/2 (50.0%) (target ≤ 5%)" in text
-    assert "| palm-never-up | 1 | 0/1 (0.0%) |" in text
+    assert "| side grasp | 1 | 0/1 (0.0%) |" in text
