@@ -101,15 +101,19 @@ def procedural_eval() -> tuple[str, str, str]:
 
 def procedural_outcomes() -> tuple[str, str, str]:
     d = json.loads((RESULTS / "procedural_outcomes.json").read_text())
-    target = load_script("benchmarks/procedural_outcomes.py").TARGET
+    bench = load_script("benchmarks/procedural_outcomes.py")
+    target = bench.TARGET
     rate = d["allowed_physics_ok"] / d["allowed"]
     clean = d["allowed_clean_physics_ok"] / d["allowed_clean"]
     worst = min(f["allowed_ok"] / f["allowed"] for f in d["by_family"].values() if f.get("allowed"))
     family = _short(f"every family ≥ {int(100 * worst)} %", worst < target)
+    forbidden = d["forbidden_picks_physics_ok"] / d["forbidden_picks"]
     figure = (
-        f"{_short(_pct(rate), rate < target)} ({_pct(clean)} in states the rules lead to); {family}"
+        f"{_short(_pct(rate), rate < target)} ({_pct(clean)} in states the rules lead to); "
+        f"{family}; forbidden picks physics carries out: "
+        f"{_short(_pct(forbidden), forbidden > bench.FORBIDDEN_PICKS)}"
     )
-    return "rules against physics, allowed actions that succeed", figure, "procedural_outcomes.md"
+    return "rules against physics on procedural states", figure, "procedural_outcomes.md"
 
 
 def perceived() -> tuple[str, str, str]:
