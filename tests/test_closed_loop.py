@@ -282,10 +282,10 @@ def _salt_orientation(scene: Scene, state: PhysicalState) -> set[str]:
 
 
 def test_a_planner_that_gives_up_names_the_physical_failure_that_led_there() -> None:
-    """procedural-v2/hard/0012, seed 0: lifting obj2 off obj1 would collide with obj4's handle
-    (the arm checks it), the policy bans that pick and no other plan exists from there; the
-    row says both."""
-    out = run_closed_loop("procedural-v2/hard/0012", "utamp2x-rules", seed=0)
+    """procedural-v2/train/0238, seed 0: lifting the bottle obj3 by its neck from slot5 leaves
+    the arm's reach (IK), the policy bans both neck grasps and no other plan exists from
+    there; the row says both."""
+    out = run_closed_loop("procedural-v2/train/0238", "utamp2x-rules", seed=0)
     assert not out.success and out.n_replans >= 1
     assert out.failure.startswith("no plan from the current state")
-    assert "(last failed step: lifting obj2 would collide" in out.failure
+    assert "(last failed step: IK infeasible: cannot grasp obj3 by its neck" in out.failure

@@ -88,7 +88,8 @@ def test_the_guard_stops_a_descent_only_where_the_hand_carries_nothing():
 def test_a_board_that_slipped_down_in_the_pads_is_let_go_where_it_landed(monkeypatch):
     """pick-place/091 seed 0: the board held by its handle slipped down in the pads on the
     carry and rests on its slot 1.6 cm before the place pose. The guarded descent stops
-    there and lets go; pressed on down (no guard) it slips out of the pads, stays on the
+    there and lets go (pressed on down, it would slide up in the pads and be let go at its
+    place pose all the same); backed up from instead, it slips out of the pads, stays on the
     table as the hand backs up, and the next aim starts in collision. The slip is MuJoCo's
     contact solution: on mujoco 4 the board does not slip on the carry, the guard has nothing
     to stop and the counterfactual does not arise (skipped, with the version)."""
@@ -108,7 +109,8 @@ def test_a_board_that_slipped_down_in_the_pads_is_let_go_where_it_landed(monkeyp
     assert result.success, result.failure
     if not fired:
         pytest.skip(f"on mujoco {mujoco.__version__} the board does not slip in the pads")
-    monkeypatch.setattr(skills, "contact_guard", lambda arm, carried, up: lambda: False)
+    # never let go before the place pose (neither where the guard stopped nor pressed on)
+    monkeypatch.setattr(skills, "_rests_at", lambda st, name, target: False)
     result = run_episode("pick-place/091", "utamp2-gt", 0)
     assert not result.success and result.failure is not None
     assert result.failure["step"] == 1 and "board" in result.failure["reason"]
@@ -145,3 +147,32 @@ def test_a_pan_pressing_on_a_rim_is_not_stopped(scene, seed):
 
     result = run_episode(scene, "utamp2-rules", seed)
     assert result.success, result.failure
+
+
+@pytest.mark.physics
+def test_a_board_pressed_onto_its_place_pose_is_let_go_there(monkeypatch):
+    """procedural-v1/train/0185 (2 mm pose noise, seed 0): a paddle board held by its handle
+    lands on the table at its slot 1.6 cm before the hand's place pose; the hand presses on
+    (about 300 N, an early landing) and the board slides up in the pads, resting where it was
+    to. It is let go there; backed up from (as before), it stayed on the table out of the
+    pads and the next aim started in collision with it."""
+    scene = resolve_scene("procedural-v1/train/0185")
+    pick = "(pick-support obj1 obj1-handle on left right back on slot3 under on)"
+    place = "(place-support obj1 obj1-handle on left right back on under slot2 back on)"
+    backed_up: list[float] = []
+    move_line = ArmDriver.move_line
+
+    def counting(self: ArmDriver, line, speed: float, acc: float, **kw) -> bool:
+        if (speed, acc) == skills.PLACE and not kw:  # the back-up after an early landing
+            backed_up.append(line.length)
+        return move_line(self, line, speed, acc, **kw)
+
+    monkeypatch.setattr(ArmDriver, "move_line", counting)
+    sim = MujocoBackend(pose_noise=0.002)
+    sim.reset(scene, np.random.default_rng(0))
+    assert sim.execute(pick).success
+    result = sim.execute(place)
+    assert result.success, result.reason
+    assert backed_up == []
+    assert sim.state.stack()["obj1"] == "slot2"
+    sim.close()

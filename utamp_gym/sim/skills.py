@@ -68,8 +68,10 @@ SLIDE_TOL = 0.02  # m, slid footprint centre within this of the space centre
 CARRY_HOLD_S = 0.04  # s the arm holds over the support while its load is measured
 #: a guarded descent: an upward push on the held object this strong (N, measured from the
 #: joint torques) at the place pose, and stronger than the object's weight, means it landed
-#: early; the arm backs up, looks again and aims anew, at most `PLACE_ATTEMPTS` times. (A
-#: support may carry up to the whole weight unpressed: a pan held by its handle sags onto it.)
+#: early; unless the wrist camera sees it resting at its place pose all the same (`_rests_at`:
+#: it slid up in the pads as the hand pressed on), the arm backs up, looks again and aims
+#: anew, at most `PLACE_ATTEMPTS` times. (A support may carry up to the whole weight
+#: unpressed: a pan held by its handle sags onto it.)
 CONTACT_N = 5.0
 PLACE_ATTEMPTS = 3
 #: the descent is guarded as it moves (`contact_guard`): it stops where the hand carries
@@ -196,6 +198,8 @@ def place(st: SimState, act: MacroAction) -> None:
             break
         push = hold_and_measure(arm, CARRY_HOLD_S).force[2] - carried.force[2]
         if not (stopped or landed_early(push, weight)) or attempt == PLACE_ATTEMPTS:
+            break
+        if not stopped and _rests_at(st, name, target):  # pressed on down at its place pose
             break
         # it landed early (on a rim, say): back up, look again, aim anew
         arm.move_line(up, *PLACE)
