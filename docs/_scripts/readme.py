@@ -109,7 +109,8 @@ def procedural_outcomes() -> tuple[str, str, str]:
     family = _short(f"every family ≥ {int(100 * worst)} %", worst < target)
     forbidden = d["forbidden_picks_physics_ok"] / d["forbidden_picks"]
     figure = (
-        f"{_short(_pct(rate), rate < target)} ({_pct(clean)} in states the rules lead to); "
+        f"allowed actions succeed {_short(_pct(rate), rate < target)} ({_pct(clean)} in states "
+        "the rules lead to); "
         f"{family}; forbidden picks physics carries out: "
         f"{_short(_pct(forbidden), forbidden > bench.FORBIDDEN_PICKS)}"
     )
