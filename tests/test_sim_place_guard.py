@@ -30,20 +30,27 @@ def test_a_push_is_an_early_landing_beyond_contact_n_and_the_weight(push, weight
     assert landed_early(push, weight) is early
 
 
+def _place_lines(monkeypatch: pytest.MonkeyPatch) -> list[tuple[float, bool]]:
+    """Records every line the arm follows at the place speed from now on, as (length,
+    guarded): a descent is guarded (`contact_guard`), the back-up after an early landing not."""
+    lines: list[tuple[float, bool]] = []
+    move_line = ArmDriver.move_line
+
+    def recording(self: ArmDriver, line, speed: float, acc: float, **kw) -> bool:
+        if (speed, acc) == skills.PLACE:
+            lines.append((line.length, kw.get("until") is not None))
+        return move_line(self, line, speed, acc, **kw)
+
+    monkeypatch.setattr(ArmDriver, "move_line", recording)
+    return lines
+
+
 @pytest.mark.physics
 def test_a_pan_sagging_onto_the_tray_is_placed_at_the_first_descent(monkeypatch):
     scene = resolve_scene("pick-place/003")  # tray | pan
     pick = "(pick-support pan pan-handle on left right back on slot2 under on)"
     place = "(place-support pan pan-handle on left right back on under tray back on)"
-    lowered: list[float] = []
-    move_line = ArmDriver.move_line
-
-    def counting(self: ArmDriver, line, speed: float, acc: float, **kw) -> bool:
-        if (speed, acc) == skills.PLACE:  # a descent, or the back-up before another one
-            lowered.append(line.length)
-        return move_line(self, line, speed, acc, **kw)
-
-    monkeypatch.setattr(ArmDriver, "move_line", counting)
+    lowered = _place_lines(monkeypatch)  # a descent, or the back-up before another one
     sim = MujocoBackend(pose_noise=0.0)
     sim.reset(scene, np.random.default_rng(0))
     assert sim.execute(pick).success
@@ -159,20 +166,12 @@ def test_a_board_pressed_onto_its_place_pose_is_let_go_there(monkeypatch):
     scene = resolve_scene("procedural-v1/train/0185")
     pick = "(pick-support obj1 obj1-handle on left right back on slot3 under on)"
     place = "(place-support obj1 obj1-handle on left right back on under slot2 back on)"
-    backed_up: list[float] = []
-    move_line = ArmDriver.move_line
-
-    def counting(self: ArmDriver, line, speed: float, acc: float, **kw) -> bool:
-        if (speed, acc) == skills.PLACE and not kw:  # the back-up after an early landing
-            backed_up.append(line.length)
-        return move_line(self, line, speed, acc, **kw)
-
-    monkeypatch.setattr(ArmDriver, "move_line", counting)
+    lines = _place_lines(monkeypatch)
     sim = MujocoBackend(pose_noise=0.002)
     sim.reset(scene, np.random.default_rng(0))
     assert sim.execute(pick).success
     result = sim.execute(place)
     assert result.success, result.reason
-    assert backed_up == []
+    assert [length for length, guarded in lines if not guarded] == []  # no back-up
     assert sim.state.stack()["obj1"] == "slot2"
     sim.close()
