@@ -9,13 +9,19 @@ material, mass and robustness are cached per scene under ``--cache/<suite>`` (re
 ``train``: development data only — the first ``--limit`` train scenes and the paper's
 scenes collected (``collect --suite pick-place,sliding --part 1/10``). Even-numbered scenes
 fit and odd-numbered ones are held out, and vice versa, to choose each head's L2
-regularisation, the temperatures of the confidences, and whether mass comes from the learned
-heads or from the hand-built volume x density rule on the learned material; the shipped
-model is refitted on all of them with the chosen settings and written to
-``assets/perception/attribute_model.json`` (``--write``).
+regularisation, the mass-class temperature, and whether mass comes from the learned heads
+or from the hand-built volume x density rule on the learned material. The material head's
+pooling of its all-feature and appearance-only logits (`learned.AttributeModel.pool`) and
+its temperature are chosen by the mean held-out negative log-likelihood of those halves
+(families seen in fitting) and of leave-one-family-out folds over the train families (each
+family held out in turn, the paper's objects always fitted): the test splits hold families
+never seen, and a perceiver judged only on seen families learns the family, not the
+material. The shipped model is refitted on all of them with the chosen settings and written
+to ``assets/perception/attribute_model.json`` (``--write``).
 
 ``report``: the shipped model on the measurements of the ``--suite`` split(s) (test splits:
-reported only, never used to choose anything), after the train cross-validation's row:
+reported only, never used to choose anything), after the train cross-validation's rows
+(even/odd halves, and leave-one-family-out):
 per-attribute accuracy beside the hand-built pipeline's, and a reliability table of the
 confidences; writes ``docs/results/attribute-model.{md,json}``.
 
@@ -38,6 +44,7 @@ from utamp_gym.perception.confidence import mass_class, packaged_calibration, ra
 from utamp_gym.perception.learned import (
     MATERIAL_NAMES,
     MODEL_FILE,
+    N_APPEARANCE,
     AttributeModel,
     best_temperature,
     features,
@@ -57,11 +64,14 @@ from utamp_gym.perception.objects import (
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.materials import material
 from utamp_gym.seeding import run_seed
+from utamp_gym.suites import suite_scenes
+from utamp_gym.tasks.attributes import family_of
 
 ROOT = Path(__file__).resolve().parents[1]
 TRAIN = "procedural-v1/train"
 PAPER = ("pick-place", "sliding")  # the paper's objects: development data too
 L2_GRID = (1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0)
+POOL_GRID = (0.0, 0.1, 0.25, 0.4, 0.5, 0.75, 1.0)  # weight of the all-feature material head
 HEADS = ("material", "robustness", "mass")
 
 
@@ -113,18 +123,23 @@ def fit(
     l2: tuple[float, float, float],
     temps: tuple[float, float] = (1.0, 1.0),
     mass_head: str = "learned",
+    pool: float = 1.0,
 ) -> AttributeModel:
-    """The model fitted on `rows` with regularisation `l2` (material, class, mass)."""
+    """The model fitted on `rows` with regularisation `l2` (material, class, mass); `pool`
+    < 1 fits the appearance-only material head too (`learned.AttributeModel.pool`)."""
     x, mat, cls, logm = arrays(rows)
     mean, std = x.mean(axis=0), x.std(axis=0)
     std = np.where(std < 1e-9, 1.0, std)
     z = (x - mean) / std
+    appearance = None
+    if pool < 1.0:
+        appearance = fit_softmax(z[:, :N_APPEARANCE], mat, len(MATERIAL_NAMES), l2[0])
     return AttributeModel(
         mean, std,
         fit_softmax(z, mat, len(MATERIAL_NAMES), l2[0]),
         fit_softmax(z, cls, 5, l2[1]),
         fit_ridge(z, logm, l2[2]),
-        *temps, mass_head,
+        *temps, mass_head, appearance, pool,
     )  # fmt: skip
 
 
@@ -159,25 +174,89 @@ def evaluate(model: AttributeModel, rows: list[dict[str, object]]) -> dict[str, 
 def logits(model: AttributeModel, rows: list[dict[str, object]]) -> tuple[np.ndarray, np.ndarray]:
     x = np.array([features(r["measurements"]) for r in rows])  # type: ignore[arg-type]
     xb = model._xb(x)
-    return xb @ model.w_material, xb @ model.w_mass_class
+    return model.material_logits(xb), xb @ model.w_mass_class
 
 
 def _index(r: dict[str, object]) -> int:
     return int(str(r["scene"]).rsplit("/", 1)[-1])
 
 
+def families(rows: list[dict[str, object]]) -> list[str]:
+    """The kitchenware family of each row's object ("" for the paper's objects)."""
+    wanted = {str(r["scene"]) for r in rows if str(r["scene"]).startswith(TRAIN)}
+    types = {
+        (scene.name, o): scene.object(o).type
+        for scene in suite_scenes(TRAIN) if scene.name in wanted
+        for o in scene.object_names
+    }  # fmt: skip
+    return [
+        family_of(types[(str(r["scene"]), str(r["object"]))])
+        if str(r["scene"]).startswith(TRAIN) else ""
+        for r in rows
+    ]  # fmt: skip
+
+
+Folds = list[tuple[list[dict[str, object]], list[dict[str, object]]]]
+
+
+def family_folds(rows: list[dict[str, object]]) -> Folds:
+    """Leave-one-family-out: per train family, (every other row, that family's rows)."""
+    fams = families(rows)
+    return [
+        ([r for r, f in zip(rows, fams, strict=True) if f != name],
+         [r for r, f in zip(rows, fams, strict=True) if f == name])
+        for name in sorted(set(fams) - {""})
+    ]  # fmt: skip
+
+
+def _nll(logits: np.ndarray, y: np.ndarray) -> float:
+    z = logits - logits.max(axis=1, keepdims=True)
+    logp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
+    return float(-np.mean(logp[np.arange(len(y)), y]))
+
+
+def choose_pool(
+    fold_sets: tuple[Folds, ...], l2: tuple[float, float, float]
+) -> tuple[float, float, dict[float, float]]:
+    """(pool, material temperature, mean held-out NLL per pool in `POOL_GRID`): the pooling
+    of the two material heads, and one temperature for it, that give the least negative
+    log-likelihood averaged over the fold sets (each set: its held-out rows pooled)."""
+    held = []
+    for folds in fold_sets:
+        full, app, ys = [], [], []
+        for a, b in folds:
+            m = fit(a, l2, pool=0.0)
+            x, mat, _, _ = arrays(b)
+            xb = m._xb(x)
+            full.append(xb @ m.w_material)
+            app.append(np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]]) @ m.w_appearance)
+            ys.append(mat)
+        held.append((np.vstack(full), np.vstack(app), np.concatenate(ys)))
+    scores: dict[float, tuple[float, float]] = {}
+    for w in POOL_GRID:
+        pooled = [w * f + (1.0 - w) * a for f, a, _ in held]
+        t = best_temperature(np.vstack(pooled), np.concatenate([y for *_, y in held]))
+        nll = float(np.mean([_nll(p / t, y) for p, (*_, y) in zip(pooled, held, strict=True)]))
+        scores[w] = (nll, t)
+    best = min(POOL_GRID, key=lambda w: (scores[w][0], -w))
+    return best, scores[best][1], {w: round(v[0], 4) for w, v in scores.items()}
+
+
 def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, object]:
-    """Choose settings by even/odd cross-validation on train (its first `limit` scenes) and
-    the paper's scenes collected; fit on all; maybe ship."""
+    """Choose settings by cross-validation on train (its first `limit` scenes) and the
+    paper's scenes collected: even/odd halves, and leave-one-family-out for the material
+    head's pooling and temperature (module docstring); fit on all; maybe ship."""
     rows = [r for r in cached(TRAIN, cache) if limit is None or _index(r) < limit]
     rows += [r for suite in PAPER for r in cached(suite, cache)]
     folds = ([r for r in rows if _index(r) % 2 == 0], [r for r in rows if _index(r) % 2 == 1])
+    halves: Folds = [folds, folds[::-1]]
+    by_family = family_folds(rows)
     best: list[float] = []
     for head in range(3):
         scores = []
         for l2 in L2_GRID:
             s = []
-            for a, b in (folds, folds[::-1]):
+            for a, b in halves:
                 m = fit(a, (l2, l2, l2))
                 x, mat, cls, logm = arrays(b)
                 xb = m._xb(x)
@@ -191,17 +270,16 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
         best.append(L2_GRID[int(np.argmax(scores))])
         print(f"head {head}: l2 grid scores {dict(zip(L2_GRID, np.round(scores, 4), strict=True))}")
     l2 = (best[0], best[1], best[2])
-    # temperatures on held-out halves, then the cross-validated accuracy with them
-    tm, tc = [], []
-    for a, b in (folds, folds[::-1]):
-        m = fit(a, l2)
-        lm, lc = logits(m, b)
-        _, mat, cls, _ = arrays(b)
-        tm.append(best_temperature(lm, mat))
-        tc.append(best_temperature(lc, cls))
-    temps = (float(np.mean(tm)), float(np.mean(tc)))
+    pool, t_material, pool_nll = choose_pool((halves, by_family), l2)
+    print(f"material pool (weight of the all-feature head): {pool}; mean NLL {pool_nll}")
+    # the mass-class temperature on held-out halves
+    tc = []
+    for a, b in halves:
+        _, lc = logits(fit(a, l2), b)
+        tc.append(best_temperature(lc, arrays(b)[2]))
+    temps = (t_material, float(np.mean(tc)))
     # the mass: the learned heads, or the hand-built rule on the learned material
-    heads = {h: [evaluate(fit(a, l2, temps, h), b) for a, b in (folds, folds[::-1])]
+    heads = {h: [evaluate(fit(a, l2, temps, h, pool), b) for a, b in halves]
              for h in ("learned", "rule")}  # fmt: skip
     # held-out mass-class accuracy of each head on the procedural objects and on the paper's
     # (the paper's suites must keep reading their own objects' masses: the learned heads
@@ -215,14 +293,27 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
     better = all(mass_cv["learned"][k] >= mass_cv["rule"][k] for k in ("procedural", "paper"))
     mass_head = "learned" if better else "rule"
     held = heads[mass_head]
-    cv_acc = {k: float(np.mean(held[0]["right"][k] + held[1]["right"][k]))  # type: ignore[index,operator]
-              for k in ("material", "robustness", "mass")}  # fmt: skip
-    model = fit(rows, l2, temps, mass_head)
+    unseen = [evaluate(fit(a, l2, temps, mass_head, pool), b) for a, b in by_family]
+    model = fit(rows, l2, temps, mass_head, pool)
     if write:
         path = ROOT / "assets" / Path(*MODEL_FILE)
         path.write_text(json.dumps(model.to_json(), separators=(",", ":")) + "\n")
-    return {"l2": l2, "temperatures": temps, "cv_accuracy": cv_acc, "objects": len(rows),
-            "mass_cv": mass_cv, "mass_head": mass_head, "cv": held}  # fmt: skip
+    return {"l2": l2, "temperatures": temps, "cv_accuracy": _accuracy(held),
+            "objects": len(rows), "mass_cv": mass_cv, "mass_head": mass_head, "cv": held,
+            "pool": pool, "pool_nll": pool_nll, "family_accuracy": _accuracy(unseen),
+            "family_objects": sum(len(b) for _, b in by_family), "family_cv": unseen,
+            "family_rows": [r for _, b in by_family for r in b]}  # fmt: skip
+
+
+def _accuracy(evs: list[dict[str, object]]) -> dict[str, float]:
+    return {k: float(np.mean([x for ev in evs for x in ev["right"][k]]))  # type: ignore[index,attr-defined]
+            for k in HEADS}  # fmt: skip
+
+
+def _pooled(evs: list[dict[str, object]]) -> dict[str, dict[str, list]]:
+    """The held-out evaluations of several folds as one (`evaluate`'s form)."""
+    return {k: {h: [x for ev in evs for x in ev[k][h]] for h in HEADS}  # type: ignore[index]
+            for k in ("right", "confidence")}  # fmt: skip
 
 
 def reliability(ev: dict[str, object]) -> dict[str, list[dict[str, float]]]:
@@ -269,16 +360,21 @@ def report(
     model = packaged_attribute_model()
     assert model is not None, "no shipped model: run `train --write` first"
     payload: dict[str, object] = {}
-    cv = train(cache, write=False, limit=limit)  # the development data, held out by halves
-    held = cv["cv"]
-    ev = {k: {h: held[0][k][h] + held[1][k][h] for h in HEADS} for k in ("right", "confidence")}  # type: ignore[index]
+    cv = train(cache, write=False, limit=limit)  # the development data, held out
     hb_rows = [r for r in cached(TRAIN, cache) if limit is None or _index(r) < limit]
     hb_rows += [r for suite in PAPER for r in cached(suite, cache)]
     payload[f"{TRAIN} (even/odd cross-validation)"] = {
         "objects": cv["objects"], "scenes": len({r["scene"] for r in hb_rows}),
         "learned": cv["cv_accuracy"], "handbuilt": handbuilt_accuracy(hb_rows),
-        "reliability": reliability(ev),
-        "settings": {k: cv[k] for k in ("l2", "temperatures", "mass_cv", "mass_head")},
+        "reliability": reliability(_pooled(cv["cv"])),  # type: ignore[arg-type]
+        "settings": {k: cv[k] for k in
+                     ("l2", "temperatures", "mass_cv", "mass_head", "pool", "pool_nll")},
+    }  # fmt: skip
+    fam_rows = cv["family_rows"]
+    payload[f"{TRAIN} (leave-one-family-out)"] = {
+        "objects": cv["family_objects"], "scenes": len({r["scene"] for r in fam_rows}),  # type: ignore[attr-defined]
+        "learned": cv["family_accuracy"], "handbuilt": handbuilt_accuracy(fam_rows),  # type: ignore[arg-type]
+        "reliability": reliability(_pooled(cv["family_cv"])),  # type: ignore[arg-type]
     }  # fmt: skip
     for suite in suites:
         rows = cached(suite, cache)
@@ -293,7 +389,8 @@ def report(
         f"{TRAIN} renders only by `benchmarks/attribute_model.py train --write`) on the "
         "measurements of every object of the scenes collected of each split (`collect "
         "--part I/N`: every N-th scene, the scenes column; rendered at seed 0; test splits are "
-        "only evaluated here; the train row is held out by even/odd halves). Accuracy of "
+        "only evaluated here; the train rows are held out: by even/odd halves, and by "
+        "leaving each train family out in turn, as the test-families split does). Accuracy of "
         "the learned heads beside the hand-built pipeline's; "
         "mass judged as its class at the rules' thresholds 0.5 / 1.1 / 1.5 / 3.0 kg. The "
         "learned model is a classifier trained on train-split renders with the true labels: "
@@ -354,12 +451,10 @@ def main() -> None:
             print(suite, len(collect(suite, args.cache, (i, n))), "objects")
     elif args.command == "train":
         out = train(args.cache, args.write, args.limit)
-        print({k: v for k, v in out.items() if k != "cv"})
-        for a, table in reliability({
-            k: {h: held[0][k][h] + held[1][k][h] for h in HEADS}  # type: ignore[index]
-            for k in ("right", "confidence") for held in [out["cv"]]
-        }).items():  # fmt: skip
-            print(a, table)
+        print({k: v for k, v in out.items() if k not in ("cv", "family_cv", "family_rows")})
+        for name, evs in (("even/odd", out["cv"]), ("leave-one-family-out", out["family_cv"])):
+            for a, table in reliability(_pooled(evs)).items():  # type: ignore[arg-type]
+                print(name, a, "ECE", round(table[-1]["ece"], 3))
     else:
         commit()
         report(args.suite.split(","), args.cache, args.results, args.limit)

@@ -10,8 +10,14 @@ its volume, outer surface and the wall thickness they imply, and its members.
 
 Three heads, plain numpy at run time (`AttributeModel`):
 
-* **material**: multinomial logistic regression over `features` (L2-regularised), its
-  posterior temperature-scaled on held-out objects;
+* **material**: two multinomial logistic regressions (L2-regularised), one over all of
+  `features`, one over the appearance columns alone (the first `N_APPEARANCE`: colour,
+  finish and the hand-built posterior); their logits pooled with weight `pool` on the first,
+  then temperature-scaled. Geometry tells a train family's material well and an unseen
+  family's badly (the model learns the family, which does not carry over); appearance
+  carries over. `pool` and the temperature are chosen on held-out objects of train: even/odd
+  halves (families seen) and leave-one-family-out folds (families unseen), by their mean
+  negative log-likelihood;
 * **mass class** at the rules' thresholds (`confidence.MASS_BOUNDS`): multinomial logistic
   regression, temperature-scaled likewise;
 * **mass** (kg): ridge regression of log mass, clamped into the predicted class.
@@ -48,6 +54,9 @@ MODEL_FILE = ("perception", "attribute_model.json")
 MATERIAL_NAMES = tuple(sorted(MATERIALS))
 TOP_SHAPES = ("open", "concave", "flat", "pointy")
 N_MASS_CLASSES = len(MASS_BOUNDS) + 1
+#: the leading columns of `features` that describe appearance only (colour and finish
+#: features, the missing-pixels flag, the hand-built material posterior)
+N_APPEARANCE = len(FEATURES) + 1 + len(MATERIAL_NAMES)
 
 
 def measurements(
@@ -167,15 +176,27 @@ class AttributeModel:
     #: "learned": mass from the two mass heads; "rule": the hand-built volume x density
     #: rule (`material.estimate_mass`) on the learned material (chosen by cross-validation)
     mass_head: str = "learned"
+    #: the appearance-only material head over the first `N_APPEARANCE` columns (None: none)
+    w_appearance: np.ndarray | None = None
+    #: weight of the all-feature material head's logits (1 - pool: the appearance head's)
+    pool: float = 1.0
 
     def _xb(self, x: np.ndarray) -> np.ndarray:
         z = (np.atleast_2d(x) - self.mean) / self.std
         return np.hstack([z, np.ones((len(z), 1))])
 
+    def material_logits(self, xb: np.ndarray) -> np.ndarray:
+        """The pooled material logits (before the temperature) of rows `xb` (`_xb`)."""
+        logits = xb @ self.w_material
+        if self.w_appearance is None or self.pool >= 1.0:
+            return logits
+        xa = np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]])
+        return self.pool * logits + (1.0 - self.pool) * (xa @ self.w_appearance)
+
     def predict(self, m: Mapping[str, float | str]) -> Prediction:
         """The attributes of an object from its measurements (`measurements`)."""
         xb = self._xb(features(m))
-        pm = _softmax(xb @ self.w_material / self.t_material)[0]
+        pm = _softmax(self.material_logits(xb) / self.t_material)[0]
         pc = _softmax(xb @ self.w_mass_class / self.t_mass_class)[0]
         c = int(np.argmax(pc))
         lo = MASS_BOUNDS[c - 1] if c > 0 else 0.0
@@ -195,7 +216,9 @@ class AttributeModel:
             "w_mass_class": np.round(self.w_mass_class, r).tolist(),
             "w_mass": np.round(self.w_mass, r).tolist(),
             "t_material": self.t_material, "t_mass_class": self.t_mass_class,
-            "mass_head": self.mass_head,
+            "mass_head": self.mass_head, "pool": self.pool,
+            **({} if self.w_appearance is None else
+               {"w_appearance": np.round(self.w_appearance, r).tolist()}),
         }  # fmt: skip
 
     @classmethod
@@ -209,11 +232,24 @@ class AttributeModel:
         head = str(data.get("mass_head", "learned"))
         if head not in ("learned", "rule"):
             raise AssetError(f"{source}: mass_head {head!r} is neither 'learned' nor 'rule'")
+        pool = float(data.get("pool", 1.0))  # type: ignore[arg-type]
+        if not 0.0 <= pool <= 1.0:
+            raise AssetError(f"{source}: pool {pool} is not within [0, 1]")
+        w_app = data.get("w_appearance")
+        if w_app is not None:
+            w_app = np.asarray(w_app, dtype=float)
+            want = (N_APPEARANCE + 1, len(MATERIAL_NAMES))
+            if w_app.shape != want:
+                raise AssetError(f"{source}: w_appearance has shape {w_app.shape}, not {want}")
+        elif pool < 1.0:
+            raise AssetError(f"{source}: pool {pool} < 1 needs w_appearance")
         return cls(
             **arr,
             t_material=float(data["t_material"]),  # type: ignore[arg-type]
             t_mass_class=float(data["t_mass_class"]),  # type: ignore[arg-type]
             mass_head=head,
+            w_appearance=w_app,
+            pool=pool,
         )
 
 
@@ -264,6 +300,7 @@ def packaged_attribute_model() -> AttributeModel | None:
 
 __all__ = [
     "MODEL_FILE",
+    "N_APPEARANCE",
     "AttributeModel",
     "Prediction",
     "best_temperature",
