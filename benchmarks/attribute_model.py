@@ -11,13 +11,14 @@ scenes collected (``collect --suite pick-place,sliding --part 1/10``). Even-numb
 fit and odd-numbered ones are held out, and vice versa, to choose each head's L2
 regularisation, the mass-class temperature, and whether mass comes from the learned heads
 or from the hand-built volume x density rule on the learned material. The material head's
-pooling of its all-feature and appearance-only logits (`learned.AttributeModel.pool`) and
-its temperature are chosen by the mean held-out negative log-likelihood of those halves
-(families seen in fitting) and of leave-one-family-out folds over the train families (each
-family held out in turn, the paper's objects always fitted): the test splits hold families
-never seen, and a perceiver judged only on seen families learns the family, not the
-material. The shipped model is refitted on all of them with the chosen settings and written
-to ``assets/perception/attribute_model.json`` (``--write``).
+pooling of its experts (the all-feature and appearance-only logits and the hand-built log
+posterior: `learned.AttributeModel.pool`, ``handbuilt``) and its temperature are chosen by
+the mean held-out negative log-likelihood of those halves (families seen in fitting) and of
+leave-one-family-out folds over the train families (each family held out in turn, the
+paper's objects always fitted): the test splits hold families never seen, and a perceiver
+judged only on seen families learns the family, not the material. The shipped model is
+refitted on all of them with the chosen settings and written to
+``assets/perception/attribute_model.json`` (``--write``).
 
 ``report``: the shipped model on the measurements of the ``--suite`` split(s) (test splits:
 reported only, never used to choose anything), after the train cross-validation's rows
@@ -45,6 +46,7 @@ from utamp_gym.perception.learned import (
     MATERIAL_NAMES,
     MODEL_FILE,
     N_APPEARANCE,
+    POSTERIOR,
     AttributeModel,
     best_temperature,
     features,
@@ -72,6 +74,7 @@ TRAIN = "procedural-v1/train"
 PAPER = ("pick-place", "sliding")  # the paper's objects: development data too
 L2_GRID = (1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0)
 POOL_GRID = (0.0, 0.1, 0.25, 0.4, 0.5, 0.75, 1.0)  # weight of the all-feature material head
+HANDBUILT_GRID = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0)  # weight of the hand-built log posterior
 HEADS = ("material", "robustness", "mass")
 
 
@@ -124,6 +127,7 @@ def fit(
     temps: tuple[float, float] = (1.0, 1.0),
     mass_head: str = "learned",
     pool: float = 1.0,
+    handbuilt: float = 0.0,
 ) -> AttributeModel:
     """The model fitted on `rows` with regularisation `l2` (material, class, mass); `pool`
     < 1 fits the appearance-only material head too (`learned.AttributeModel.pool`)."""
@@ -139,7 +143,7 @@ def fit(
         fit_softmax(z, mat, len(MATERIAL_NAMES), l2[0]),
         fit_softmax(z, cls, 5, l2[1]),
         fit_ridge(z, logm, l2[2]),
-        *temps, mass_head, appearance, pool,
+        *temps, mass_head, appearance, pool, handbuilt,
     )  # fmt: skip
 
 
@@ -173,8 +177,7 @@ def evaluate(model: AttributeModel, rows: list[dict[str, object]]) -> dict[str, 
 
 def logits(model: AttributeModel, rows: list[dict[str, object]]) -> tuple[np.ndarray, np.ndarray]:
     x = np.array([features(r["measurements"]) for r in rows])  # type: ignore[arg-type]
-    xb = model._xb(x)
-    return model.material_logits(xb), xb @ model.w_mass_class
+    return model.material_logits(x), model._xb(x) @ model.w_mass_class
 
 
 def _index(r: dict[str, object]) -> int:
@@ -215,31 +218,35 @@ def _nll(logits: np.ndarray, y: np.ndarray) -> float:
     return float(-np.mean(logp[np.arange(len(y)), y]))
 
 
-def choose_pool(
+def choose_material(
     fold_sets: tuple[Folds, ...], l2: tuple[float, float, float]
-) -> tuple[float, float, dict[float, float]]:
-    """(pool, material temperature, mean held-out NLL per pool in `POOL_GRID`): the pooling
-    of the two material heads, and one temperature for it, that give the least negative
-    log-likelihood averaged over the fold sets (each set: its held-out rows pooled)."""
+) -> tuple[float, float, float, dict[str, float]]:
+    """(pool, handbuilt, temperature, mean held-out NLL per "pool/handbuilt"): the pooling
+    of the material experts (`learned.AttributeModel`) and one temperature for it that give
+    the least negative log-likelihood averaged over the fold sets (each set: its held-out
+    rows pooled); ties go to the larger pool and the smaller hand-built weight."""
     held = []
     for folds in fold_sets:
-        full, app, ys = [], [], []
+        full, app, post, ys = [], [], [], []
         for a, b in folds:
             m = fit(a, l2, pool=0.0)
             x, mat, _, _ = arrays(b)
             xb = m._xb(x)
             full.append(xb @ m.w_material)
             app.append(np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]]) @ m.w_appearance)
+            post.append(x[:, POSTERIOR])
             ys.append(mat)
-        held.append((np.vstack(full), np.vstack(app), np.concatenate(ys)))
-    scores: dict[float, tuple[float, float]] = {}
+        held.append((np.vstack(full), np.vstack(app), np.vstack(post), np.concatenate(ys)))
+    scores: dict[tuple[float, float], tuple[float, float]] = {}
     for w in POOL_GRID:
-        pooled = [w * f + (1.0 - w) * a for f, a, _ in held]
-        t = best_temperature(np.vstack(pooled), np.concatenate([y for *_, y in held]))
-        nll = float(np.mean([_nll(p / t, y) for p, (*_, y) in zip(pooled, held, strict=True)]))
-        scores[w] = (nll, t)
-    best = min(POOL_GRID, key=lambda w: (scores[w][0], -w))
-    return best, scores[best][1], {w: round(v[0], 4) for w, v in scores.items()}
+        for h in HANDBUILT_GRID:
+            pooled = [w * f + (1.0 - w) * a + h * p for f, a, p, _ in held]
+            t = best_temperature(np.vstack(pooled), np.concatenate([y for *_, y in held]))
+            nll = np.mean([_nll(z / t, y) for z, (*_, y) in zip(pooled, held, strict=True)])
+            scores[(w, h)] = (float(nll), t)
+    best = min(scores, key=lambda k: (scores[k][0], -k[0], k[1]))
+    table = {f"{w}/{h}": round(v[0], 4) for (w, h), v in scores.items()}
+    return best[0], best[1], scores[best][1], table
 
 
 def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, object]:
@@ -270,8 +277,11 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
         best.append(L2_GRID[int(np.argmax(scores))])
         print(f"head {head}: l2 grid scores {dict(zip(L2_GRID, np.round(scores, 4), strict=True))}")
     l2 = (best[0], best[1], best[2])
-    pool, t_material, pool_nll = choose_pool((halves, by_family), l2)
-    print(f"material pool (weight of the all-feature head): {pool}; mean NLL {pool_nll}")
+    pool, handbuilt, t_material, pool_nll = choose_material((halves, by_family), l2)
+    print(
+        f"material: all-feature head {pool}, appearance head {1 - pool:g}, hand-built "
+        f"log posterior {handbuilt}, temperature {t_material:.3f}"
+    )
     # the mass-class temperature on held-out halves
     tc = []
     for a, b in halves:
@@ -279,7 +289,7 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
         tc.append(best_temperature(lc, arrays(b)[2]))
     temps = (t_material, float(np.mean(tc)))
     # the mass: the learned heads, or the hand-built rule on the learned material
-    heads = {h: [evaluate(fit(a, l2, temps, h, pool), b) for a, b in halves]
+    heads = {h: [evaluate(fit(a, l2, temps, h, pool, handbuilt), b) for a, b in halves]
              for h in ("learned", "rule")}  # fmt: skip
     # held-out mass-class accuracy of each head on the procedural objects and on the paper's
     # (the paper's suites must keep reading their own objects' masses: the learned heads
@@ -293,14 +303,15 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
     better = all(mass_cv["learned"][k] >= mass_cv["rule"][k] for k in ("procedural", "paper"))
     mass_head = "learned" if better else "rule"
     held = heads[mass_head]
-    unseen = [evaluate(fit(a, l2, temps, mass_head, pool), b) for a, b in by_family]
-    model = fit(rows, l2, temps, mass_head, pool)
+    unseen = [evaluate(fit(a, l2, temps, mass_head, pool, handbuilt), b) for a, b in by_family]
+    model = fit(rows, l2, temps, mass_head, pool, handbuilt)
     if write:
         path = ROOT / "assets" / Path(*MODEL_FILE)
         path.write_text(json.dumps(model.to_json(), separators=(",", ":")) + "\n")
     return {"l2": l2, "temperatures": temps, "cv_accuracy": _accuracy(held),
             "objects": len(rows), "mass_cv": mass_cv, "mass_head": mass_head, "cv": held,
-            "pool": pool, "pool_nll": pool_nll, "family_accuracy": _accuracy(unseen),
+            "pool": pool, "handbuilt": handbuilt, "pool_nll": pool_nll,
+            "family_accuracy": _accuracy(unseen),
             "family_objects": sum(len(b) for _, b in by_family), "family_cv": unseen,
             "family_rows": [r for _, b in by_family for r in b]}  # fmt: skip
 
@@ -368,7 +379,8 @@ def report(
         "learned": cv["cv_accuracy"], "handbuilt": handbuilt_accuracy(hb_rows),
         "reliability": reliability(_pooled(cv["cv"])),  # type: ignore[arg-type]
         "settings": {k: cv[k] for k in
-                     ("l2", "temperatures", "mass_cv", "mass_head", "pool", "pool_nll")},
+                     ("l2", "temperatures", "mass_cv", "mass_head", "pool", "handbuilt",
+                      "pool_nll")},
     }  # fmt: skip
     fam_rows = cv["family_rows"]
     payload[f"{TRAIN} (leave-one-family-out)"] = {

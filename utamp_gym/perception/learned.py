@@ -10,14 +10,14 @@ its volume, outer surface and the wall thickness they imply, and its members.
 
 Three heads, plain numpy at run time (`AttributeModel`):
 
-* **material**: two multinomial logistic regressions (L2-regularised), one over all of
-  `features`, one over the appearance columns alone (the first `N_APPEARANCE`: colour,
-  finish and the hand-built posterior); their logits pooled with weight `pool` on the first,
-  then temperature-scaled. Geometry tells a train family's material well and an unseen
-  family's badly (the model learns the family, which does not carry over); appearance
-  carries over. `pool` and the temperature are chosen on held-out objects of train: even/odd
-  halves (families seen) and leave-one-family-out folds (families unseen), by their mean
-  negative log-likelihood;
+* **material**: three experts pooled in their logits, then temperature-scaled: a multinomial
+  logistic regression over all of `features`, one over the appearance columns alone (the
+  first `N_APPEARANCE`: colour, finish and the hand-built posterior), and the hand-built
+  mixture's own log posterior (`AttributeModel.pool`, `AttributeModel.handbuilt`).
+  Geometry tells a train family's material well and an unseen family's badly (the model
+  learns the family, which does not carry over); appearance carries over. The pooling and
+  the temperature are chosen on held-out objects of train: even/odd halves (families seen)
+  and leave-one-family-out folds (families unseen), by their mean negative log-likelihood;
 * **mass class** at the rules' thresholds (`confidence.MASS_BOUNDS`): multinomial logistic
   regression, temperature-scaled likewise;
 * **mass** (kg): ridge regression of log mass, clamped into the predicted class.
@@ -57,6 +57,8 @@ N_MASS_CLASSES = len(MASS_BOUNDS) + 1
 #: the leading columns of `features` that describe appearance only (colour and finish
 #: features, the missing-pixels flag, the hand-built material posterior)
 N_APPEARANCE = len(FEATURES) + 1 + len(MATERIAL_NAMES)
+#: the columns of `features` that hold the hand-built mixture's log posterior
+POSTERIOR = slice(len(FEATURES) + 1, N_APPEARANCE)
 
 
 def measurements(
@@ -180,23 +182,28 @@ class AttributeModel:
     w_appearance: np.ndarray | None = None
     #: weight of the all-feature material head's logits (1 - pool: the appearance head's)
     pool: float = 1.0
+    #: weight of the hand-built mixture's log posterior added to the pooled logits
+    handbuilt: float = 0.0
 
     def _xb(self, x: np.ndarray) -> np.ndarray:
         z = (np.atleast_2d(x) - self.mean) / self.std
         return np.hstack([z, np.ones((len(z), 1))])
 
-    def material_logits(self, xb: np.ndarray) -> np.ndarray:
-        """The pooled material logits (before the temperature) of rows `xb` (`_xb`)."""
+    def material_logits(self, x: np.ndarray) -> np.ndarray:
+        """The pooled material logits (before the temperature) of feature rows `x`."""
+        x = np.atleast_2d(x)
+        xb = self._xb(x)
         logits = xb @ self.w_material
-        if self.w_appearance is None or self.pool >= 1.0:
-            return logits
-        xa = np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]])
-        return self.pool * logits + (1.0 - self.pool) * (xa @ self.w_appearance)
+        if self.w_appearance is not None and self.pool < 1.0:
+            xa = np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]])
+            logits = self.pool * logits + (1.0 - self.pool) * (xa @ self.w_appearance)
+        return logits + self.handbuilt * x[:, POSTERIOR]
 
     def predict(self, m: Mapping[str, float | str]) -> Prediction:
         """The attributes of an object from its measurements (`measurements`)."""
-        xb = self._xb(features(m))
-        pm = _softmax(self.material_logits(xb) / self.t_material)[0]
+        x = features(m)
+        xb = self._xb(x)
+        pm = _softmax(self.material_logits(x) / self.t_material)[0]
         pc = _softmax(xb @ self.w_mass_class / self.t_mass_class)[0]
         c = int(np.argmax(pc))
         lo = MASS_BOUNDS[c - 1] if c > 0 else 0.0
@@ -216,7 +223,7 @@ class AttributeModel:
             "w_mass_class": np.round(self.w_mass_class, r).tolist(),
             "w_mass": np.round(self.w_mass, r).tolist(),
             "t_material": self.t_material, "t_mass_class": self.t_mass_class,
-            "mass_head": self.mass_head, "pool": self.pool,
+            "mass_head": self.mass_head, "pool": self.pool, "handbuilt": self.handbuilt,
             **({} if self.w_appearance is None else
                {"w_appearance": np.round(self.w_appearance, r).tolist()}),
         }  # fmt: skip
@@ -243,6 +250,9 @@ class AttributeModel:
                 raise AssetError(f"{source}: w_appearance has shape {w_app.shape}, not {want}")
         elif pool < 1.0:
             raise AssetError(f"{source}: pool {pool} < 1 needs w_appearance")
+        handbuilt = float(data.get("handbuilt", 0.0))  # type: ignore[arg-type]
+        if handbuilt < 0.0:
+            raise AssetError(f"{source}: handbuilt {handbuilt} is negative")
         return cls(
             **arr,
             t_material=float(data["t_material"]),  # type: ignore[arg-type]
@@ -250,6 +260,7 @@ class AttributeModel:
             mass_head=head,
             w_appearance=w_app,
             pool=pool,
+            handbuilt=handbuilt,
         )
 
 
@@ -301,6 +312,7 @@ def packaged_attribute_model() -> AttributeModel | None:
 __all__ = [
     "MODEL_FILE",
     "N_APPEARANCE",
+    "POSTERIOR",
     "AttributeModel",
     "Prediction",
     "best_temperature",
