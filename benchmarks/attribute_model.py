@@ -202,9 +202,9 @@ def families(rows: list[dict[str, object]]) -> list[str]:
 Folds = list[tuple[list[dict[str, object]], list[dict[str, object]]]]
 
 
-def family_folds(rows: list[dict[str, object]]) -> Folds:
-    """Leave-one-family-out: per train family, (every other row, that family's rows)."""
-    fams = families(rows)
+def family_folds(rows: list[dict[str, object]], fams: list[str]) -> Folds:
+    """Leave-one-family-out: per family of `fams` (one per row, `families`; "" is never
+    held out), (every other row, that family's rows)."""
     return [
         ([r for r, f in zip(rows, fams, strict=True) if f != name],
          [r for r, f in zip(rows, fams, strict=True) if f == name])
@@ -257,7 +257,7 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
     rows += [r for suite in PAPER for r in cached(suite, cache)]
     folds = ([r for r in rows if _index(r) % 2 == 0], [r for r in rows if _index(r) % 2 == 1])
     halves: Folds = [folds, folds[::-1]]
-    by_family = family_folds(rows)
+    by_family = family_folds(rows, families(rows))
     best: list[float] = []
     for head in range(3):
         scores = []

@@ -14,14 +14,17 @@ from utamp_gym.perception.confidence import MASS_BOUNDS, mass_class
 from utamp_gym.perception.learned import (
     MATERIAL_NAMES,
     MODEL_FILE,
+    N_APPEARANCE,
     AttributeModel,
     Prediction,
     best_temperature,
+    features,
     fit_ridge,
     fit_softmax,
     learned_confidences,
     packaged_attribute_model,
 )
+from utamp_gym.perception.material import FEATURES, SHAPE_CLASSES
 from utamp_gym.resources import asset_path
 
 
@@ -71,3 +74,71 @@ def test_learned_confidences_name_the_other_classes_and_robustness() -> None:
     assert conf["robustness"] == 0.6 and alts["robustness"] == ("sturdy",)  # plastic
     assert conf["mass"] == 0.7 and mass_class(alts["mass"][0]) == 2  # 1.1-1.5 kg
     assert alts["mass"][0] < MASS_BOUNDS[2] and conf["members"] == 0.75
+
+
+def _blank_model(**kw: object) -> AttributeModel:
+    """A model whose fitted heads know nothing (all weights zero)."""
+    d = len(features(_measurements()))
+    k = len(MATERIAL_NAMES)
+    return AttributeModel(
+        np.zeros(d),
+        np.ones(d),
+        np.zeros((d + 1, k)),
+        np.zeros((d + 1, 5)),
+        np.zeros(d + 1),
+        **kw,  # type: ignore[arg-type]
+    )
+
+
+def _measurements() -> dict[str, float | str]:
+    m: dict[str, float | str] = dict.fromkeys(FEATURES, 0.0)
+    m.update({f"post_{n}": 0.01 for n in MATERIAL_NAMES})
+    m.update({"post_ceramic": 0.7, "post_glass": 0.2})
+    m.update({
+        "shape_class": SHAPE_CLASSES[0], "top_shape": "open", "cylinder": 1.0, "size_0": 0.08,
+        "size_1": 0.08, "size_2": 0.1, "height": 0.1, "top_rim": 0.0, "top_floor": 0.0,
+        "top_visible": 1.0, "covered": 0.0, "flare": 0.0, "n_members": 1.0, "volume": 1e-4,
+        "area": 0.02, "envelope": 6.4e-4, "members_volume": 1e-4,
+    })  # fmt: skip
+    return m
+
+
+def test_the_handbuilt_expert_carries_its_posterior_into_the_pooled_material() -> None:
+    m = _measurements()
+    alone = _blank_model().predict(m).material  # no expert with an opinion: uniform
+    assert max(alone.values()) == pytest.approx(1.0 / len(MATERIAL_NAMES))
+    post = _blank_model(handbuilt=1.0).predict(m).material  # log posterior, temperature 1
+    total = sum(float(m[f"post_{n}"]) for n in MATERIAL_NAMES)
+    assert post["ceramic"] == pytest.approx(0.7 / total)
+    assert post["glass"] == pytest.approx(0.2 / total)
+    sharper = _blank_model(handbuilt=2.0).predict(m).material
+    assert sharper["ceramic"] > post["ceramic"]
+    # the appearance head's logits count with weight 1 - pool
+    w_app = np.zeros((N_APPEARANCE + 1, len(MATERIAL_NAMES)))
+    w_app[-1, MATERIAL_NAMES.index("wood")] = 4.0  # its bias: wood
+    for pool, wood in ((1.0, False), (0.0, True)):
+        p = _blank_model(w_appearance=w_app, pool=pool).predict(m).material
+        assert (max(p, key=p.__getitem__) == "wood") is wood
+
+
+def test_the_pooled_model_round_trips_and_rejects_an_inconsistent_pooling() -> None:
+    w_app = np.arange((N_APPEARANCE + 1) * len(MATERIAL_NAMES), dtype=float).reshape(
+        N_APPEARANCE + 1, -1
+    )
+    model = _blank_model(w_appearance=w_app, pool=0.4, handbuilt=2.0)
+    again = AttributeModel.from_json(json.loads(json.dumps(model.to_json())))
+    assert again.pool == 0.4 and again.handbuilt == 2.0
+    assert np.array_equal(again.w_appearance, w_app)  # type: ignore[arg-type]
+    data = model.to_json()
+    for change, message in (
+        ({"pool": 1.5}, "pool 1.5 is not within"),
+        ({"handbuilt": -1.0}, "handbuilt -1.0 is negative"),
+        ({"w_appearance": w_app[:-1].tolist()}, "w_appearance has shape"),
+    ):
+        with pytest.raises(AssetError, match=message):
+            AttributeModel.from_json({**data, **change}, "x.json")
+    no_app = {k: v for k, v in data.items() if k != "w_appearance"}
+    with pytest.raises(AssetError, match="needs w_appearance"):
+        AttributeModel.from_json(no_app, "x.json")
+    old = {k: v for k, v in no_app.items() if k not in ("pool", "handbuilt")}
+    assert AttributeModel.from_json(old).pool == 1.0  # a file from before the pooling

@@ -1,0 +1,75 @@
+"""benchmarks/attribute_model.py: leave-one-family-out folds, and the choice of the material
+experts' pooling on them (a head that learns the family does not carry over to a new one)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+import attribute_model as am
+
+from utamp_gym.perception.learned import MATERIAL_NAMES, SHAPE_CLASSES
+from utamp_gym.perception.material import FEATURES
+from utamp_gym.suites import suite_scenes
+from utamp_gym.tasks.attributes import family_of
+
+
+def test_families_name_each_train_object_and_leave_the_paper_objects_fitted() -> None:
+    scene = suite_scenes(am.TRAIN)[3]
+    rows = [{"scene": scene.name, "object": o} for o in scene.object_names]
+    rows.append({"scene": "pick-place/001", "object": "mug"})
+    fams = am.families(rows)
+    assert fams[:-1] == [family_of(scene.object(o).type) for o in scene.object_names]
+    assert fams[-1] == "" and all(f and "-v1-" not in f for f in fams[:-1])
+    folds = am.family_folds(rows, fams)
+    assert len(folds) == len(set(fams[:-1]))
+    for fit, held in folds:
+        assert len({am.families([r])[0] for r in held}) == 1  # one family held out
+        assert rows[-1] in fit and rows[-1] not in held  # the paper's object stays fitted
+        assert len(fit) + len(held) == len(rows)
+
+
+def _row(rng: np.random.Generator, family: int, material: str, k: int) -> dict[str, object]:
+    """A synthetic object: its colour says its material (noisily), its size its family."""
+    colour = (1.0 if material == MATERIAL_NAMES[0] else -1.0) + rng.normal(0.0, 0.8)
+    m: dict[str, object] = {f: float(rng.normal(0.0, 0.1)) for f in FEATURES}
+    m[FEATURES[0]] = colour
+    m.update({f"post_{n}": 1.0 / len(MATERIAL_NAMES) for n in MATERIAL_NAMES})
+    size = 0.05 + 0.05 * family + rng.normal(0.0, 0.002)
+    m.update({
+        "shape_class": SHAPE_CLASSES[0], "top_shape": "open", "cylinder": 1.0,
+        "size_0": size, "size_1": size, "size_2": 0.1, "height": 0.1, "top_rim": 0.0,
+        "top_floor": 0.0, "top_visible": 1.0, "covered": 0.0, "flare": 0.0, "n_members": 1.0,
+        "volume": 1e-4, "area": 0.02, "envelope": size * size * 0.1, "members_volume": 1e-4,
+    })  # fmt: skip
+    return {"scene": f"synthetic/{k:04d}", "object": f"obj{k}", "measurements": m,
+            "declared": {"material": material, "mass": 0.3, "robustness": "sturdy"}}  # fmt: skip
+
+
+def test_a_family_that_gives_the_material_away_makes_the_pooling_lean_on_appearance() -> None:
+    rng = np.random.default_rng(0)
+    a, b = MATERIAL_NAMES[0], MATERIAL_NAMES[1]
+    rows, fams = [], []
+    for family in range(4):  # each family nearly all one material, alternating
+        for k in range(40):
+            mat = (a if family % 2 == 0 else b) if k < 36 else (b if family % 2 == 0 else a)
+            rows.append(_row(rng, family, mat, len(rows)))
+            fams.append(f"family{family}")
+    halves = [
+        ([r for r in rows if am._index(r) % 2 == p], [r for r in rows if am._index(r) % 2 != p])
+        for p in (0, 1)
+    ]
+    by_family = am.family_folds(rows, fams)
+    pool, _, _, nll = am.choose_material((halves, by_family), (1e-3, 1e-3, 1e-3))
+    # judged on seen families alone, the size (the family) is the better cue ...
+    seen_only, _, _, _ = am.choose_material((halves,), (1e-3, 1e-3, 1e-3))
+    assert seen_only > pool
+    # ... and over unseen families too, the appearance head carries more weight
+    assert pool < 1.0 and nll[f"{pool}/0.0"] <= nll["1.0/0.0"]
+    model = am.fit(rows, (1e-3, 1e-3, 1e-3), pool=pool)
+    assert model.w_appearance is not None and model.pool == pytest.approx(pool)
