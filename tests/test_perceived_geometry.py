@@ -5,13 +5,21 @@ camera sees, a plate's mass (`perception.walls`, `perception.objects`, `percepti
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from utamp_gym.perception.grid import Grid
 from utamp_gym.perception.material import MaterialEstimate
-from utamp_gym.perception.objects import PerceivedObject, _edges, _mass_area, _shell_area
+from utamp_gym.perception.members import trim_bar
+from utamp_gym.perception.objects import (
+    RIM_BAND,
+    PerceivedObject,
+    _edges,
+    _mass_area,
+    _shell_area,
+)
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.tops import classify_top
 from utamp_gym.perception.walls import wall_fit
@@ -74,6 +82,51 @@ def test_a_plates_rim_ends_where_its_off_centre_well_begins() -> None:
     assert front.box.lo[0] == pytest.approx(0.002 + 0.09)  # the well's edge, not r - rim
     assert back.box.hi[0] == pytest.approx(0.002 - 0.09)
     assert front.box.lo[2] == pytest.approx(0.015)  # the band starts at the well's floor
+
+
+def test_round_rims_take_the_catalogues_span_and_band() -> None:
+    """A plate's rim strips span 0.3 of its radius either side (at most 4 cm) from its well
+    up; a bowl's (an open top) 0.4 of it, in a band `RIM_BAND` deep below the rim."""
+    front, _ = _edges(_rimmed("cylinder"))  # a 21 cm plate
+    assert front.box.hi[1] - front.box.lo[1] == pytest.approx(2 * 0.3 * 0.105)
+    plate = _rimmed("cylinder")
+    bowl = replace(plate, top=replace(plate.top, shape="open", floor=0.005))
+    front, back = _edges(bowl)
+    assert front.box.hi[1] - front.box.lo[1] == pytest.approx(2 * 0.04)  # 0.4 r > 4 cm
+    assert front.box.lo[2] == pytest.approx(0.04 - RIM_BAND)  # not from the floor
+    assert back.box.hi[2] == pytest.approx(0.04)
+    small = replace(
+        bowl, body=replace(bowl.body, box=SeenBox((-0.06, -0.06, 0.0), (0.06, 0.06, 0.04)))
+    )
+    front, _ = _edges(small)
+    assert front.box.hi[1] - front.box.lo[1] == pytest.approx(2 * 0.4 * 0.06)
+
+
+def _handle_piece(post_slices: int, gap: int = 0) -> np.ndarray:
+    """Cells of a tray's front handle seen from above (rows: outward, x; columns: along
+    the bar): a bar 6 rows x 36 columns and `post_slices` rows of two 3-cell posts at its
+    ends (`gap`: columns between two runs of a narrow piece, instead of posts)."""
+    piece = np.zeros((6 + post_slices, 40), dtype=bool)
+    piece[post_slices:, 2:38] = True
+    for r in range(post_slices):
+        if gap:
+            piece[r, 10:13] = piece[r, 13 + gap : 16 + gap] = True
+        else:
+            piece[r, 2:5] = piece[r, 35:38] = True
+    return piece
+
+
+def test_a_bar_on_posts_is_trimmed_even_where_a_narrow_gap_shows_one_slice_of_posts() -> None:
+    bar, trimmed = trim_bar(_handle_piece(1), "front")
+    assert trimmed and bar[0].sum() == 0 and bar[1:, 2:38].all()
+    assert int(bar.sum()) == 6 * 36  # the bar alone
+    assert trim_bar(_handle_piece(3), "front")[1]  # a wide gap: three slices of posts
+    assert not trim_bar(_handle_piece(0), "front")[1]  # a bar alone: nothing to trim
+    assert not trim_bar(_handle_piece(1, gap=2), "front")[1]  # two runs close together
+    ragged = _handle_piece(0)
+    ragged = np.vstack([np.zeros((1, 40), bool), ragged])
+    ragged[0, 20] = True  # one ragged cell next to the body
+    assert not trim_bar(ragged, "front")[1]
 
 
 def test_a_round_body_with_handles_has_no_rim_edges() -> None:

@@ -83,6 +83,15 @@ def face_beside(
         hi[ax] = float(np.percentile(pts[beside, ax], 99.8))
 
 
+def _posts(line: np.ndarray, bar: int) -> bool:
+    """Whether a slice across the handle (a 1-D mask) holds two runs or more whose ends lie
+    at least half the bar's length (`bar` cells) apart."""
+    v = np.asarray(line, dtype=np.int8)
+    runs = np.count_nonzero(np.diff(np.concatenate([[0], v])) == 1)
+    cells = np.nonzero(v)[0]
+    return bool(runs >= 2 and cells[-1] - cells[0] + 1 >= 0.5 * bar)
+
+
 def between(piece: np.ndarray, bar: np.ndarray) -> np.ndarray:
     """Cells of the piece's bounding box that the trimmed bar left out (the posts' gap)."""
     i, j = np.nonzero(piece)
@@ -103,7 +112,13 @@ def trim_bar(piece: np.ndarray, side: str) -> tuple[np.ndarray, bool]:
         hi += 1
     outward = side in ("front", "left")
     inner = counts[:lo] if outward else counts[hi + 1 :]
-    if np.count_nonzero(inner) < 3:  # no posts (a ragged cell or two next to the body)
+    slices = np.nonzero(counts)[0]
+    inner_at = slices[slices < lo] if outward else slices[slices > hi]
+    # posts: three slices or more, or a slice holding two runs as far apart as half the
+    # bar (the posts at its ends, seen in a narrow gap); a ragged cell or two next to the
+    # body is neither
+    posts = any(_posts(np.take(piece, k, axis=axis), counts[peak]) for k in inner_at)
+    if np.count_nonzero(inner) < 3 and not posts:
         return piece, False
     keep = np.zeros(len(counts), dtype=bool)
     if outward:

@@ -21,9 +21,10 @@ then need and no camera sees is filled in by stated assumptions:
 * a narrow part standing on the body's top (a bottle's neck) makes the top **pointy**;
 * a rim (an open, concave or well top) on a body too wide for the hand is offered as
   **edges**: a box's (a tray's sides, standing on the table) on the two sides across from
-  its handles, else front and back; a round body's (a plate's, a bowl's band from its
-  floor up) front and back, only where it has no handles (a pot or a pan is held by
-  them). An edge ends where the opening or well inside the rim begins;
+  its handles, else front and back; a round body's front and back, only where it has no
+  handles (a pot or a pan is held by them), as strips across its middle with the
+  catalogues' span and band (`RIM_SPAN_SHARE`: a plate's rim from its well up, a bowl's
+  band `RIM_BAND` deep). An edge ends where the opening or well inside the rim begins;
 * a bare flat slab (no members, lower than `THIN_SIDE`, wider than the hand: a board
   without a handle) has the end strips of its longer axis as **edges**, as the catalogues
   declare them (the rules judge whether a finger fits beside them);
@@ -77,7 +78,14 @@ THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
 SLAB_EDGE, SLAB_EDGE_INSET = 0.0225, 0.02  # m: a bare slab's end strips (`_slab_edges`)
-EDGE_SPAN = 0.09  # m: an edge on a round body spans at least this much (0.6 of its width)
+#: a round body's rim edges as the catalogues declare them (`utamp_gym.kitchenware`): a strip
+#: across the middle, at most `RIM_HALF_SPAN` either side, a share of the radius (a flat
+#: well's rim, a plate's: 0.3; an open vessel's wall, a bowl's: 0.4); an open vessel's band
+#: reaches `RIM_BAND` below its rim (the middle of the catalogues' 20-35 mm bands; a camera
+#: sees no end to it), a well's rim stands from the well's floor
+RIM_HALF_SPAN = 0.04  # m
+RIM_SPAN_SHARE = {"well": 0.3, "open": 0.4}
+RIM_BAND = 0.0275  # m
 OPPOSITE_SIDE = {"front": "back", "back": "front", "left": "right", "right": "left"}
 ACROSS = {"front": ("left", "right"), "back": ("left", "right"), "left": ("front", "back")}
 ACROSS["right"] = ACROSS["left"]
@@ -245,8 +253,12 @@ def _edges(shape: SeenShape) -> tuple[SeenMember, ...]:
         return ()
     sides = ACROSS[handles[0]] if handles else ("front", "back")
     rim = max(top.rim, 0.004)
-    # a box's rim stands on the table (a tray's sides); a round one's band starts at the floor
+    # a box's rim stands on the table (a tray's sides); a round one's band starts at the
+    # well's floor (a plate), or `RIM_BAND` below the rim of an open vessel (a bowl)
     z0 = 0.0 if not round_ else min(max(top.floor, 0.0), body.hi[2] - 0.005)
+    kind = "open" if top.shape == "open" else "well"
+    if round_ and kind == "open":
+        z0 = max(z0, body.hi[2] - RIM_BAND)
     out = []
     for side in sides:
         ax = 0 if side in ("front", "back") else 1
@@ -259,7 +271,8 @@ def _edges(shape: SeenShape) -> tuple[SeenMember, ...]:
         else:
             ehi[ax] = lo[ax] + rim if inner is None else max(inner, lo[ax] + 0.004)
         if shape.body.geom == "cylinder":
-            half = min(max(0.3 * body.size[across], EDGE_SPAN / 2), body.size[across] / 2)
+            radius = body.size[across] / 2
+            half = min(RIM_HALF_SPAN, RIM_SPAN_SHARE[kind] * radius)
             mid = (lo[across] + hi[across]) / 2
             elo[across], ehi[across] = mid - half, mid + half
         elo[2] = z0
