@@ -15,9 +15,10 @@ Three heads, plain numpy at run time (`AttributeModel`):
   first `N_APPEARANCE`: colour, finish and the hand-built posterior), and the hand-built
   mixture's own log posterior (`AttributeModel.pool`, `AttributeModel.handbuilt`).
   Geometry tells a train family's material well and an unseen family's badly (the model
-  learns the family, which does not carry over); appearance carries over. The pooling and
-  the temperature are chosen on held-out objects of train: even/odd halves (families seen)
-  and leave-one-family-out folds (families unseen), by their mean negative log-likelihood;
+  learns the family, which does not carry over); appearance carries over. The pooling is
+  chosen on held-out objects of train by its accuracy, averaged over even/odd halves
+  (families seen), leave-one-family-out folds (families unseen) and train scenes never
+  fitted; the temperature by the negative log-likelihood over all of them;
 * **mass class** at the rules' thresholds (`confidence.MASS_BOUNDS`): multinomial logistic
   regression, temperature-scaled likewise;
 * **mass** (kg): ridge regression of log mass, clamped into the predicted class.
