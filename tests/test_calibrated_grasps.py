@@ -228,7 +228,9 @@ def _pick_and_place(sim: Any, fam: str, seed: int, grasp: str) -> str:
         ("stock-pot", 31, "body", "front", "back"),  # granted: a 0.9 mm wall
         ("saucepan", 8, "body", "front", "back"),  # granted: a thin wall at 0.66 N m
         ("stock-pot", 33, "body", "front", "back"),  # refused: a thin wall at 0.73 N m
-        ("tumbler", 23, "body", "left", "right"),  # refused: a 0.9 mm wall bowed 1 mm
+        # refused: a 0.8 mm wall bowed 1 mm (0.9 mm walls bowed 1 mm, tumblers 23, 42, 59
+        # and 90, are the edge: they slipped out on one machine and held on another)
+        ("tumbler", 84, "body", "left", "right"),
         ("stock-pot", 9, "body", "left", "right"),  # granted: a finger on the lug
         ("stock-pot", 16, "body", "left", "right"),  # refused: 6 mm early on the lug
         ("tray", 24, "edge-left", "left", "right"),  # granted: 2.32 N m, 17.3 mm rim

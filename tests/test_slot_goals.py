@@ -51,10 +51,16 @@ def test_a_model_saved_before_goal_conditioning_acts_as_it_did() -> None:
     assert not has_goal(policy.observation_space)
     assert not any(name.startswith("features_extractor.goal") for name in policy.state_dict())
     obs = {k[4:]: cases[k] for k in cases.files if k.startswith("obs_")}
-    assert np.array_equal(_dist(policy, obs, cases["masks"]), cases["logits"])
+    # the same logits and values up to float rounding (another CPU sums in another order:
+    # 1e-6 apart), and the same actions masked out
+    logits = _dist(policy, obs, cases["masks"])
+    assert np.array_equal(np.isfinite(logits), np.isfinite(cases["logits"]))
+    finite = np.isfinite(logits)
+    np.testing.assert_allclose(logits[finite], cases["logits"][finite], rtol=1e-5, atol=1e-5)
     tensor, _ = policy.obs_to_tensor(obs)
     with th.no_grad():
-        assert np.array_equal(policy.predict_values(tensor).numpy(), cases["values"])
+        values = policy.predict_values(tensor).numpy()
+    np.testing.assert_allclose(values, cases["values"], rtol=1e-5, atol=1e-5)
     # and it still acts on today's env of its id
     env = gym.make("UTampKitchenProcedural-v0", grounding="symbolic", masks="geometric")
     o, info = env.reset(seed=0)

@@ -214,8 +214,9 @@ def wall_bow(radius: float) -> float:
     """m a round wall of `radius` m bows across the flat pads' width (`hand.PAD_WIDTH`): a
     wall thinner than that bow is not straddled by pads facing each other through it (the
     inner pad touches it at its two ends, the outer at its middle) and the calibrated rules
-    refuse a sub-millimetre wall so bowed (a 7.7 cm tumbler of 0.9 mm slipped out, pots of
-    14-19 cm held)."""
+    refuse a sub-millimetre wall so bowed (a 7.7 cm tumbler of 0.8 mm slipped out, pots of
+    14-19 cm held; 0.9 mm walls bowed 1.0 mm are the edge: they slipped out on one machine
+    and held on another, so the rule errs on the side of refusing them)."""
     return (PAD_WIDTH / 2) ** 2 / (2 * radius)
 
 
