@@ -25,7 +25,7 @@ written to
 
 ``report``: the shipped model on the measurements of the ``--suite`` split(s) (test splits:
 reported only, never used to choose anything), after the train cross-validation's rows
-(even/odd halves, and leave-one-family-out):
+(even/odd halves, leave-one-family-out, and the later scenes held out whole):
 per-attribute accuracy beside the hand-built pipeline's, and a reliability table of the
 confidences; writes ``docs/results/attribute-model.{md,json}``.
 
@@ -147,8 +147,9 @@ def evaluate(model: AttributeModel, rows: list[dict[str, object]]) -> dict[str, 
 
 def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, object]:
     """Choose settings by cross-validation on train (its first `limit` scenes) and the
-    paper's scenes collected: even/odd halves, and leave-one-family-out for the material
-    head's pooling and temperature (module docstring); fit on all; maybe ship."""
+    paper's scenes collected: even/odd halves, and for the material head's pooling and
+    temperature also leave-one-family-out folds and the train scenes after `limit` (module
+    docstring); fit on the first `limit` and the paper's; maybe ship."""
     train_rows = cached(TRAIN, cache)
     rows = [r for r in train_rows if limit is None or index(r) < limit]
     later = [r for r in train_rows if limit is not None and index(r) >= limit]

@@ -28,8 +28,8 @@ class better than the two mass heads (``mass_head: rule``), the perceiver keeps 
 applied to the learned material, with its own confidences.
 
 Robustness is the material's (the posterior summed over the materials of each class).
-`benchmarks/attribute_model.py` renders procedural-v1/train, trains the model (even/odd
-cross-validation chooses its settings) and ships it as
+`benchmarks/attribute_model.py` renders procedural-v1/train, trains the model (held-out
+train objects choose its settings: see the material head above) and ships it as
 ``assets/perception/attribute_model.json``; without the file the hand-built pipeline stands.
 """
 
