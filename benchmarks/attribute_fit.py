@@ -10,7 +10,6 @@ from utamp_gym.perception.confidence import mass_class
 from utamp_gym.perception.learned import (
     MATERIAL_NAMES,
     N_APPEARANCE,
-    POSTERIOR,
     AttributeModel,
     best_temperature,
     features,
@@ -108,12 +107,11 @@ def choose_material(
     for folds in fold_sets:
         full, app, post, ys = [], [], [], []
         for a, b in folds:
-            m = fit(a, l2, pool=0.0)
             x, mat, _, _ = arrays(b)
-            xb = m._xb(x)
-            full.append(xb @ m.w_material)
-            app.append(np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]]) @ m.w_appearance)
-            post.append(x[:, POSTERIOR])
+            f, ap, p = fit(a, l2, pool=0.0).material_experts(x)
+            full.append(f)
+            app.append(ap)
+            post.append(p)
             ys.append(mat)
         held.append((np.vstack(full), np.vstack(app), np.vstack(post), np.concatenate(ys)))
     accuracy: dict[tuple[float, float], float] = {}

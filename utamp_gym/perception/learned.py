@@ -190,15 +190,22 @@ class AttributeModel:
         z = (np.atleast_2d(x) - self.mean) / self.std
         return np.hstack([z, np.ones((len(z), 1))])
 
-    def material_logits(self, x: np.ndarray) -> np.ndarray:
-        """The pooled material logits (before the temperature) of feature rows `x`."""
+    def material_experts(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """The material experts' logits of feature rows `x`: the all-feature head's, the
+        appearance head's (None without one) and the hand-built log posterior."""
         x = np.atleast_2d(x)
         xb = self._xb(x)
-        logits = xb @ self.w_material
-        if self.w_appearance is not None and self.pool < 1.0:
-            xa = np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]])
-            logits = self.pool * logits + (1.0 - self.pool) * (xa @ self.w_appearance)
-        return logits + self.handbuilt * x[:, POSTERIOR]
+        appearance = None
+        if self.w_appearance is not None:
+            appearance = np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]]) @ self.w_appearance
+        return xb @ self.w_material, appearance, x[:, POSTERIOR]
+
+    def material_logits(self, x: np.ndarray) -> np.ndarray:
+        """The pooled material logits (before the temperature) of feature rows `x`."""
+        logits, appearance, posterior = self.material_experts(x)
+        if appearance is not None and self.pool < 1.0:
+            logits = self.pool * logits + (1.0 - self.pool) * appearance
+        return logits + self.handbuilt * posterior
 
     def predict(self, m: Mapping[str, float | str]) -> Prediction:
         """The attributes of an object from its measurements (`measurements`)."""

@@ -111,14 +111,13 @@ def trim_bar(piece: np.ndarray, side: str) -> tuple[np.ndarray, bool]:
     while hi < len(counts) - 1 and counts[hi + 1] >= 0.5 * counts[peak]:
         hi += 1
     outward = side in ("front", "left")
-    inner = counts[:lo] if outward else counts[hi + 1 :]
     slices = np.nonzero(counts)[0]
-    inner_at = slices[slices < lo] if outward else slices[slices > hi]
+    inner = slices[slices < lo] if outward else slices[slices > hi]  # between bar and body
     # posts: three slices or more, or a slice holding two runs as far apart as half the
     # bar (the posts at its ends, seen in a narrow gap); a ragged cell or two next to the
     # body is neither
-    posts = any(_posts(np.take(piece, k, axis=axis), counts[peak]) for k in inner_at)
-    if np.count_nonzero(inner) < 3 and not posts:
+    posts = any(_posts(np.take(piece, k, axis=axis), counts[peak]) for k in inner)
+    if len(inner) < 3 and not posts:
         return piece, False
     keep = np.zeros(len(counts), dtype=bool)
     if outward:
