@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -28,12 +29,14 @@ from perceiver_data import cached_rows, reliability_table  # benchmarks/ is on s
 from utamp_gym.methods.perceived import align_members, attribute_accuracy
 from utamp_gym.perception.confidence import (
     CALIBRATION_FILE,
+    SIZE_COVERAGE,
     Calibration,
     mass_class,
     raw_confidences,
 )
 from utamp_gym.perception.objects import _shell_area, _solid_volume, perceive_objects
 from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.seeding import run_seed
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,9 +73,35 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
             "perceived": {"material": seen.material, "mass": seen.mass,
                           "members": len(seen.members) - 1},
             "covered": p.shape.covered, "raw": raw, "alternatives": alts,
-            "right": right, "accuracy": acc,
+            "right": right, "accuracy": acc, "body_error": body_error(seen, declared),
         })  # fmt: skip
     return rows
+
+
+def body_error(seen: ObjectType, declared: ObjectType) -> list[float]:
+    """m: how much wider than declared the body was read, per side, along x and y."""
+    a, b = seen.body.box, declared.body.box
+    return [round(((a.max[k] - a.min[k]) - (b.max[k] - b.min[k])) / 2, 6) for k in (0, 1)]
+
+
+def size_error(rows: list[dict[str, object]]) -> dict[str, float]:
+    """The body's reading error per side: the `SIZE_COVERAGE` quantile of its magnitude
+    on the even-numbered scenes, rounded up to 0.1 mm (the perceiver's ``SIZE_ERROR``), and
+    the share of the
+    odd-numbered scenes' readings it covers."""
+
+    def errors(part: list[dict[str, object]]) -> np.ndarray:
+        return np.abs([e for r in part for e in r["body_error"]])  # type: ignore[attr-defined]
+
+    fit = errors([r for r in rows if _index(r) % 2 == 0])
+    held = errors([r for r in rows if _index(r) % 2 == 1])
+    bound = math.ceil(float(np.quantile(fit, SIZE_COVERAGE)) * 1e4 - 1e-6) / 1e4  # 0.1 mm up
+    return {
+        "quantile": SIZE_COVERAGE, "metres": bound,
+        "median_signed": float(np.median([e for r in rows if _index(r) % 2 == 0
+                                           for e in r["body_error"]])),  # type: ignore[attr-defined]
+        "held_out_covered": float(np.mean(held <= bound + 1e-9)),
+    }  # fmt: skip
 
 
 def collect(cache: Path, limit: int | None) -> list[dict[str, object]]:
@@ -119,6 +148,16 @@ def _markdown(payload: dict[str, object]) -> str:
     lines += ["", "Material confusions (declared -> perceived: count):", ""]
     for k, v in payload["confusions"].items():  # type: ignore[attr-defined]
         lines.append(f"- {k}: {v}")
+    size = payload["size_error"]
+    lines += [
+        "",
+        "Body sizes: per side along x and y, the perceived body is read "
+        f"{1000 * size['median_signed']:+.2f} mm wider than declared at the median; "  # type: ignore[index]
+        f"{size['quantile']:.0%} of the "  # type: ignore[index]
+        f"even-numbered scenes' readings are within **{1000 * size['metres']:.2f} mm** "  # type: ignore[index]
+        f"(`perception.confidence.SIZE_ERROR`), which covers {size['held_out_covered']:.1%} "  # type: ignore[index]
+        "of the odd-numbered ones'.",
+    ]
     kept = ", ".join(payload["calibrated_attributes"]) or "none"  # type: ignore[arg-type]
     for label, key in (("raw", "reliability_raw"), (f"shipped (maps for {kept})", "reliability")):
         lines += [
@@ -186,6 +225,7 @@ def main() -> None:
         "reliability_raw": raw_rel,
         "reliability": reliability(held, cal),
         "calibrated_attributes": kept,
+        "size_error": size_error(rows),
         "calibration": cal.to_json(),
     }  # fmt: skip
     md = _markdown(payload)

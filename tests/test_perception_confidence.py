@@ -2,23 +2,35 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 
 from utamp_gym.affordances.rim import RIM_LIFT_LIMIT
 from utamp_gym.affordances.rules import EDGE_LIFT_LIMIT, LIFT_FRACTION, LOAD_CAPACITY, PAYLOAD
 from utamp_gym.methods.attributes import ATTRIBUTES
+from utamp_gym.methods.perceivers import _attributes
 from utamp_gym.perception.confidence import (
     MASS_BOUNDS,
+    SIZE_COVERAGE,
+    SIZE_ERROR,
     Calibration,
     isotonic_knots,
     mass_class,
     mass_classes,
     packaged_calibration,
     raw_confidences,
+    size_readings,
 )
-from utamp_gym.perception.objects import SLAB_EDGE, SLAB_EDGE_INSET, _edges
+from utamp_gym.perception.material import MaterialEstimate
+from utamp_gym.perception.objects import SLAB_EDGE, SLAB_EDGE_INSET, PerceivedObject, _edges
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
+from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
+from utamp_gym.suites import resolve_scene
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_mass_classes_are_cut_at_the_rules_thresholds() -> None:
@@ -86,3 +98,33 @@ def test_a_bare_board_is_offered_its_end_strips_as_edges() -> None:
     assert np.isclose(front.size[1], 0.2 - 2 * SLAB_EDGE_INSET)
     handle = SeenMember("handle", "back", SeenBox((-0.22, -0.02, 0.0), (-0.15, 0.02, 0.02)))
     assert _edges(_slab((handle,))) == ()  # a board with a handle is held by it
+
+
+def test_size_readings_narrow_and_widen_the_body_by_the_reading_error() -> None:
+    t = resolve_scene("procedural-v1/train/0126").type_of("obj3")  # a tumbler
+    narrow, wide = size_readings(t)
+    for read, sign in ((narrow, -1), (wide, 1)):
+        a, b = read.body.box, t.body.box
+        np.testing.assert_allclose(np.subtract(a.max, b.max), [sign * SIZE_ERROR] * 2 + [0])
+        np.testing.assert_allclose(np.subtract(a.min, b.min), [-sign * SIZE_ERROR] * 2 + [0])
+        for part, attrs in t.parts.items():
+            if attrs.size is not None:
+                grown = np.subtract(read.parts[part].size, attrs.size)
+                np.testing.assert_allclose(grown, [2 * sign * SIZE_ERROR] * 2)
+        assert (read.mass, read.material, read.name) == (t.mass, t.material, t.name)
+    thin = t._replace(members={"body": t.body._replace(box=Box((0, 0, 0), (0.002, 0.2, 0.1)))})
+    assert size_readings(thin)[0] == thin  # no narrower reading of a 2 mm slab
+
+
+def test_the_reading_error_is_the_one_measured_on_train() -> None:
+    page = json.loads((ROOT / "docs" / "results" / "perceiver-train.json").read_text())
+    measured = page["size_error"]
+    assert measured["quantile"] == SIZE_COVERAGE and measured["metres"] == SIZE_ERROR
+
+
+def test_the_builtin_perceiver_offers_the_size_readings() -> None:
+    glass = MaterialEstimate("glass", {"glass": 1.0})
+    obj = PerceivedObject(1, _slab(), glass, 0.3, 0.3, 0.3, ())
+    report = _attributes(obj, "cup", "upright")
+    assert report.alternatives["member_size"] == size_readings(report.type)
+    assert report.confidence_of("member_size") == SIZE_COVERAGE

@@ -19,7 +19,9 @@ Then the robot's own actions are its measurements:
 * **extra looks** – when no plan reaches the goal from what is believed, the robot looks
   again (a new survey, perceived afresh: what moved since may have uncovered members and
   rims) and the attributes that block the goal — the doubts planned cautiously — take their
-  likely values; only when that still leaves the goal unsolvable does it give up.
+  likely values; the next look hopes: every attribute at the value that promises most, and
+  every fact any one object's reading of its sizes allows (`hoped_facts`), for the acts
+  to test; only when that still leaves the goal unsolvable does it give up.
 
 After every revision the policy replans from the revised beliefs. `n_weighings` and
 `n_looks` count the measurements of the episode (`ClosedLoopResult`, the eval row).
@@ -38,7 +40,7 @@ from utamp_gym.backend import Surveying
 from utamp_gym.contract.perceiver import Perceiver
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.errors import PlanningError
-from utamp_gym.methods.doubt import DOUBT_THRESHOLD, Doubt, cautious_types
+from utamp_gym.methods.doubt import DOUBT_THRESHOLD, Doubt, cautious_types, hoped_facts
 from utamp_gym.methods.perceived import (
     PerceivedScene,
     PerceptionError,
@@ -90,6 +92,7 @@ class InteractivePerception:
         self.beliefs: dict[str, ObjectType] = {}  # object -> believed (perceived) type
         self.doubts: tuple[Doubt, ...] = ()  # planned at their cautious values
         self.untested: set[str] = set()  # objects whose lighter mass is a hypothesis
+        self.hoping = False  # also believe what any one reading of the sizes allows
         self.weighed: dict[str, float] = {}  # object -> kg it weighs at least (torques)
         self.withdrawn: set[Fact] = set()  # declared-name facts refuted by the robot's acts
         self.revisions: list[str] = []  # what was learnt, in order
@@ -132,7 +135,7 @@ class InteractivePerception:
         where in doubt (``first``), at the likely ones (``likely``), or at the values that
         promise most (``hopeful``: hypotheses the robot's acts then test)."""
         seen = self._perceive()
-        self.seen, self.untested = seen, set()
+        self.seen, self.untested, self.hoping = seen, set(), mode == "hopeful"
         if mode == "likely":
             self.beliefs, self.doubts = dict(seen.types), ()
         else:
@@ -218,9 +221,14 @@ class InteractivePerception:
                 return
 
     def _facts(self) -> frozenset[Fact]:
+        """The facts believed: the believed types' and, hoping, those any one object's
+        reading of its sizes allows (`hoped_facts`), in the declared names."""
         assert self.seen is not None
         ps = build_perceived_scene(self.seen.declared, self.beliefs)
-        return ps.usable_facts(plan_affordances(ps.planning))
+        facts = plan_affordances(ps.planning)
+        if self.hoping:
+            facts |= hoped_facts(ps.planning, ps.types, self.seen.reports)
+        return ps.usable_facts(facts)
 
     def _believe(self) -> None:
         self.policy.believe(self.env.scene.name, self._facts() - self.withdrawn)

@@ -10,8 +10,14 @@ reported value. A scene the cautious values make unsolvable is planned with the 
 values instead, and that is marked (`DoubtfulPlan.fell_back`).
 
 An alternative is applied by `with_value`: ``material``, ``mass`` (kg) and ``robustness``
-replace the type's field; an alternative that is a whole `ObjectType` replaces the type
-(how a perceiver offers another reading of the geometry: members, shapes, surfaces).
+replace the type's field; an alternative that is a whole `ObjectType` replaces the type's
+geometry, its members and parts (how a perceiver offers another reading of the geometry:
+members, shapes, surfaces, sizes), and keeps the material, mass and robustness.
+
+Some readings are not ordered by promise (`READINGS`: ``member_size``, the body read a
+little narrower or wider: a narrower one fits into the hand and onto more supports, a wider
+one carries more). Hoping, they are not chosen between: every fact that holds under any one
+object's reading is hoped for (`hoped_facts`), for the robot's acts to test.
 """
 
 from __future__ import annotations
@@ -29,6 +35,8 @@ from utamp_gym.scene.model import Scene
 #: an attribute reported with a lower confidence than this is planned cautiously
 DOUBT_THRESHOLD = 0.8
 SCALAR = ("material", "mass", "robustness")
+#: attributes whose alternatives are readings no one of which promises most (docstring)
+READINGS = ("member_size",)
 
 
 @dataclass(frozen=True)
@@ -55,7 +63,7 @@ def _show(value: Any) -> str:
 def with_value(t: ObjectType, attribute: str, value: Any) -> ObjectType | None:
     """`t` with `attribute` set to `value` (module docstring); None if it cannot be applied."""
     if isinstance(value, ObjectType):
-        return value._replace(name=t.name)
+        return t._replace(members=value.members, parts=value.parts)
     if attribute == "mass":
         try:
             return t._replace(mass=float(value))
@@ -97,7 +105,7 @@ def cautious_types(
         for attribute in report.alternatives if hopeful else report.confidence:
             p = report.confidence_of(attribute)
             alts = tuple(report.alternatives.get(attribute, ()))
-            if (p >= threshold and not hopeful) or not alts:
+            if (p >= threshold and not hopeful) or not alts or (hopeful and attribute in READINGS):
                 continue
             current = out[obj]
             candidates = [current]
@@ -122,6 +130,28 @@ def cautious_types(
                 out[obj] = chosen
                 planning = _with_type(planning, chosen)
     return out, tuple(doubts)
+
+
+def hoped_facts(
+    planning: Scene,
+    types: Mapping[str, ObjectType],
+    reports: Mapping[str, PerceivedAttributes],
+    affordances: Callable[[Scene], frozenset[Fact]] = plan_affordances,
+) -> frozenset[Fact]:
+    """The facts of `planning` with, one object at a time, its type (`types`: object -> its
+    type as in `planning`) at each of its `READINGS` alternatives, over all of them: what
+    may hold within the perceiver's reading error (the union; planning's own facts are not
+    included)."""
+    out: set[Fact] = set()
+    for obj, report in reports.items():
+        if obj not in types:
+            continue
+        for attribute in READINGS:
+            for value in report.alternatives.get(attribute, ()):
+                t = with_value(types[obj], attribute, value)
+                if t is not None and t != types[obj]:
+                    out |= affordances(_with_type(planning, t))
+    return frozenset(out)
 
 
 def _with_type(planning: Scene, t: ObjectType) -> Scene:
@@ -152,9 +182,11 @@ class DoubtfulPlan:
 
 __all__ = [
     "DOUBT_THRESHOLD",
+    "READINGS",
     "Doubt",
     "DoubtfulPlan",
     "cautious_types",
+    "hoped_facts",
     "value_of",
     "with_value",
 ]

@@ -24,6 +24,7 @@ from utamp_gym.contract.perceiver import PerceivedAttributes, Perceiver, Percept
 from utamp_gym.errors import EndpointError, UtampError
 from utamp_gym.methods.vlm import prompt
 from utamp_gym.methods.vlm_client import VlmClient, extract_json, image_part
+from utamp_gym.perception.confidence import SIZE_COVERAGE, size_readings
 from utamp_gym.perception.objects import PerceivedObject, perceive_objects
 from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES
 from utamp_gym.scene.geometry import SIDES
@@ -39,16 +40,21 @@ class PerceiverLoadError(UtampError, ValueError):
 def _attributes(obj: PerceivedObject, name: str, orientation: str) -> PerceivedAttributes:
     """The protocol's result for one object the built-in perceiver saw (the only place that
     reads the perceiver's optional ``confidence`` / ``alternatives``: certain if absent).
-    Without mass alternatives, the lightest plausible mass is one where it is below the
-    reported one (the perceiver reports the heaviest plausible where that decides a lift)."""
+    The lightest plausible mass over the plausible materials is the last mass alternative
+    where it is below the reported one and the others (the perceiver reports the heaviest
+    plausible where that decides a lift; a light reading is what the closed loop hopes for
+    and then weighs);
+    the sizes are offered a reading error narrower and wider (`confidence.size_readings`)."""
+    t = obj.as_type(name, orientation)
     alternatives = dict(getattr(obj, "alternatives", None) or {})
-    if "mass" not in alternatives and obj.mass_low < obj.mass:
-        alternatives["mass"] = (obj.mass_low,)
-    return PerceivedAttributes(
-        obj.as_type(name, orientation),
-        dict(getattr(obj, "confidence", None) or {}),
-        alternatives,
-    )
+    masses = tuple(alternatives.get("mass", ()))
+    if obj.mass_low < min((obj.mass, *masses)):  # the lightest plausible, last
+        alternatives["mass"] = (*masses, round(obj.mass_low, 4))
+    confidence = dict(getattr(obj, "confidence", None) or {})
+    if "member_size" not in alternatives:  # the body's reading error (`size_readings`)
+        alternatives["member_size"] = size_readings(t)
+        confidence.setdefault("member_size", SIZE_COVERAGE)
+    return PerceivedAttributes(t, confidence, alternatives)
 
 
 class BuiltinPerceiver:

@@ -15,7 +15,13 @@ with keys from `utamp_gym.methods.attributes.ATTRIBUTES`:
   class, most likely first: the heaviest plausible mass in that class (planning with it
   promises what holds for the whole class);
 * **members**: from the geometry alone: how much of the body's top was hidden under other
-  objects (`SeenShape.covered`) — what hides a handle or a neck.
+  objects (`SeenShape.covered`) — what hides a handle or a neck;
+* **member_size**: the body is read within `SIZE_ERROR` a side with probability
+  `SIZE_COVERAGE` (measured on procedural-v1/train by `benchmarks/perceiver_train.py`); the
+  alternatives are the type read that much narrower and that much wider (`size_readings`).
+  Neither promises more than the other — a narrower body fits into the hand and onto more
+  supports, a wider one carries more — so the closed loop hopes for the facts of either
+  (`utamp_gym.methods.doubt.hoped_facts`).
 
 The raw values are then mapped through monotone calibration maps fitted on
 procedural-v1/train renders (`benchmarks/perceiver_train.py`, isotonic regression of
@@ -35,6 +41,8 @@ import numpy as np
 
 from utamp_gym.errors import AssetError
 from utamp_gym.resources import asset_path
+from utamp_gym.scene.catalogue import MIN_EXTENT, ObjectType
+from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
 
 #: kg: the mass thresholds the rules use (affordances.rules EDGE_LIFT_LIMIT, affordances.rim
@@ -42,6 +50,12 @@ from utamp_gym.scene.materials import material
 MASS_BOUNDS = (0.5, 1.1, 1.5, 3.0)
 ALT_MIN = 0.02  # the least probability of a value offered as an alternative
 CALIBRATION_FILE = ("perception", "confidence_calibration.json")
+#: the share of body readings within `SIZE_ERROR` a side of the declared size
+SIZE_COVERAGE = 0.9
+#: m a side: the `SIZE_COVERAGE` quantile of the body's reading error on the even-numbered
+#: procedural-v1/train scenes, rounded up to 0.1 mm (docs/results/perceiver-train.json
+#: ``size_error``; a test checks it)
+SIZE_ERROR = 0.0007
 
 
 def mass_class(mass: float) -> int:
@@ -117,6 +131,25 @@ def raw_confidences(
     return conf, alts
 
 
+def size_readings(t: ObjectType, error: float = SIZE_ERROR) -> tuple[ObjectType, ObjectType]:
+    """`t` with its body read `error` narrower, and wider, on every side along x and y (the
+    parts' declared sizes with it); a side too thin to narrow stays."""
+    return _widened(t, -error), _widened(t, error)
+
+
+def _widened(t: ObjectType, d: float) -> ObjectType:
+    body = t.body
+    lo, hi = body.box.min, body.box.max
+    if min(hi[0] - lo[0], hi[1] - lo[1]) + 2 * d < 2 * MIN_EXTENT:
+        return t
+    box = Box((lo[0] - d, lo[1] - d, lo[2]), (hi[0] + d, hi[1] + d, hi[2]))
+    parts = {
+        p: a if a.size is None else a._replace(size=(a.size[0] + 2 * d, a.size[1] + 2 * d))
+        for p, a in t.parts.items()
+    }
+    return t._replace(members={**t.members, body.name: body._replace(box=box)}, parts=parts)
+
+
 class Calibration:
     """Monotone maps raw confidence -> probability of being right, one per attribute
     (piecewise linear through isotonic-regression knots)."""
@@ -186,10 +219,13 @@ def packaged_calibration() -> Calibration | None:
 __all__ = [
     "ALT_MIN",
     "MASS_BOUNDS",
+    "SIZE_COVERAGE",
+    "SIZE_ERROR",
     "Calibration",
     "isotonic_knots",
     "mass_class",
     "mass_classes",
     "packaged_calibration",
     "raw_confidences",
+    "size_readings",
 ]

@@ -52,7 +52,7 @@ import numpy as np
 
 from utamp_gym.contract.views import ViewBundle
 from utamp_gym.perception.cloud import Scene3D, fuse
-from utamp_gym.perception.confidence import packaged_calibration, raw_confidences
+from utamp_gym.perception.confidence import ALT_MIN, packaged_calibration, raw_confidences
 from utamp_gym.perception.learned import (
     learned_confidences,
     measurements,
@@ -99,7 +99,7 @@ class PerceivedObject:
     shape: SeenShape
     material: MaterialEstimate
     mass: float  # kg, the nominal estimate or the heaviest plausible (`lift_mass`)
-    mass_low: float  # kg, the lightest plausible
+    mass_low: float  # kg, the lightest plausible over the plausible materials
     mass_high: float  # kg, the heaviest plausible
     edges: tuple[SeenMember, ...]
     #: attribute (`methods.attributes.ATTRIBUTES`: material, mass, robustness, members) ->
@@ -401,6 +401,7 @@ def perceive_instance(
         )
         mat = MaterialEstimate(max(pred.material, key=pred.material.__getitem__), pred.material)
         mass, low, high = estimate_mass(mat.name, volume, _mass_area(shape))
+        low = min(low, lightest_mass(mat.posterior, volume, _mass_area(shape)))
         if model.mass_head == "rule":  # volume x density of the learned material
             reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
             conf, alts = raw_confidences(
@@ -412,6 +413,7 @@ def perceive_instance(
             conf, alts = learned_confidences(pred, mat.name, shape.covered)
     else:
         mass, low, high = estimate_mass(mat.name, volume, _mass_area(shape))
+        low = min(low, lightest_mass(mat.posterior, volume, _mass_area(shape)))
         reported = lift_mass(mass, high)
         conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
     calibration = packaged_calibration()
@@ -423,6 +425,15 @@ def perceive_instance(
                            conf, alts)  # fmt: skip
 
 
+def lightest_mass(posterior: Mapping[str, float], volume: float, area: float) -> float:
+    """kg: the lightest plausible mass of the piece over the materials at least `ALT_MIN`
+    likely (each at the low end of its density range)."""
+    return min(
+        (estimate_mass(m, volume, area)[1] for m, p in posterior.items() if p >= ALT_MIN),
+        default=math.inf,
+    )
+
+
 def lift_mass(mass: float, high: float) -> float:
     """The mass a perceived type reports: the nominal one, or the heaviest plausible one
     where the nominal one is `LIFTABLE` but the material's density range leaves that
@@ -430,4 +441,4 @@ def lift_mass(mass: float, high: float) -> float:
     return high if mass <= LIFTABLE < high else mass
 
 
-__all__ = ["PerceivedObject", "lift_mass", "perceive_instance", "perceive_objects"]
+__all__ = ["PerceivedObject", "lift_mass", "lightest_mass", "perceive_instance", "perceive_objects"]
