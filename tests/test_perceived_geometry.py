@@ -176,3 +176,30 @@ def test_a_cavity_under_another_object_is_hidden_but_a_well_still_shows() -> Non
     assert seen.shape == "open"  # what the ring alone says
     hidden = classify_top(grid, top, visible, body, 0.1, "cylinder", lo, hi, over=over)
     assert not hidden.visible and hidden.shape == "flat"
+
+
+@pytest.mark.parametrize(
+    ("depth", "flared", "shape"),
+    [
+        (0.016, False, "flat"),  # a shallow well: depth 0.13 of the opening
+        (0.026, False, "flat"),  # a deep plate's well: 0.21, its floor spans the opening
+        (0.026, True, "open"),  # the same inside a flared outer wall: a pan, not a plate
+        (0.040, False, "open"),  # 0.32: a cavity (a bowl)
+    ],
+)
+def test_a_deep_plates_well_is_a_well_unless_its_outer_wall_flares(
+    depth: float, flared: bool, shape: str
+) -> None:
+    cell = 0.004
+    grid = Grid(np.array([-0.1, -0.1]), (50, 50), cell)
+    ij = np.indices(grid.shape).transpose(1, 2, 0)
+    r = np.linalg.norm((ij + 0.5) * cell - 0.1, axis=2)
+    body = r <= 0.094
+    top = np.where(body, 0.035, -np.inf)
+    top[r <= 0.062] = 0.035 - depth  # a steep-walled well 12.4 cm across
+    lo, hi = np.array([-0.094, -0.094]), np.array([0.094, 0.094])
+    seen = classify_top(grid, top, body, body, 0.035, "cylinder", lo, hi, flared=flared)
+    assert seen.shape == shape
+    if shape == "flat":  # the well's floor, across the opening
+        assert seen.height == pytest.approx(0.035 - depth)
+        assert seen.size[0] == pytest.approx(0.124, abs=2 * cell)

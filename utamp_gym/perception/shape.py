@@ -290,6 +290,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
             body_top = float(np.percentile(away, 98))
 
     # ---- top surface of the body
+    flare = wall_flare(local[in_body], centre, body_top) if geom == "cylinder" else 0.0
     top_shape = classify_top(
         grid,
         top,
@@ -300,12 +301,12 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         body_lo,
         body_hi,
         over=other_top > body_top + FLAT_TOL,
+        flared=flare > DISH_FLARE,
     )
     if geom == "cylinder" and top_shape.visible and top_shape.shape in ("open", "concave"):
         top_shape = round_opening(top_shape, local[in_body], centre, radius)
     elif geom == "box" and top_shape.visible and top_shape.rim > 0:
         top_shape = box_opening(top_shape, local[in_body], body_lo, body_hi, body_top)
-    flare = wall_flare(local[in_body], centre, body_top) if geom == "cylinder" else 0.0
     if top_shape.shape == "open" and flare > DISH_FLARE and top_shape.floor > 0:
         depth = top_shape.height - top_shape.floor
         if depth < DISH_RATIO * float(np.mean(top_shape.size)):  # a shallow flared cavity

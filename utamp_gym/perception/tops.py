@@ -3,12 +3,14 @@
 Cells covered by other objects are left out. The top is *flat* (at least `FLAT_FRACTION` of
 it within `FLAT_TOL` of one height), *round* (lower towards its outline all around: a dome),
 or lower inside than at a rim running round it: a *flat* well inside a rim when shallow
-(depth below `WELL_RATIO` of the opening), *concave* (a dish whose walls flare from a
-smaller floor, or whose outer wall flares by more than `DISH_FLARE`: a pan's floor measured
-in cells came out wider than `FLARE` of its opening, and the pan was read as a pot, where
-nothing rests across its rim) or *open* (a cavity). An opening is measured finer than cells,
-from the inner edge of the rim's top; the base (never seen) from the lowest slice of the
-side wall; its flare (`wall_flare`) judges a top hidden under other objects (`shape`).
+(depth below `WELL_RATIO` of the opening, or below `DEEP_WELL_RATIO` where the floor spans
+the opening and the outer wall does not flare: a deep plate), *concave* (a dish whose walls
+flare from a smaller floor, or whose outer wall flares by more than `DISH_FLARE`: a pan's
+floor measured in cells came out wider than `FLARE` of its opening, and the pan was read as
+a pot, where nothing rests across its rim) or *open* (a cavity). An opening is measured
+finer than cells, from the inner edge of the rim's top; the base (never seen) from the
+lowest slice of the side wall; its flare (`wall_flare`) judges a top hidden under other
+objects (`shape`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from utamp_gym.perception.seen import SeenTop
 FLAT_TOL = 0.004  # m, heights this close to the top level are on it
 FLAT_FRACTION = 0.8  # of the visible top at the top level: a flat top
 WELL_RATIO = 0.18  # depth / opening below this: a flat well inside a rim (tray, plate)
+DEEP_WELL_RATIO = 0.25  # ... or below this with a floor spanning the opening (a deep plate)
 DISH_RATIO = 0.30  # ... below this, with a floor smaller than the opening: a dish (pan)
 FLARE = 0.85  # a floor narrower than this fraction of the opening: the walls flare
 DISH_FLARE = 0.12  # ... as do walls whose outer radius grows by more than this, base to top
@@ -41,11 +44,13 @@ def classify_top(
     lo: np.ndarray,
     hi: np.ndarray,
     over: np.ndarray | None = None,
+    flared: bool = False,
 ) -> SeenTop:
     """The body's top surface (module docstring). `over`: cells where another object stands
     above the body's top: a cavity or dish whose inside is mostly under them was not seen,
     it is hidden (a tumbler standing on an inverted mug's base left a ring around it, read
-    as an opening); a flat well shows around what stands in it (a pan in a tray)."""
+    as an opening); a flat well shows around what stands in it (a pan in a tray). `flared`:
+    the outer wall flares (by more than `DISH_FLARE`): a pan, never a deep well."""
     full = tuple((hi - lo).tolist())
     centre = tuple(((hi + lo) / 2).tolist())
     if visible.sum() < max(8, 0.15 * body.sum()):
@@ -69,7 +74,7 @@ def classify_top(
     if not inner.any():
         return SeenTop("flat", full, rim_level, centre)  # type: ignore[arg-type]
     hidden = over is not None and (inner & over).sum() >= 0.5 * inner.sum()
-    out = _inside(grid, top, inner, geom, rim_level, lo, hi)
+    out = _inside(grid, top, inner, geom, rim_level, lo, hi, flared)
     if hidden and out.shape in ("open", "concave"):  # no cavity seen: one under an object
         return SeenTop("flat", full, rim_level, centre, visible=False)  # type: ignore[arg-type]
     return out
@@ -83,6 +88,7 @@ def _inside(
     rim_level: float,
     lo: np.ndarray,
     hi: np.ndarray,
+    flared: bool = False,
 ) -> SeenTop:
     """What lies inside a rim: a flat well, a dish (concave) or a cavity (open)."""
     ilo, ihi = grid.bounds(inner)
@@ -98,8 +104,15 @@ def _inside(
     plateau = seen & (np.abs(top - floor) <= FLAT_TOL)
     depth = rim_level - floor
     ratio = depth / max(width, 1e-6)
-    if ratio < WELL_RATIO and plateau.sum() >= 0.6 * seen.sum():
-        plo, phi = grid.bounds(components(plateau)[0])
+    pl = components(plateau)[0] if plateau.any() else plateau
+    if plateau.any():
+        plo, phi = grid.bounds(pl)
+        floor_width = float(np.mean(phi - plo))
+    else:
+        floor_width = 0.0
+    level = plateau.sum() >= 0.6 * seen.sum()  # mostly one flat floor
+    steep = floor_width >= FLARE * width and not flared  # no flared walls, inside or out
+    if level and (ratio < WELL_RATIO or (ratio < DEEP_WELL_RATIO and steep)):
         return SeenTop(
             "flat",
             tuple((phi - plo).tolist()),  # type: ignore[arg-type]
@@ -108,12 +121,6 @@ def _inside(
             rim_width,
             floor,
         )
-    pl = components(plateau)[0] if plateau.any() else plateau
-    if plateau.any():
-        plo, phi = grid.bounds(pl)
-        floor_width = float(np.mean(phi - plo))
-    else:
-        floor_width = 0.0
     size = tuple(opening.tolist()) if geom == "box" else (width, width)
     if ratio < DISH_RATIO and floor_width < FLARE * width:
         return SeenTop(
