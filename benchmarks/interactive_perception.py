@@ -9,8 +9,12 @@ the unachievable ones that ended without success, and the weighing lifts and ext
 episode (mean, max); with ``--results`` also writes ``interactive_perception.md`` there.
 
     python benchmarks/interactive_perception.py [--splits test-instances,test-families,test-count]
-        [--seeds 3] [--limit N] [--workers 2] [--method utamp2-perceived[:PERCEIVER]]
-        [--out out/bench/interactive] [--results docs/results]
+        [--seeds 3] [--limit N] [--scenes GLOB] [--workers 2]
+        [--method utamp2-perceived[:PERCEIVER]] [--out out/bench/interactive]
+        [--results docs/results]
+
+Development runs on train scenes no component was fitted on, e.g. ``--splits train
+--scenes 'procedural-v1/train/01[2-9]?'`` (the attribute model is trained on scenes 0-119).
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--splits", default="test-instances,test-families,test-count")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--limit", type=int, default=None, help="only the first N scenes per split")
+    ap.add_argument("--scenes", default=None, help="only scenes matching this glob")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--method", default="utamp2-perceived")
     ap.add_argument("--out", default="out/bench/interactive")
@@ -80,7 +85,7 @@ def main() -> None:
         achievable = {s["name"]: bool(s["achievable"]) for s in scene_summary(suite)}
         cfg = SweepConfig(
             suite, (args.method,), seeds=args.seeds, closed_loop=True, explain=False,
-            limit=args.limit,
+            limit=args.limit, scenes=args.scenes,
         )  # fmt: skip
         report = run_sweep(cfg, Path(args.out) / split, workers=args.workers, progress=False)
         rows = report.rows
