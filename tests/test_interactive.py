@@ -133,3 +133,19 @@ def test_a_refused_affordance_is_withdrawn(loop, reason: str) -> None:
     assert ip.revisions[-1] == "refused: canLift(cutting-board, handle) withdrawn"
     ip._revise(reason)  # withdrawn once
     assert ip.revisions.count(ip.revisions[-1]) == 1
+
+
+def test_the_last_look_hopes_within_the_reading_error_and_the_acts_confirm_it() -> None:
+    """A tumbler read 0.1-0.3 mm wider than its 7.4 cm leaves no grasp in the rules; its
+    narrower reading does, and the hand then lifts it (train scene, never fitted)."""
+    out = run_closed_loop("procedural-v1/train/0191", "utamp2-perceived", grounding="symbolic")
+    assert out.success, out.failure
+    assert out.n_looks == 2 and out.n_weighings == 0  # likely values, then hoping
+
+
+def test_the_lightest_plausible_mass_is_hoped_for_and_weighed() -> None:
+    """A wooden paddle board read 0.917 kg (declared 0.863) is too heavy for its handle in
+    the rules; the lightest plausible reading lifts it, and the lift weighs it."""
+    out = run_closed_loop("procedural-v1/train/0132", "utamp2-perceived", grounding="symbolic")
+    assert out.success, out.failure
+    assert (out.n_looks, out.n_weighings) == (1, 1)
