@@ -13,8 +13,9 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import attribute_fit as af
+from measurements import cylinder_measurements
 
-from utamp_gym.perception.learned import MATERIAL_NAMES, SHAPE_CLASSES
+from utamp_gym.perception.learned import MATERIAL_NAMES
 from utamp_gym.perception.material import FEATURES
 from utamp_gym.suites import suite_scenes
 from utamp_gym.tasks.attributes import family_of
@@ -38,16 +39,9 @@ def test_families_name_each_train_object_and_leave_the_paper_objects_fitted() ->
 def _row(rng: np.random.Generator, family: int, material: str, k: int) -> dict[str, object]:
     """A synthetic object: its colour says its material (noisily), its size its family."""
     colour = (1.0 if material == MATERIAL_NAMES[0] else -1.0) + rng.normal(0.0, 0.8)
-    m: dict[str, object] = {f: float(rng.normal(0.0, 0.1)) for f in FEATURES}
-    m[FEATURES[0]] = colour
-    m.update({f"post_{n}": 1.0 / len(MATERIAL_NAMES) for n in MATERIAL_NAMES})
+    appearance = {f: float(rng.normal(0.0, 0.1)) for f in FEATURES}
     size = 0.05 + 0.05 * family + rng.normal(0.0, 0.002)
-    m.update({
-        "shape_class": SHAPE_CLASSES[0], "top_shape": "open", "cylinder": 1.0,
-        "size_0": size, "size_1": size, "size_2": 0.1, "height": 0.1, "top_rim": 0.0,
-        "top_floor": 0.0, "top_visible": 1.0, "covered": 0.0, "flare": 0.0, "n_members": 1.0,
-        "volume": 1e-4, "area": 0.02, "envelope": size * size * 0.1, "members_volume": 1e-4,
-    })  # fmt: skip
+    m: dict[str, object] = {**cylinder_measurements(size), **appearance, FEATURES[0]: colour}
     return {"scene": f"synthetic/{k:04d}", "object": f"obj{k}", "measurements": m,
             "declared": {"material": material, "mass": 0.3, "robustness": "sturdy"}}  # fmt: skip
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from measurements import cylinder_measurements
 
 from utamp_gym.errors import AssetError
 from utamp_gym.perception.confidence import MASS_BOUNDS, mass_class
@@ -24,7 +25,6 @@ from utamp_gym.perception.learned import (
     learned_confidences,
     packaged_attribute_model,
 )
-from utamp_gym.perception.material import FEATURES, SHAPE_CLASSES
 from utamp_gym.resources import asset_path
 
 
@@ -91,16 +91,8 @@ def _blank_model(**kw: object) -> AttributeModel:
 
 
 def _measurements() -> dict[str, float | str]:
-    m: dict[str, float | str] = dict.fromkeys(FEATURES, 0.0)
-    m.update({f"post_{n}": 0.01 for n in MATERIAL_NAMES})
-    m.update({"post_ceramic": 0.7, "post_glass": 0.2})
-    m.update({
-        "shape_class": SHAPE_CLASSES[0], "top_shape": "open", "cylinder": 1.0, "size_0": 0.08,
-        "size_1": 0.08, "size_2": 0.1, "height": 0.1, "top_rim": 0.0, "top_floor": 0.0,
-        "top_visible": 1.0, "covered": 0.0, "flare": 0.0, "n_members": 1.0, "volume": 1e-4,
-        "area": 0.02, "envelope": 6.4e-4, "members_volume": 1e-4,
-    })  # fmt: skip
-    return m
+    post = {n: 0.01 for n in MATERIAL_NAMES} | {"ceramic": 0.7, "glass": 0.2}
+    return cylinder_measurements(posterior=post)
 
 
 def test_the_handbuilt_expert_carries_its_posterior_into_the_pooled_material() -> None:
