@@ -296,6 +296,17 @@ def test_a_pans_open_top_is_a_dish() -> None:
     assert ("isSupportable", t.name, "on") not in facts
 
 
+def test_a_bottles_wide_neck_is_a_neck() -> None:
+    """A neck a third of the body's area across (its cells, quantised, cover more): found
+    standing on the body's top, as wide and as high as declared (train/0137, never fitted)."""
+    declared, t = _perceived_type("procedural-v1/train/0137", "obj1")
+    neck = declared.members["neck"].box
+    seen = [m for m in t.members.values() if m.kind != "body"]
+    assert len(seen) == 1 and seen[0].box.min[2] == pytest.approx(neck.min[2], abs=0.005)
+    assert seen[0].box.max[0] - seen[0].box.min[0] == pytest.approx(0.033, abs=0.005)
+    assert t.body.box.max[2] == pytest.approx(neck.min[2], abs=0.005)
+
+
 @pytest.mark.parametrize(
     ("scene_name", "obj"),
     [("procedural-v1/train/0042", "obj3"), ("procedural-v1/train/0087", "obj2")],
