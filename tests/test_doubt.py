@@ -124,3 +124,24 @@ def test_hoped_facts_hold_under_one_reading_of_the_sizes(
     # hoping does not choose between readings: the reported type stays
     types, doubts = cautious_types(ps.planning, ps.types, reports, hopeful=True)
     assert doubts == () and types[obj] == ps.types[obj]
+
+
+def test_a_fact_between_two_objects_is_hoped_for_under_both_their_readings() -> None:
+    """A tumbler read too wide on another read too narrow: neither object's reading alone
+    lets it stand there again; the two together do (train/0129, never fitted)."""
+    scene = resolve_scene("procedural-v1/train/0129")
+    declared = {o.name: scene.type_of(o.name) for o in scene.objects}
+    seen = {**declared, "obj3": size_readings(declared["obj3"])[1]}
+    seen["obj2"] = size_readings(declared["obj2"])[0]
+    ps = build_perceived_scene(scene, seen)
+    fact = ("isP2PSupportive", "under", "obj2-seen", "on", "obj3-seen")
+    assert fact in plan_affordances(build_perceived_scene(scene, declared).planning)
+    assert fact not in plan_affordances(ps.planning)
+
+    def report(obj: str) -> PerceivedAttributes:
+        return PerceivedAttributes(ps.types[obj], {}, {"member_size": size_readings(seen[obj])})
+
+    for alone in ("obj3", "obj2"):
+        assert fact not in hoped_facts(ps.planning, ps.types, {alone: report(alone)})
+    both = {o: report(o) for o in ("obj3", "obj2")}
+    assert fact in hoped_facts(ps.planning, ps.types, both)

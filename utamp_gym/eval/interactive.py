@@ -20,8 +20,8 @@ Then the robot's own actions are its measurements:
   again (a new survey, perceived afresh: what moved since may have uncovered members and
   rims) and the attributes that block the goal — the doubts planned cautiously — take their
   likely values; the next look hopes: every attribute at the value that promises most, and
-  every fact any one object's reading of its sizes allows (`hoped_facts`), for the acts
-  to test; only when that still leaves the goal unsolvable does it give up.
+  every fact some reading of the sizes of the objects it concerns allows (`hoped_facts`),
+  for the acts to test; only when that still leaves the goal unsolvable does it give up.
 
 After every revision the policy replans from the revised beliefs. `n_weighings` and
 `n_looks` count the measurements of the episode (`ClosedLoopResult`, the eval row).
@@ -92,7 +92,7 @@ class InteractivePerception:
         self.beliefs: dict[str, ObjectType] = {}  # object -> believed (perceived) type
         self.doubts: tuple[Doubt, ...] = ()  # planned at their cautious values
         self.untested: set[str] = set()  # objects whose lighter mass is a hypothesis
-        self.hoping = False  # also believe what any one reading of the sizes allows
+        self.hoping = False  # also believe what some reading of the sizes allows
         self.weighed: dict[str, float] = {}  # object -> kg it weighs at least (torques)
         self.withdrawn: set[Fact] = set()  # declared-name facts refuted by the robot's acts
         self.revisions: list[str] = []  # what was learnt, in order
@@ -221,8 +221,8 @@ class InteractivePerception:
                 return
 
     def _facts(self) -> frozenset[Fact]:
-        """The facts believed: the believed types' and, hoping, those any one object's
-        reading of its sizes allows (`hoped_facts`), in the declared names."""
+        """The facts believed: the believed types' and, hoping, those some reading of the
+        sizes of the objects they concern allows (`hoped_facts`), in the declared names."""
         assert self.seen is not None
         ps = build_perceived_scene(self.seen.declared, self.beliefs)
         facts = plan_affordances(ps.planning)

@@ -16,12 +16,14 @@ members, shapes, surfaces, sizes), and keeps the material, mass and robustness.
 
 Some readings are not ordered by promise (`READINGS`: ``member_size``, the body read a
 little narrower or wider: a narrower one fits into the hand and onto more supports, a wider
-one carries more). Hoping, they are not chosen between: every fact that holds under any one
-object's reading is hoped for (`hoped_facts`), for the robot's acts to test.
+one carries more). Hoping, they are not chosen between: every fact that holds under some
+reading of the objects it concerns is hoped for (`hoped_facts`), for the robot's acts to
+test.
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -138,11 +140,12 @@ def hoped_facts(
     reports: Mapping[str, PerceivedAttributes],
     affordances: Callable[[Scene], frozenset[Fact]] = plan_affordances,
 ) -> frozenset[Fact]:
-    """The facts of `planning` with, one object at a time, its type (`types`: object -> its
-    type as in `planning`) at each of its `READINGS` alternatives, over all of them: what
-    may hold within the perceiver's reading error (the union; planning's own facts are not
-    included)."""
-    out: set[Fact] = set()
+    """The facts of `planning` that hold under some reading (`READINGS` alternatives) of
+    the objects they concern, one object or two at a time (`types`: object -> its type as
+    in `planning`): what may hold within the perceiver's reading error — a fact concerns at
+    most two objects, so this is every fact some joint reading allows (the facts of the
+    reported readings themselves are not included)."""
+    readings: dict[str, list[ObjectType]] = {}
     for obj, report in reports.items():
         if obj not in types:
             continue
@@ -150,7 +153,14 @@ def hoped_facts(
             for value in report.alternatives.get(attribute, ()):
                 t = with_value(types[obj], attribute, value)
                 if t is not None and t != types[obj]:
-                    out |= affordances(_with_type(planning, t))
+                    readings.setdefault(obj, []).append(t)
+    out: set[Fact] = set()
+    for alts in readings.values():
+        for t in alts:
+            out |= affordances(_with_type(planning, t))
+    for a, b in itertools.combinations(readings, 2):
+        for ta, tb in itertools.product(readings[a], readings[b]):
+            out |= affordances(_with_type(_with_type(planning, ta), tb))
     return frozenset(out)
 
 
