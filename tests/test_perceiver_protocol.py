@@ -15,9 +15,11 @@ from utamp_gym.eval.stages import ATTRIBUTE_COLUMNS
 from utamp_gym.methods.perceivers import (
     BuiltinPerceiver,
     PerceiverLoadError,
+    _with_answer,
     load_perceiver,
     split_method,
 )
+from utamp_gym.perception.confidence import SIZE_COVERAGE, size_readings
 from utamp_gym.scene.catalogue import load_catalogue
 
 TESTS = Path(__file__).parent
@@ -106,3 +108,19 @@ def test_reports_carry_confidences() -> None:
 
 def _type():  # a catalogue type to report about
     return load_catalogue()["glass-mug"]
+
+
+def test_a_vlm_answer_is_certain_and_the_geometry_keeps_its_reading_error() -> None:
+    t = load_catalogue()["glass-mug"]
+    seen = PerceivedAttributes(
+        t, {"material": 0.5, "member_size": SIZE_COVERAGE},
+        {"material": ("ceramic",), "member_size": size_readings(t)},
+    )  # fmt: skip
+    entry = {"name": "mug", "material": "Ceramic", "mass_kg": 0.4, "robustness": "fragile"}
+    got = _with_answer(seen, entry, "mug")
+    assert (got.type.material, got.type.mass) == ("ceramic", 0.4)
+    assert got.confidence == {"member_size": SIZE_COVERAGE}  # the answer itself is certain
+    narrow, wide = got.alternatives["member_size"]
+    assert (narrow.material, wide.mass) == ("ceramic", 0.4)  # readings of the answered type
+    assert narrow.members == size_readings(t)[0].members
+    assert _with_answer(PerceivedAttributes(t), entry, "mug").alternatives == {}

@@ -121,7 +121,8 @@ class VlmPerceiver:
 def _with_answer(
     seen: PerceivedAttributes, entry: Mapping[str, Any], name: str
 ) -> PerceivedAttributes:
-    """`seen` with the attributes a VLM answer entry reports (malformed ones raise)."""
+    """`seen` with the attributes a VLM answer entry reports (malformed ones raise), taken as
+    certain; the sizes keep the built-in geometry's readings."""
     t = seen.type
     try:
         mass = float(entry.get("mass_kg", t.mass))
@@ -137,8 +138,13 @@ def _with_answer(
             food = str(attrs.get("food_surface", False)).lower() == "true"
             parts[side] = parts[side]._replace(shape=shape, food_surface=food)
     material = str(entry.get("material", t.material)).lower()
-    return PerceivedAttributes(
-        t._replace(mass=mass, robustness=robustness, material=material, parts=parts)
+    answered = t._replace(mass=mass, robustness=robustness, material=material, parts=parts)
+    if "member_size" not in seen.alternatives:  # what the VLM answers is taken as certain
+        return PerceivedAttributes(answered)
+    return PerceivedAttributes(  # the built-in geometry keeps its reading error
+        answered,
+        {"member_size": seen.confidence_of("member_size")},
+        {"member_size": size_readings(answered)},
     )
 
 
