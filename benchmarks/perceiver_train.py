@@ -85,21 +85,17 @@ def body_error(seen: ObjectType, declared: ObjectType) -> list[float]:
 
 
 def size_error(rows: list[dict[str, object]]) -> dict[str, float]:
-    """The body's reading error per side: the `SIZE_COVERAGE` quantile of its magnitude
-    on the even-numbered scenes, rounded up to 0.1 mm (the perceiver's ``SIZE_ERROR``), and
-    the share of the
-    odd-numbered scenes' readings it covers."""
-
-    def errors(part: list[dict[str, object]]) -> np.ndarray:
-        return np.abs([e for r in part for e in r["body_error"]])  # type: ignore[attr-defined]
-
-    fit = errors([r for r in rows if _index(r) % 2 == 0])
-    held = errors([r for r in rows if _index(r) % 2 == 1])
-    bound = math.ceil(float(np.quantile(fit, SIZE_COVERAGE)) * 1e4 - 1e-6) / 1e4  # 0.1 mm up
+    """The body's reading error per side: the `SIZE_COVERAGE` quantile of its magnitude on
+    the even-numbered scenes, rounded up to 0.1 mm (the perceiver's ``SIZE_ERROR``), its
+    signed median there, and the share of the odd-numbered scenes' readings it covers."""
+    errors = {
+        parity: np.array([e for r in rows if _index(r) % 2 == parity for e in r["body_error"]])  # type: ignore[attr-defined]
+        for parity in (0, 1)
+    }
+    fit, held = errors[0], np.abs(errors[1])
+    bound = math.ceil(float(np.quantile(np.abs(fit), SIZE_COVERAGE)) * 1e4 - 1e-6) / 1e4
     return {
-        "quantile": SIZE_COVERAGE, "metres": bound,
-        "median_signed": float(np.median([e for r in rows if _index(r) % 2 == 0
-                                           for e in r["body_error"]])),  # type: ignore[attr-defined]
+        "quantile": SIZE_COVERAGE, "metres": bound, "median_signed": float(np.median(fit)),
         "held_out_covered": float(np.mean(held <= bound + 1e-9)),
     }  # fmt: skip
 

@@ -201,23 +201,22 @@ class InteractivePerception:
             m = pattern.match(reason)
             if m and m["obj"] in self.beliefs and m["support"] in scene.object_names:
                 under, over = scene.object(m["support"]).type, scene.object(m["obj"]).type
+                facts = self._facts()
                 self.withdrawn.update(
-                    f
-                    for f in self._facts()
-                    if f[0] == "isP2PSupportive" and f[2:5:2] == (under, over)
+                    f for f in facts if f[0] == "isP2PSupportive" and f[2:5:2] == (under, over)
                 )
                 self.revisions.append(f"{m['obj']} does not stand on {m['support']}")
-                self._believe()
+                self._believe(facts)
                 return
         for pattern in _REFUSED:
             m = pattern.match(reason)
             if m:
                 args = tuple(a.strip() for a in m["args"].replace(",", " ").split())
-                fact = (m["pred"], *args)
-                if fact in self._facts() and fact not in self.withdrawn:
+                fact, facts = (m["pred"], *args), self._facts()
+                if fact in facts and fact not in self.withdrawn:
                     self.withdrawn.add(fact)
                     self.revisions.append(f"refused: {fact[0]}({', '.join(args)}) withdrawn")
-                    self._believe()
+                    self._believe(facts)
                 return
 
     def _facts(self) -> frozenset[Fact]:
@@ -230,8 +229,11 @@ class InteractivePerception:
             facts |= hoped_facts(ps.planning, ps.types, self.seen.reports)
         return ps.usable_facts(facts)
 
-    def _believe(self) -> None:
-        self.policy.believe(self.env.scene.name, self._facts() - self.withdrawn)
+    def _believe(self, facts: frozenset[Fact] | None = None) -> None:
+        """Plan from the believed facts (`facts`: `_facts()` if already computed for the
+        current beliefs) less those the acts refuted."""
+        facts = self._facts() if facts is None else facts
+        self.policy.believe(self.env.scene.name, facts - self.withdrawn)
 
 
 __all__ = ["MAX_LOOKS", "InteractivePerception"]

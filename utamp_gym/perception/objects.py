@@ -393,15 +393,14 @@ def perceive_instance(
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     cls = looks.shape_class()
     mat = classify_material(colours, cls)
-    volume, area = _solid_volume(shape), _shell_area(shape)
+    volume, area, mass_area = _solid_volume(shape), _shell_area(shape), _mass_area(shape)
     model = packaged_attribute_model()
     if model is not None and mat.name != "default":  # the learned model (`learned`)
         pred = model.predict(
             measurements(shape, appearance_features(colours), mat.posterior, cls, volume, area)
         )
         mat = MaterialEstimate(max(pred.material, key=pred.material.__getitem__), pred.material)
-        mass, low, high = estimate_mass(mat.name, volume, _mass_area(shape))
-        low = min(low, lightest_mass(mat.posterior, volume, _mass_area(shape)))
+        mass, low, high = mass_range(mat, volume, mass_area)
         if model.mass_head == "rule":  # volume x density of the learned material
             reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
             conf, alts = raw_confidences(
@@ -412,8 +411,7 @@ def perceive_instance(
             reported, low, high = pred.mass, low * scale, high * scale
             conf, alts = learned_confidences(pred, mat.name, shape.covered)
     else:
-        mass, low, high = estimate_mass(mat.name, volume, _mass_area(shape))
-        low = min(low, lightest_mass(mat.posterior, volume, _mass_area(shape)))
+        mass, low, high = mass_range(mat, volume, mass_area)
         reported = lift_mass(mass, high)
         conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
     calibration = packaged_calibration()
@@ -425,13 +423,15 @@ def perceive_instance(
                            conf, alts)  # fmt: skip
 
 
-def lightest_mass(posterior: Mapping[str, float], volume: float, area: float) -> float:
-    """kg: the lightest plausible mass of the piece over the materials at least `ALT_MIN`
-    likely (each at the low end of its density range)."""
-    return min(
-        (estimate_mass(m, volume, area)[1] for m, p in posterior.items() if p >= ALT_MIN),
-        default=math.inf,
-    )
+def mass_range(mat: MaterialEstimate, volume: float, area: float) -> tuple[float, float, float]:
+    """(nominal, lightest, heaviest plausible) mass in kg of the piece: the chosen material's
+    nominal and heaviest (`estimate_mass`), the lightest over the materials at least
+    `ALT_MIN` likely (each at the low end of its density range)."""
+    mass, low, high = estimate_mass(mat.name, volume, area)
+    for m, p in mat.posterior.items():
+        if p >= ALT_MIN:
+            low = min(low, estimate_mass(m, volume, area)[1])
+    return mass, low, high
 
 
 def lift_mass(mass: float, high: float) -> float:
@@ -441,4 +441,4 @@ def lift_mass(mass: float, high: float) -> float:
     return high if mass <= LIFTABLE < high else mass
 
 
-__all__ = ["PerceivedObject", "lift_mass", "lightest_mass", "perceive_instance", "perceive_objects"]
+__all__ = ["PerceivedObject", "lift_mass", "mass_range", "perceive_instance", "perceive_objects"]
