@@ -7,7 +7,10 @@ fewest affordance facts (the rules decide what "promises less" means: a support 
 fragile carries less than a sturdy one, a heavier mass class is lifted by fewer grasps and
 rests on fewer supports, a material that rules out a grasp gives fewer). Ties keep the
 reported value. A scene the cautious values make unsolvable is planned with the likely
-values instead, and that is marked (`DoubtfulPlan.fell_back`).
+values instead, and that is marked (`DoubtfulPlan.fell_back`); one the likely values leave
+unsolvable too is planned hoping (`DoubtfulPlan.hoped`): every attribute at the value that
+promises most, and every fact some reading allows (`hoped_facts`) -- the plan the closed
+loop would test by acting, played open loop.
 
 An alternative is applied by `with_value`: ``material``, ``mass`` (kg) and ``robustness``
 replace the type's field; an alternative that is a whole `ObjectType` replaces the type's
@@ -175,13 +178,19 @@ def _with_type(planning: Scene, t: ObjectType) -> Scene:
 @dataclass(frozen=True)
 class DoubtfulPlan:
     """How doubt was handled: the doubts planned cautiously, or (`fell_back`) the doubts
-    whose cautious values made the goal unsolvable, so the likely values were planned."""
+    whose cautious values made the goal unsolvable, so the likely values were planned, or
+    (`hoped`) the likely values left it unsolvable too, so the values that promise most
+    (`doubts`: those taken) and the facts of every reading of the sizes were planned."""
 
     doubts: tuple[Doubt, ...] = ()
     fell_back: bool = False
+    hoped: bool = False
 
     def note(self) -> str:
         """A one-line account for a result row ("" if no attribute was in doubt)."""
+        if self.hoped:
+            what = "; ".join(map(str, self.doubts)) or "sizes"
+            return f"likely values unsolvable, planned hoping ({what})"
         if not self.doubts:
             return ""
         what = "; ".join(map(str, self.doubts))

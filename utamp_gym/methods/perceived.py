@@ -36,7 +36,7 @@ from utamp_gym.backend import DEFAULT_BACKEND, DEFAULT_POSE_NOISE, backend_facto
 from utamp_gym.contract.perceiver import PerceivedAttributes, Perceiver, PerceptionRequest
 from utamp_gym.errors import UtampError
 from utamp_gym.methods.attributes import ATTRIBUTES
-from utamp_gym.methods.doubt import DOUBT_THRESHOLD, DoubtfulPlan, cautious_types
+from utamp_gym.methods.doubt import DOUBT_THRESHOLD, DoubtfulPlan, cautious_types, hoped_facts
 from utamp_gym.methods.perceivers import PERCEIVED, BuiltinPerceiver
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.catalogue import ObjectType
@@ -309,38 +309,48 @@ def plan_seen(
 ) -> tuple[PlanOutcome, PerceivedScene]:
     """Plan `scene` with the affordances of a perceived scene, cautiously where in doubt
     (`plan_perceived`); a goal the cautious values make unsolvable is planned with the
-    likely ones (marked in the returned scene's ``doubt``). The scores are the likely
-    values' (what was perceived), whichever values were planned with."""
+    likely ones, and one those leave unsolvable, hoping (`utamp_gym.methods.doubt`: the
+    values that promise most, and the facts some reading of the sizes allows); the returned
+    scene's ``doubt`` says which. The scores are the likely values' (what was perceived),
+    whichever values were planned with."""
+    likely = plan_affordances(ps.planning)
+    scores = ps.scores(likely, ground_truth_for(scene))  # perception, not caution
+
+    def attempt(planned: PerceivedScene, facts: frozenset[Fact]) -> PlanOutcome:
+        return plan_scene(
+            scene, PERCEIVED, seed=seed, timeout=timeout, search=search, deadline=deadline,
+            affordances=(planned.usable_facts(facts), scores),
+        )  # fmt: skip
+
     cautious, doubts = cautious_types(ps.planning, ps.types, ps.reports, doubt)
-    attempts: list[tuple[PerceivedScene, DoubtfulPlan]] = []
     if doubts:
-        seen = build_perceived_scene(scene, cautious)
-        attempts.append(
-            (
-                dataclasses.replace(
-                    ps, planning=seen.planning, types=seen.types, members=seen.members
-                ),
-                DoubtfulPlan(doubts),
-            )
-        )
-    attempts.append((ps, DoubtfulPlan(doubts, fell_back=bool(doubts))))
-    truth = ground_truth_for(scene)
-    scores = ps.scores(plan_affordances(ps.planning), truth)  # perception, not caution
-    planned, how = attempts[0]
-    for planned, how in attempts:  # noqa: B007 - the last one tried is returned
-        perceived = plan_affordances(planned.planning)
-        outcome = plan_scene(
-            scene,
-            PERCEIVED,
-            seed=seed,
-            timeout=timeout,
-            search=search,
-            deadline=deadline,
-            affordances=(planned.usable_facts(perceived), scores),
-        )
+        planned = _with_types(scene, ps, cautious)
+        outcome = attempt(planned, plan_affordances(planned.planning))
         if outcome.solved:
-            break
-    return outcome, dataclasses.replace(planned, doubt=how)
+            return outcome, dataclasses.replace(planned, doubt=DoubtfulPlan(doubts))
+    outcome = attempt(ps, likely)
+    fell_back = dataclasses.replace(ps, doubt=DoubtfulPlan(doubts, fell_back=bool(doubts)))
+    if outcome.solved:
+        return outcome, fell_back
+    hopeful, hopes = cautious_types(ps.planning, ps.types, ps.reports, doubt, hopeful=True)
+    planned = _with_types(scene, ps, hopeful) if hopes else ps
+    facts = plan_affordances(planned.planning) | hoped_facts(
+        planned.planning, planned.types, ps.reports
+    )
+    if facts == likely:  # nothing to hope for: the likely values' verdict stands
+        return outcome, fell_back
+    hoped = attempt(planned, facts)
+    if not hoped.solved:
+        return outcome, fell_back
+    return hoped, dataclasses.replace(planned, doubt=DoubtfulPlan(hopes, hoped=True))
+
+
+def _with_types(
+    scene: Scene, ps: PerceivedScene, types: Mapping[str, ObjectType]
+) -> PerceivedScene:
+    """`ps` planned with other `types` (object -> type), its reports kept."""
+    seen = build_perceived_scene(scene, types)
+    return dataclasses.replace(ps, planning=seen.planning, types=seen.types, members=seen.members)
 
 
 def run_perceived_episode(
