@@ -145,3 +145,42 @@ def test_a_fact_between_two_objects_is_hoped_for_under_both_their_readings() -> 
         assert fact not in hoped_facts(ps.planning, ps.types, {alone: report(alone)})
     both = {o: report(o) for o in ("obj3", "obj2")}
     assert fact in hoped_facts(ps.planning, ps.types, both)
+
+
+def test_hopes_when_the_likely_values_leave_the_goal_unsolvable() -> None:
+    """A tray read fragile for sure, with sturdy as its other reading: the 0.6 kg board
+    cannot rest on it, so neither caution nor the likely value plans; hoping does."""
+    scene, ps = _seen("pick-place/000", "tray", "robustness", 0.9, ("sturdy",))
+    fragile = ps.types["tray"]._replace(robustness="fragile")
+    ps = _perceived_as(scene, ps, "tray", fragile)
+    outcome, planned = plan_seen(scene, dataclasses.replace(ps, reports={}))
+    assert not outcome.solved and not planned.doubt.hoped  # nothing to hope with
+    outcome, planned = plan_seen(scene, ps)
+    assert outcome.solved and planned.doubt.hoped and not planned.doubt.fell_back
+    assert planned.types["tray"].robustness == "sturdy"
+    assert planned.doubt.note().startswith("likely values unsolvable, planned hoping (tray.")
+
+
+def test_hopes_for_the_facts_of_another_reading_of_the_sizes() -> None:
+    """train/0126: a tumbler read 0.7 mm a side too wide no longer stands on the inverted
+    mug's base, and the goal needs it to; the narrower reading hopes for it again."""
+    scene = resolve_scene("procedural-v1/train/0126")
+    declared = {o.name: scene.type_of(o.name) for o in scene.objects}
+    wide = size_readings(declared["obj3"])[1]
+    ps = build_perceived_scene(scene, {**declared, "obj3": wide})
+    outcome, planned = plan_seen(scene, ps)
+    assert not outcome.solved and not planned.doubt.hoped
+    reports = {
+        "obj3": PerceivedAttributes(ps.types["obj3"], {}, {"member_size": size_readings(wide)})
+    }
+    outcome, planned = plan_seen(scene, dataclasses.replace(ps, reports=reports))
+    assert outcome.solved and planned.doubt.hoped and planned.doubt.doubts == ()
+    assert planned.types["obj3"] == ps.types["obj3"]  # hoping does not choose a reading
+    assert planned.doubt.note() == "likely values unsolvable, planned hoping (sizes)"
+
+
+def _perceived_as(scene: Scene, ps: PerceivedScene, obj: str, t: Any) -> PerceivedScene:
+    """`ps` with `obj` perceived as `t` (its reports kept, their type replaced)."""
+    seen = build_perceived_scene(scene, {**{o: ps.types[o] for o in ps.types}, obj: t})
+    reports = {o: dataclasses.replace(r, type=seen.types[o]) for o, r in ps.reports.items()}
+    return dataclasses.replace(seen, reports=reports)
