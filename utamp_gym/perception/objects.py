@@ -16,8 +16,10 @@ then need and no camera sees is filled in by stated assumptions:
   (turned over onto its opening: a mug, a pot), inside walls as thick as its material's;
 * a flat top at least `FOOD_SURFACE` wide both ways is a **food surface** (boards, trays,
   plates: never put face-down);
-* a body thinner than `THIN_TOP` has a **thin** top (a spatula's blade: nothing rests on
-  it); a box body lower than `THIN_SIDE` has **thin** sides, a round body round ones;
+* a body thinner than `THIN_TOP` has a **thin** top where it is narrower than
+  `FOOD_SURFACE` (a spatula's blade: nothing rests on it; a slab as thin and wider is a
+  board that carries things); a box body lower than `THIN_SIDE` has **thin** sides, a
+  round body round ones;
 * a narrow part standing on the body's top (a bottle's neck) makes the top **pointy**;
 * a rim (an open, concave or well top) on a body too wide for the hand is offered as
   **edges**: a box's (a tray's sides, standing on the table) on the two sides across from
@@ -72,8 +74,9 @@ from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
 
 FOOD_SURFACE = 0.12  # m: a flat top at least this wide both ways is a food surface
-THIN_TOP = 0.0125  # m: a body thinner than this has a thin top (a spatula's blade, 6-12 mm;
-#: chopping boards are 12-40 mm thick)
+THIN_TOP = 0.0125  # m: a body thinner than this has a thin top where narrower than
+#: FOOD_SURFACE (a spatula's blade, 6-12 mm thick, 55-90 mm wide; chopping boards are 12-40
+#: mm thick, and wider)
 THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
@@ -195,9 +198,9 @@ def _top_part(obj: PerceivedObject, body: Box, bbox: Box, inverted: bool) -> Par
     if necked:
         return PartAttrs("pointy")
     shape = top.shape
-    if shape == "flat" and sh.body.box.size[2] < THIN_TOP:
-        return PartAttrs("thin")
     size = _fit2(top.size, bbox, part)
+    if shape == "flat" and sh.body.box.size[2] < THIN_TOP and min(size) < FOOD_SURFACE:
+        return PartAttrs("thin")
     height: float | None = None
     center: tuple[float, float] | None = None
     if shape == "flat" and top.height < sh.body.box.hi[2] - 0.004:  # a well inside a rim
