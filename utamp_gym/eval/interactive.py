@@ -20,8 +20,9 @@ Then the robot's own actions are its measurements:
   again (a new survey, perceived afresh: what moved since may have uncovered members and
   rims) and the attributes that block the goal — the doubts planned cautiously — take their
   likely values; the next look hopes: every attribute at the value that promises most, and
-  every fact some reading of the sizes of the objects it concerns allows (`hoped_facts`),
-  for the acts to test; only when that still leaves the goal unsolvable does it give up.
+  every fact some alternative the perceiver offers for the objects it concerns allows
+  (`hoped_facts`: a size reading, a lighter mass), for the acts to test; only when that
+  still leaves the goal unsolvable does it give up.
 
 After every revision the policy replans from the revised beliefs. `n_weighings` and
 `n_looks` count the measurements of the episode (`ClosedLoopResult`, the eval row).
@@ -29,6 +30,8 @@ After every revision the policy replans from the revised beliefs. `n_weighings` 
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import re
 from collections.abc import Mapping
 from typing import Any
@@ -37,7 +40,7 @@ from utamp_gym.affordances.facts import Fact
 from utamp_gym.affordances.sources import plan_affordances
 from utamp_gym.agents.planner import PlannerPolicy
 from utamp_gym.backend import Surveying
-from utamp_gym.contract.perceiver import Perceiver
+from utamp_gym.contract.perceiver import PerceivedAttributes, Perceiver
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.errors import PlanningError
 from utamp_gym.methods.doubt import DOUBT_THRESHOLD, Doubt, cautious_types, hoped_facts
@@ -92,7 +95,7 @@ class InteractivePerception:
         self.beliefs: dict[str, ObjectType] = {}  # object -> believed (perceived) type
         self.doubts: tuple[Doubt, ...] = ()  # planned at their cautious values
         self.untested: set[str] = set()  # objects whose lighter mass is a hypothesis
-        self.hoping = False  # also believe what some reading of the sizes allows
+        self.hoping = False  # also believe what some alternative allows (`hoped_facts`)
         self.weighed: dict[str, float] = {}  # object -> kg it weighs at least (torques)
         self.withdrawn: set[Fact] = set()  # declared-name facts refuted by the robot's acts
         self.revisions: list[str] = []  # what was learnt, in order
@@ -150,7 +153,24 @@ class InteractivePerception:
             if obj in self.beliefs and kg > self.beliefs[obj].mass:
                 self.beliefs[obj] = self.beliefs[obj]._replace(mass=kg)
                 self.untested.discard(obj)
+        if self.hoping:
+            self.untested |= self._lifted_if_lighter()
         self._believe()
+
+    def _lifted_if_lighter(self) -> set[str]:
+        """The objects only a lighter mass alternative lets the arm lift (hoped for, so
+        their lift weighs them)."""
+        assert self.seen is not None
+        ps = build_perceived_scene(self.seen.declared, self.beliefs)
+        sure = plan_affordances(ps.planning)
+        out = set()
+        for obj, report in self.seen.reports.items():
+            lighter = {"mass": self._hoped(obj, report).alternatives.get("mass", ())}
+            only = {obj: dataclasses.replace(report, alternatives=lighter)}
+            hoped = hoped_facts(ps.planning, ps.types, only) - sure
+            if obj in ps.types and any(f[:2] == ("canLift", ps.types[obj].name) for f in hoped):
+                out.add(obj)
+        return out
 
     def _look_at_blockers(self) -> bool:
         """No plan from the beliefs: look again (module docstring); False to give up. The
@@ -220,20 +240,39 @@ class InteractivePerception:
                 return
 
     def _facts(self) -> frozenset[Fact]:
-        """The facts believed: the believed types' and, hoping, those some reading of the
-        sizes of the objects they concern allows (`hoped_facts`), in the declared names."""
+        """The facts believed: the believed types' and, hoping, those some alternative the
+        perceiver offers for the objects they concern allows (`hoped_facts`; a mass below
+        what the arm weighed is no longer one), in the declared names."""
         assert self.seen is not None
         ps = build_perceived_scene(self.seen.declared, self.beliefs)
         facts = plan_affordances(ps.planning)
         if self.hoping:
-            facts |= hoped_facts(ps.planning, ps.types, self.seen.reports)
+            reports = {obj: self._hoped(obj, r) for obj, r in self.seen.reports.items()}
+            facts |= hoped_facts(ps.planning, ps.types, reports)
         return ps.usable_facts(facts)
+
+    def _hoped(self, obj: str, report: PerceivedAttributes) -> PerceivedAttributes:
+        """`report` without the mass alternatives lighter than what the arm weighed."""
+        if obj not in self.weighed:
+            return report
+        masses = tuple(
+            v for v in report.alternatives.get("mass", ()) if _kg(v) >= self.weighed[obj]
+        )
+        return dataclasses.replace(report, alternatives={**report.alternatives, "mass": masses})
 
     def _believe(self, facts: frozenset[Fact] | None = None) -> None:
         """Plan from the believed facts (`facts`: `_facts()` if already computed for the
         current beliefs) less those the acts refuted."""
         facts = self._facts() if facts is None else facts
         self.policy.believe(self.env.scene.name, facts - self.withdrawn)
+
+
+def _kg(value: Any) -> float:
+    """A mass alternative in kg (inf if it is not a number: not lighter than anything)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.inf
 
 
 __all__ = ["MAX_LOOKS", "InteractivePerception"]

@@ -19,9 +19,10 @@ members, shapes, surfaces, sizes), and keeps the material, mass and robustness.
 
 Some readings are not ordered by promise (`READINGS`: ``member_size``, the body read a
 little narrower or wider: a narrower one fits into the hand and onto more supports, a wider
-one carries more). Hoping, they are not chosen between: every fact that holds under some
-reading of the objects it concerns is hoped for (`hoped_facts`), for the robot's acts to
-test.
+one carries more), and some alternatives promise other things (a mass light enough to lift,
+a heavier one the rules let the arm slide). Hoping, they are not chosen between: every fact
+that holds under some alternative of the objects it concerns is hoped for (`hoped_facts`),
+for the robot's acts to test.
 """
 
 from __future__ import annotations
@@ -143,24 +144,28 @@ def hoped_facts(
     reports: Mapping[str, PerceivedAttributes],
     affordances: Callable[[Scene], frozenset[Fact]] = plan_affordances,
 ) -> frozenset[Fact]:
-    """The facts of `planning` that hold under some reading (`READINGS` alternatives) of
-    the objects they concern, one object or two at a time (`types`: object -> its type as
-    in `planning`): what may hold within the perceiver's reading error — a fact concerns at
-    most two objects, so this is every fact some joint reading allows (the facts of the
-    reported readings themselves are not included)."""
+    """The facts of `planning` that hold under some alternative the perceiver offers for
+    the objects they concern (`types`: object -> its type as in `planning`): under each
+    alternative of each attribute, one object at a time (a mass light enough to lift and
+    the heavier one that may be slid), and under the `READINGS` alternatives two objects at
+    a time -- a fact concerns at most two objects, so this is every fact some joint reading
+    of the sizes allows (the facts of the reported values themselves are not included)."""
+    singles: list[ObjectType] = []
     readings: dict[str, list[ObjectType]] = {}
     for obj, report in reports.items():
         if obj not in types:
             continue
-        for attribute in READINGS:
-            for value in report.alternatives.get(attribute, ()):
+        for attribute, values in report.alternatives.items():
+            for value in values:
                 t = with_value(types[obj], attribute, value)
-                if t is not None and t != types[obj]:
+                if t is None or t == types[obj]:
+                    continue
+                singles.append(t)
+                if attribute in READINGS:
                     readings.setdefault(obj, []).append(t)
     out: set[Fact] = set()
-    for alts in readings.values():
-        for t in alts:
-            out |= affordances(_with_type(planning, t))
+    for t in singles:
+        out |= affordances(_with_type(planning, t))
     for a, b in itertools.combinations(readings, 2):
         for ta, tb in itertools.product(readings[a], readings[b]):
             out |= affordances(_with_type(_with_type(planning, ta), tb))
