@@ -30,6 +30,7 @@ from utamp_gym.methods.perceived import align_members, attribute_accuracy
 from utamp_gym.perception.confidence import (
     CALIBRATION_FILE,
     SIZE_COVERAGE,
+    SURFACE_COVERAGE,
     Calibration,
     mass_class,
     raw_confidences,
@@ -74,6 +75,7 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
                           "members": len(seen.members) - 1},
             "covered": p.shape.covered, "raw": raw, "alternatives": alts,
             "right": right, "accuracy": acc, "body_error": body_error(seen, declared),
+            "surface_error": surface_error(seen, declared),
         })  # fmt: skip
     return rows
 
@@ -84,18 +86,32 @@ def body_error(seen: ObjectType, declared: ObjectType) -> list[float]:
     return [round(((a.max[k] - a.min[k]) - (b.max[k] - b.min[k])) / 2, 6) for k in (0, 1)]
 
 
-def size_error(rows: list[dict[str, object]]) -> dict[str, float]:
-    """The body's reading error per side: the `SIZE_COVERAGE` quantile of its magnitude on
-    the even-numbered scenes, rounded up to 0.1 mm (the perceiver's ``SIZE_ERROR``), its
-    signed median there, and the share of the odd-numbered scenes' readings it covers."""
+def surface_error(seen: ObjectType, declared: ObjectType) -> list[float]:
+    """m: how much wider than declared each sized top or bottom surface (a flat face, a
+    well, an opening) was read, per side, along x and y, where it was read as that shape."""
+    out: list[float] = []
+    for part in ("on", "under"):
+        a, b = seen.parts[part], declared.parts[part]
+        if a.shape == b.shape and a.size is not None and b.size is not None:
+            out += [round((a.size[k] - b.size[k]) / 2, 6) for k in (0, 1)]
+    return out
+
+
+def size_error(
+    rows: list[dict[str, object]], key: str = "body_error", quantile: float = SIZE_COVERAGE
+) -> dict[str, float]:
+    """A reading error per side (`key`: the body's, ``surface_error`` the surfaces'): the
+    `quantile` of its magnitude on the even-numbered scenes, rounded up to 0.1 mm (the
+    perceiver's ``SIZE_ERROR``, ``SURFACE_ERROR``), its signed median there, and the share
+    of the odd-numbered scenes' readings it covers."""
     errors = {
-        parity: np.array([e for r in rows if _index(r) % 2 == parity for e in r["body_error"]])  # type: ignore[attr-defined]
+        parity: np.array([e for r in rows if _index(r) % 2 == parity for e in r[key]])  # type: ignore[attr-defined]
         for parity in (0, 1)
     }
     fit, held = errors[0], np.abs(errors[1])
-    bound = math.ceil(float(np.quantile(np.abs(fit), SIZE_COVERAGE)) * 1e4 - 1e-6) / 1e4
+    bound = math.ceil(float(np.quantile(np.abs(fit), quantile)) * 1e4 - 1e-6) / 1e4
     return {
-        "quantile": SIZE_COVERAGE, "metres": bound, "median_signed": float(np.median(fit)),
+        "quantile": quantile, "metres": bound, "median_signed": float(np.median(fit)),
         "held_out_covered": float(np.mean(held <= bound + 1e-9)),
     }  # fmt: skip
 
@@ -153,6 +169,16 @@ def _markdown(payload: dict[str, object]) -> str:
         f"even-numbered scenes' readings are within **{1000 * size['metres']:.2f} mm** "  # type: ignore[index]
         f"(`perception.confidence.SIZE_ERROR`), which covers {size['held_out_covered']:.1%} "  # type: ignore[index]
         "of the odd-numbered ones'.",
+    ]
+    size = payload["surface_error"]
+    lines += [
+        "",
+        "Top and bottom surfaces (a flat face, a well, an opening; read as the declared "
+        "shape): per side along x and y, read "
+        f"{1000 * size['median_signed']:+.2f} mm wider than declared at the median; "  # type: ignore[index]
+        f"{size['quantile']:.0%} of the even-numbered scenes' readings are within "  # type: ignore[index]
+        f"**{1000 * size['metres']:.2f} mm** (`perception.confidence.SURFACE_ERROR`), which "  # type: ignore[index]
+        f"covers {size['held_out_covered']:.1%} of the odd-numbered ones'.",  # type: ignore[index]
     ]
     kept = ", ".join(payload["calibrated_attributes"]) or "none"  # type: ignore[arg-type]
     for label, key in (("raw", "reliability_raw"), (f"shipped (maps for {kept})", "reliability")):
@@ -222,6 +248,7 @@ def main() -> None:
         "reliability": reliability(held, cal),
         "calibrated_attributes": kept,
         "size_error": size_error(rows),
+        "surface_error": size_error(rows, "surface_error", SURFACE_COVERAGE),
         "calibration": cal.to_json(),
     }  # fmt: skip
     md = _markdown(payload)

@@ -12,7 +12,7 @@ from utamp_gym.affordances.sources import plan_affordances
 from utamp_gym.contract.perceiver import PerceivedAttributes
 from utamp_gym.methods.doubt import DOUBT_THRESHOLD, cautious_types, hoped_facts, with_value
 from utamp_gym.methods.perceived import PerceivedScene, build_perceived_scene, plan_seen
-from utamp_gym.perception.confidence import size_readings
+from utamp_gym.perception.confidence import size_readings, surface_readings
 from utamp_gym.scene.model import Scene
 from utamp_gym.suites import resolve_scene
 
@@ -177,6 +177,24 @@ def test_hopes_for_the_facts_of_another_reading_of_the_sizes() -> None:
     assert outcome.solved and planned.doubt.hoped and planned.doubt.doubts == ()
     assert planned.types["obj3"] == ps.types["obj3"]  # hoping does not choose a reading
     assert planned.doubt.note() == "likely values unsolvable, planned hoping (sizes)"
+
+
+def test_hopes_for_the_facts_of_another_reading_of_a_surface() -> None:
+    """train/0056: a plate's well read 1.2 mm a side too narrow no longer carries the food
+    box the goal stands on it; the wider reading of the well hopes for it again."""
+    scene = resolve_scene("procedural-v1/train/0056")
+    declared = {o.name: scene.type_of(o.name) for o in scene.objects}
+    narrow = surface_readings(declared["obj1"])[0]
+    ps = build_perceived_scene(scene, {**declared, "obj1": narrow})
+    fact = ("isP2PSupportive", "on", "obj1-seen", "on", "obj2-seen")
+    assert fact not in plan_affordances(ps.planning)
+    outcome, planned = plan_seen(scene, ps)
+    assert not outcome.solved
+    readings = {"surface": surface_readings(narrow)}
+    reports = {"obj1": PerceivedAttributes(ps.types["obj1"], {}, readings)}
+    assert fact in hoped_facts(ps.planning, ps.types, reports)
+    outcome, planned = plan_seen(scene, dataclasses.replace(ps, reports=reports))
+    assert outcome.solved and planned.doubt.hoped
 
 
 def _perceived_as(scene: Scene, ps: PerceivedScene, obj: str, t: Any) -> PerceivedScene:

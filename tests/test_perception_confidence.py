@@ -15,6 +15,8 @@ from utamp_gym.perception.confidence import (
     MASS_BOUNDS,
     SIZE_COVERAGE,
     SIZE_ERROR,
+    SURFACE_COVERAGE,
+    SURFACE_ERROR,
     Calibration,
     isotonic_knots,
     mass_class,
@@ -22,6 +24,7 @@ from utamp_gym.perception.confidence import (
     packaged_calibration,
     raw_confidences,
     size_readings,
+    surface_readings,
 )
 from utamp_gym.perception.material import MaterialEstimate
 from utamp_gym.perception.objects import SLAB_EDGE, SLAB_EDGE_INSET, PerceivedObject, _edges
@@ -116,10 +119,28 @@ def test_size_readings_narrow_and_widen_the_body_by_the_reading_error() -> None:
     assert size_readings(thin)[0] == thin  # no narrower reading of a 2 mm slab
 
 
-def test_the_reading_error_is_the_one_measured_on_train() -> None:
+def test_surface_readings_narrow_and_widen_the_top_and_bottom_surfaces_only() -> None:
+    t = resolve_scene("procedural-v1/train/0056").type_of("obj1")  # a plate: a well on top
+    narrow, wide = surface_readings(t)
+    for read, sign in ((narrow, -1), (wide, 1)):
+        assert read.members == t.members  # the body's outline stays
+        for part, attrs in t.parts.items():
+            if attrs.size is None:
+                assert read.parts[part] == attrs
+            else:
+                grown = np.subtract(read.parts[part].size, attrs.size)
+                np.testing.assert_allclose(grown, [2 * sign * SURFACE_ERROR] * 2)
+                assert read.parts[part]._replace(size=attrs.size) == attrs
+    unsized = t._replace(parts={p: a._replace(size=None) for p, a in t.parts.items()})
+    assert surface_readings(unsized) == ()
+
+
+def test_the_reading_errors_are_the_ones_measured_on_train() -> None:
     page = json.loads((ROOT / "docs" / "results" / "perceiver-train.json").read_text())
     measured = page["size_error"]
     assert measured["quantile"] == SIZE_COVERAGE and measured["metres"] == SIZE_ERROR
+    measured = page["surface_error"]
+    assert measured["quantile"] == SURFACE_COVERAGE and measured["metres"] == SURFACE_ERROR
 
 
 def test_the_builtin_perceiver_offers_the_size_readings() -> None:
@@ -128,3 +149,5 @@ def test_the_builtin_perceiver_offers_the_size_readings() -> None:
     report = _attributes(obj, "cup", "upright")
     assert report.alternatives["member_size"] == size_readings(report.type)
     assert report.confidence_of("member_size") == SIZE_COVERAGE
+    assert report.alternatives["surface"] == surface_readings(report.type) != ()
+    assert report.confidence_of("surface") == SURFACE_COVERAGE

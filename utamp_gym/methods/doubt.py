@@ -19,10 +19,10 @@ members, shapes, surfaces, sizes), and keeps the material, mass and robustness.
 
 Some readings are not ordered by promise (`READINGS`: ``member_size``, the body read a
 little narrower or wider: a narrower one fits into the hand and onto more supports, a wider
-one carries more), and some alternatives promise other things (a mass light enough to lift,
-a heavier one the rules let the arm slide). Hoping, they are not chosen between: every fact
-that holds under some alternative of the objects it concerns is hoped for (`hoped_facts`),
-for the robot's acts to test.
+one carries more; ``surface``, a top or bottom surface read so), and some alternatives
+promise other things (a mass light enough to lift, a heavier one the rules let the arm
+slide). Hoping, they are not chosen between: every fact that holds under some alternative
+of the objects it concerns is hoped for (`hoped_facts`), for the robot's acts to test.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from utamp_gym.scene.model import Scene
 DOUBT_THRESHOLD = 0.8
 SCALAR = ("material", "mass", "robustness")
 #: attributes whose alternatives are readings no one of which promises most (docstring)
-READINGS = ("member_size",)
+READINGS = ("member_size", "surface")
 
 
 @dataclass(frozen=True)

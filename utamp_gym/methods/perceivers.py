@@ -24,9 +24,14 @@ from utamp_gym.contract.perceiver import PerceivedAttributes, Perceiver, Percept
 from utamp_gym.errors import EndpointError, UtampError
 from utamp_gym.methods.vlm import prompt
 from utamp_gym.methods.vlm_client import VlmClient, extract_json, image_part
-from utamp_gym.perception.confidence import SIZE_COVERAGE, size_readings
+from utamp_gym.perception.confidence import (
+    SIZE_COVERAGE,
+    SURFACE_COVERAGE,
+    size_readings,
+    surface_readings,
+)
 from utamp_gym.perception.objects import PerceivedObject, perceive_objects
-from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES
+from utamp_gym.scene.catalogue import ROBUSTNESS, SHAPES, ObjectType
 from utamp_gym.scene.geometry import SIDES
 
 PERCEIVED = "utamp2-perceived"
@@ -44,17 +49,29 @@ def _attributes(obj: PerceivedObject, name: str, orientation: str) -> PerceivedA
     where it is below the reported one and the others (the perceiver reports the heaviest
     plausible where that decides a lift; a light reading is what the closed loop hopes for
     and then weighs);
-    the sizes are offered a reading error narrower and wider (`confidence.size_readings`)."""
+    the sizes are offered a reading error narrower and wider (`_readings`)."""
     t = obj.as_type(name, orientation)
     alternatives = dict(getattr(obj, "alternatives", None) or {})
     masses = tuple(alternatives.get("mass", ()))
     if obj.mass_low < min((obj.mass, *masses)):  # the lightest plausible, last
         alternatives["mass"] = (*masses, round(obj.mass_low, 4))
     confidence = dict(getattr(obj, "confidence", None) or {})
-    if "member_size" not in alternatives:  # the body's reading error (`size_readings`)
-        alternatives["member_size"] = size_readings(t)
-        confidence.setdefault("member_size", SIZE_COVERAGE)
+    for attribute, (p, alts) in _readings(t).items():  # the sizes' reading errors
+        if attribute not in alternatives:
+            alternatives[attribute] = alts
+            confidence.setdefault(attribute, p)
     return PerceivedAttributes(t, confidence, alternatives)
+
+
+def _readings(t: ObjectType) -> dict[str, tuple[float, tuple[ObjectType, ...]]]:
+    """Attribute -> (confidence, alternatives) of the built-in geometry's reading errors:
+    the body's (`confidence.size_readings`) and the top and bottom surfaces'
+    (`confidence.surface_readings`, where `t` has any)."""
+    out = {"member_size": (SIZE_COVERAGE, size_readings(t))}
+    surfaces = surface_readings(t)
+    if surfaces:
+        out["surface"] = (SURFACE_COVERAGE, surfaces)
+    return out
 
 
 class BuiltinPerceiver:
@@ -139,12 +156,12 @@ def _with_answer(
             parts[side] = parts[side]._replace(shape=shape, food_surface=food)
     material = str(entry.get("material", t.material)).lower()
     answered = t._replace(mass=mass, robustness=robustness, material=material, parts=parts)
-    if "member_size" not in seen.alternatives:  # what the VLM answers is taken as certain
-        return PerceivedAttributes(answered)
-    return PerceivedAttributes(  # the built-in geometry keeps its reading error
+    # what the VLM answers is taken as certain; the built-in geometry keeps its reading errors
+    kept = {a: r for a, r in _readings(answered).items() if a in seen.alternatives}
+    return PerceivedAttributes(
         answered,
-        {"member_size": seen.confidence_of("member_size")},
-        {"member_size": size_readings(answered)},
+        {a: seen.confidence_of(a) for a in kept},
+        {a: alts for a, (_, alts) in kept.items()},
     )
 
 

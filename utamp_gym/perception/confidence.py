@@ -20,8 +20,11 @@ with keys from `utamp_gym.methods.attributes.ATTRIBUTES`:
   `SIZE_COVERAGE` (measured on procedural-v1/train by `benchmarks/perceiver_train.py`); the
   alternatives are the type read that much narrower and that much wider (`size_readings`).
   Neither promises more than the other — a narrower body fits into the hand and onto more
-  supports, a wider one carries more — so the closed loop hopes for the facts of either
-  (`utamp_gym.methods.doubt.hoped_facts`).
+  supports, a wider one carries more — so hoping believes the facts of either
+  (`utamp_gym.methods.doubt.hoped_facts`);
+* **surface**: likewise the top and bottom surfaces (a flat face, a well, an opening), read
+  within `SURFACE_ERROR` a side with probability `SURFACE_COVERAGE`; the alternatives are
+  the type with them read that much narrower and wider (`surface_readings`).
 
 The raw values are then mapped through monotone calibration maps fitted on
 procedural-v1/train renders (`benchmarks/perceiver_train.py`, isotonic regression of
@@ -56,6 +59,13 @@ SIZE_COVERAGE = 0.9
 #: procedural-v1/train scenes, rounded up to 0.1 mm (docs/results/perceiver-train.json
 #: ``size_error``; a test checks it)
 SIZE_ERROR = 0.0007
+#: the share of top and bottom surface readings (a flat face, a well, an opening) within
+#: `SURFACE_ERROR` a side of the declared size
+SURFACE_COVERAGE = 0.9
+#: m a side: the `SURFACE_COVERAGE` quantile of the surfaces' reading error on the
+#: even-numbered procedural-v1/train scenes, rounded up to 0.1 mm
+#: (docs/results/perceiver-train.json ``surface_error``; a test checks it)
+SURFACE_ERROR = 0.0012
 
 
 def mass_class(mass: float) -> int:
@@ -135,6 +145,25 @@ def size_readings(t: ObjectType, error: float = SIZE_ERROR) -> tuple[ObjectType,
     """`t` with its body read `error` narrower, and wider, on every side along x and y (the
     parts' declared sizes with it); a side too thin to narrow stays."""
     return _widened(t, -error), _widened(t, error)
+
+
+def surface_readings(t: ObjectType, error: float = SURFACE_ERROR) -> tuple[ObjectType, ...]:
+    """`t` with its sized top and bottom surfaces (`PartAttrs.size`: a flat face, a well,
+    an opening) read `error` narrower, and wider, on every side; () if it has none. The
+    body stays: a well's rim or an opening's wall is read apart from the body's outline."""
+    sized = [p for p in ("on", "under") if t.parts[p].size is not None]
+    if not sized:
+        return ()
+
+    def read(d: float) -> ObjectType:
+        parts = dict(t.parts)
+        for p in sized:
+            w, h = t.parts[p].size  # type: ignore[misc]
+            size = (max(w + 2 * d, MIN_EXTENT), max(h + 2 * d, MIN_EXTENT))
+            parts[p] = parts[p]._replace(size=(round(size[0], 6), round(size[1], 6)))
+        return t._replace(parts=parts)
+
+    return read(-error), read(error)
 
 
 def _widened(t: ObjectType, d: float) -> ObjectType:
@@ -221,6 +250,8 @@ __all__ = [
     "MASS_BOUNDS",
     "SIZE_COVERAGE",
     "SIZE_ERROR",
+    "SURFACE_COVERAGE",
+    "SURFACE_ERROR",
     "Calibration",
     "isotonic_knots",
     "mass_class",
@@ -228,4 +259,5 @@ __all__ = [
     "packaged_calibration",
     "raw_confidences",
     "size_readings",
+    "surface_readings",
 ]
