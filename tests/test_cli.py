@@ -75,6 +75,19 @@ def test_plan_json_and_out_dir(capsys, tmp_path: Path) -> None:
     assert "step 1" in err and "precondition" in err
 
 
+def test_a_perceived_plan_says_how_it_planned_what_was_in_doubt(capsys) -> None:
+    # train/0056: the plate's well read too narrow for the food box; the wider reading hopes
+    assert main(["plan", "procedural-v1/train/0056", "--method", "utamp2-perceived"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1] == "  (likely values unsolvable, planned hoping (sizes))"
+    assert out[2].startswith("  (pick-support ")
+    assert main(["plan", "procedural-v1/train/0056", "--method", "utamp2-perceived", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["solved"] and data["doubt"] == "likely values unsolvable, planned hoping (sizes)"
+    assert main(["plan", "kitchen-demo", "--json"]) == 0
+    assert "doubt" not in json.loads(capsys.readouterr().out)
+
+
 def test_plan_unsolvable_scene_exits_zero(capsys, tmp_path: Path, demo_dict) -> None:
     import tomli_w
 

@@ -28,11 +28,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     scene = resolve_scene(args.scene)
     args.method = args.method or default_method(scene.name)
     out = None if args.out is None else output_dir(args.out, "--out")
+    doubt = ""  # how the perceived attributes in doubt were planned (`DoubtfulPlan.note`)
     if args.method == "utamp2-perceived":  # looks at the scene first (renders it)
         # lazy: keeps `utamp --help` from loading utamp_gym.methods.perceived
         from utamp_gym.methods.perceived import plan_perceived
 
-        outcome = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)[0]
+        outcome, seen = plan_perceived(scene, args.seed, search=args.search, deadline=deadline)
+        doubt = "" if seen is None else seen.doubt.note()
     else:
         outcome = plan_scene(
             scene,
@@ -53,6 +55,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     explanation = _explain(scene, outcome) if args.explain and not outcome.solved else None
     if args.json:
         data = outcome.to_json()
+        if doubt:
+            data["doubt"] = doubt
         if args.explain:
             data["explanation"] = explanation
         print(json.dumps(data, indent=2))
@@ -63,6 +67,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             f"{scene.name} [{args.method}]: {outcome.plan_length} steps, "
             f"{outcome.planning_time_s * 1000:.1f} ms"
         )
+        if doubt:
+            print(f"  ({doubt})")
         for step in outcome.plan:
             print(f"  {step}")
     else:
