@@ -27,7 +27,13 @@ from utamp_gym.perception.confidence import (
     surface_readings,
 )
 from utamp_gym.perception.material import MaterialEstimate
-from utamp_gym.perception.objects import SLAB_EDGE, SLAB_EDGE_INSET, PerceivedObject, _edges
+from utamp_gym.perception.objects import (
+    SLAB_EDGE,
+    SLAB_EDGE_INSET,
+    THIN_TOP,
+    PerceivedObject,
+    _edges,
+)
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
@@ -91,6 +97,23 @@ def _slab(members: tuple = (), top: str = "flat") -> SeenShape:
     body = SeenMember("body", "", SeenBox((-0.15, -0.1, 0.0), (0.15, 0.1, 0.02)))
     return SeenShape(0.0, np.zeros(3), body, members, SeenTop(top, (0.3, 0.2), 0.02),
                      (0.3, 0.2), 0.0, 0.0012, 0.13, 0.0)  # fmt: skip
+
+
+def test_a_thin_top_is_a_narrow_blade_not_a_thin_board() -> None:
+    """A 12 mm board 30 x 20 cm carries things (train/0064's was read thin); a blade as
+    thin and 6 cm wide does not."""
+    wood = MaterialEstimate("wood", {"wood": 1.0})
+
+    def seen(width: float) -> SeenShape:
+        body = SeenMember("body", "", SeenBox((-0.15, -width / 2, 0.0), (0.15, width / 2, 0.012)))
+        top = SeenTop("flat", (0.3, width), 0.012)
+        return SeenShape(0.0, np.zeros(3), body, (), top, (0.3, width), 0.0, 0.0012, 0.13, 0.0)
+
+    board = PerceivedObject(1, seen(0.2), wood, 0.5, 0.5, 0.5, ()).as_type("b", "upright")
+    blade = PerceivedObject(1, seen(0.06), wood, 0.1, 0.1, 0.1, ()).as_type("s", "upright")
+    assert THIN_TOP > 0.012  # both are thinner than a thin top
+    assert board.parts["on"].shape == "flat" and board.parts["on"].food_surface
+    assert blade.parts["on"].shape == "thin"
 
 
 def test_a_bare_board_is_offered_its_end_strips_as_edges() -> None:
