@@ -26,6 +26,7 @@ of every allowed action physics failed. Writes ``<out>.json`` and ``<out>.md``.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 import time
@@ -94,7 +95,7 @@ def pick_refusal_kind(scene_name: str, action: str, reason: str, domain: str) ->
     _, obj, member, palm, f1, f2, *_ = action.strip("()").split()
     scene = resolve_scene(scene_name)
     t, part = scene.type_of(obj), member.removeprefix(f"{obj}-")
-    if f"(cangraspfrom {obj} {member} {palm} {f2} {f1})" in truth_atoms(scene, domain):
+    if f"(cangraspfrom {obj} {member} {palm} {f2} {f1})" in _truth(scene_name, domain):
         poses = [
             grasp_candidates(t, GraspSymbols(obj, part, palm, a, b), np.eye(4), prefer_x=_X)
             for a, b in ((f1, f2), (f2, f1))
@@ -105,6 +106,12 @@ def pick_refusal_kind(scene_name: str, action: str, reason: str, domain: str) ->
         return "side grasp"
     refusal = pick_refusal(t, part, palm, f1, f2, domain == "utamp2x")
     return "facts" if refusal is None else refusal.rule
+
+
+@functools.lru_cache(maxsize=64)
+def _truth(scene_name: str, domain: str) -> frozenset[str]:
+    """`truth_atoms` of a scene, once per scene (a report asks for it per forbidden pick)."""
+    return truth_atoms(resolve_scene(scene_name), domain)
 
 
 def sample_split(

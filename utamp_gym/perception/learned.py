@@ -190,19 +190,22 @@ class AttributeModel:
         z = (np.atleast_2d(x) - self.mean) / self.std
         return np.hstack([z, np.ones((len(z), 1))])
 
-    def material_experts(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    def material_experts(
+        self, x: np.ndarray, xb: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """The material experts' logits of feature rows `x`: the all-feature head's, the
-        appearance head's (None without one) and the hand-built log posterior."""
+        appearance head's (None without one) and the hand-built log posterior (`xb`: the
+        rows standardised, if already computed)."""
         x = np.atleast_2d(x)
-        xb = self._xb(x)
+        xb = self._xb(x) if xb is None else xb
         appearance = None
         if self.w_appearance is not None:
             appearance = np.hstack([xb[:, :N_APPEARANCE], xb[:, -1:]]) @ self.w_appearance
         return xb @ self.w_material, appearance, x[:, POSTERIOR]
 
-    def material_logits(self, x: np.ndarray) -> np.ndarray:
+    def material_logits(self, x: np.ndarray, xb: np.ndarray | None = None) -> np.ndarray:
         """The pooled material logits (before the temperature) of feature rows `x`."""
-        logits, appearance, posterior = self.material_experts(x)
+        logits, appearance, posterior = self.material_experts(x, xb)
         if appearance is not None and self.pool < 1.0:
             logits = self.pool * logits + (1.0 - self.pool) * appearance
         return logits + self.handbuilt * posterior
@@ -211,7 +214,7 @@ class AttributeModel:
         """The attributes of an object from its measurements (`measurements`)."""
         x = features(m)
         xb = self._xb(x)
-        pm = _softmax(self.material_logits(x) / self.t_material)[0]
+        pm = _softmax(self.material_logits(x, xb) / self.t_material)[0]
         pc = _softmax(xb @ self.w_mass_class / self.t_mass_class)[0]
         c = int(np.argmax(pc))
         lo = MASS_BOUNDS[c - 1] if c > 0 else 0.0
