@@ -116,6 +116,17 @@ def size_error(
     }  # fmt: skip
 
 
+def _error_lines(size: dict[str, float], what: str, constant: str) -> list[str]:
+    """The page's paragraph on one reading error (`size_error`'s result)."""
+    return [
+        "",
+        f"{what} {1000 * size['median_signed']:+.2f} mm wider than declared at the median; "
+        f"{size['quantile']:.0%} of the even-numbered scenes' readings are within "
+        f"**{1000 * size['metres']:.2f} mm** (`perception.confidence.{constant}`), which "
+        f"covers {size['held_out_covered']:.1%} of the odd-numbered ones'.",
+    ]
+
+
 def collect(cache: Path, limit: int | None) -> list[dict[str, object]]:
     return cached_rows(
         SUITE, cache, scene_rows, limit=limit, file_name=lambda n: n.replace("/", "_")
@@ -160,26 +171,17 @@ def _markdown(payload: dict[str, object]) -> str:
     lines += ["", "Material confusions (declared -> perceived: count):", ""]
     for k, v in payload["confusions"].items():  # type: ignore[attr-defined]
         lines.append(f"- {k}: {v}")
-    size = payload["size_error"]
-    lines += [
-        "",
-        "Body sizes: per side along x and y, the perceived body is read "
-        f"{1000 * size['median_signed']:+.2f} mm wider than declared at the median; "  # type: ignore[index]
-        f"{size['quantile']:.0%} of the "  # type: ignore[index]
-        f"even-numbered scenes' readings are within **{1000 * size['metres']:.2f} mm** "  # type: ignore[index]
-        f"(`perception.confidence.SIZE_ERROR`), which covers {size['held_out_covered']:.1%} "  # type: ignore[index]
-        "of the odd-numbered ones'.",
-    ]
-    size = payload["surface_error"]
-    lines += [
-        "",
+    lines += _error_lines(
+        payload["size_error"],  # type: ignore[arg-type]
+        "Body sizes: per side along x and y, the perceived body is read",
+        "SIZE_ERROR",
+    )
+    lines += _error_lines(
+        payload["surface_error"],  # type: ignore[arg-type]
         "Top and bottom surfaces (a flat face, a well, an opening; read as the declared "
-        "shape): per side along x and y, read "
-        f"{1000 * size['median_signed']:+.2f} mm wider than declared at the median; "  # type: ignore[index]
-        f"{size['quantile']:.0%} of the even-numbered scenes' readings are within "  # type: ignore[index]
-        f"**{1000 * size['metres']:.2f} mm** (`perception.confidence.SURFACE_ERROR`), which "  # type: ignore[index]
-        f"covers {size['held_out_covered']:.1%} of the odd-numbered ones'.",  # type: ignore[index]
-    ]
+        "shape): per side along x and y, read",
+        "SURFACE_ERROR",
+    )
     kept = ", ".join(payload["calibrated_attributes"]) or "none"  # type: ignore[arg-type]
     for label, key in (("raw", "reliability_raw"), (f"shipped (maps for {kept})", "reliability")):
         lines += [

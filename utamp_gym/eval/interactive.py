@@ -166,9 +166,11 @@ class InteractivePerception:
         out = set()
         for obj, report in self.seen.reports.items():
             lighter = {"mass": self._hoped(obj, report).alternatives.get("mass", ())}
+            if obj not in ps.types or not lighter["mass"]:
+                continue
             only = {obj: dataclasses.replace(report, alternatives=lighter)}
             hoped = hoped_facts(ps.planning, ps.types, only) - sure
-            if obj in ps.types and any(f[:2] == ("canLift", ps.types[obj].name) for f in hoped):
+            if any(f[:2] == ("canLift", ps.types[obj].name) for f in hoped):
                 out.add(obj)
         return out
 

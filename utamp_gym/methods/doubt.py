@@ -185,7 +185,7 @@ class DoubtfulPlan:
     """How doubt was handled: the doubts planned cautiously, or (`fell_back`) the doubts
     whose cautious values made the goal unsolvable, so the likely values were planned, or
     (`hoped`) the likely values left it unsolvable too, so the values that promise most
-    (`doubts`: those taken) and the facts of every reading of the sizes were planned."""
+    (`doubts`: those taken) and the facts of every alternative (`hoped_facts`) were planned."""
 
     doubts: tuple[Doubt, ...] = ()
     fell_back: bool = False

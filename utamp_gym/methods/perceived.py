@@ -310,7 +310,7 @@ def plan_seen(
     """Plan `scene` with the affordances of a perceived scene, cautiously where in doubt
     (`plan_perceived`); a goal the cautious values make unsolvable is planned with the
     likely ones, and one those leave unsolvable, hoping (`utamp_gym.methods.doubt`: the
-    values that promise most, and the facts some reading of the sizes allows); the returned
+    values that promise most, and the facts some alternative allows); the returned
     scene's ``doubt`` says which. The scores are the likely values' (what was perceived),
     whichever values were planned with."""
     likely = plan_affordances(ps.planning)
