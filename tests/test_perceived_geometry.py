@@ -203,3 +203,82 @@ def test_a_deep_plates_well_is_a_well_unless_its_outer_wall_flares(
     if shape == "flat":  # the well's floor, across the opening
         assert seen.height == pytest.approx(0.035 - depth)
         assert seen.size[0] == pytest.approx(0.124, abs=2 * cell)
+
+
+def _round_top(cell: float = 0.004) -> tuple[Grid, np.ndarray, np.ndarray]:
+    grid = Grid(np.array([-0.1, -0.1]), (50, 50), cell)
+    ij = np.indices(grid.shape).transpose(1, 2, 0)
+    r = np.linalg.norm((ij + 0.5) * cell - 0.1, axis=2)
+    return grid, r, r <= 0.094
+
+
+@pytest.mark.parametrize(
+    ("rim", "flared", "shape"),
+    [
+        (0.032, True, "flat"),  # a plate's ledge round a shallow well, however its wall reads
+        (0.004, False, "flat"),  # a thin rim round a shallow well, upright walls: a tray
+        (0.004, True, "open"),  # the same inside a flared wall: a pan (`shape` makes it a dish)
+    ],
+)
+def test_a_shallow_well_in_a_flared_thin_wall_is_no_plate(
+    rim: float, flared: bool, shape: str
+) -> None:
+    grid, r, body = _round_top()
+    top = np.where(body, 0.035, -np.inf)
+    top[r <= 0.094 - rim] = 0.035 - 0.018 * (0.188 - 2 * rim) / 0.124  # depth 0.145 of it
+    lo, hi = np.array([-0.094, -0.094]), np.array([0.094, 0.094])
+    seen = classify_top(grid, top, body, body, 0.035, "cylinder", lo, hi, flared=flared)
+    assert seen.shape == shape
+
+
+def test_a_plate_whose_rim_shows_to_its_edge_in_one_place_only_is_no_dome() -> None:
+    """A large plate's rim is seen up to its outer edge along a fifth of the outline only
+    (elsewhere the edge's cells hold no point of the top): no ring; its inside lies lower
+    than its outline all the same. A dome is highest inside."""
+    grid, r, body = _round_top()
+    ij = np.indices(grid.shape).transpose(1, 2, 0)
+    x = (ij[..., 0] + 0.5) * 0.004 - 0.1
+    lo, hi = np.array([-0.094, -0.094]), np.array([0.094, 0.094])
+    visible = body & ((r <= 0.082) | (x > 0.075))
+    plate = np.where(visible, np.where(r <= 0.066, 0.012, 0.03), -np.inf)
+    seen = classify_top(grid, plate, visible, body, 0.03, "cylinder", lo, hi)
+    assert seen.shape == "flat" and seen.height == pytest.approx(0.012)
+    dome = np.where(body, 0.06 - 2.0 * r**2, -np.inf)  # 18 mm lower at its outline
+    assert classify_top(grid, dome, body, body, 0.06, "cylinder", lo, hi).shape == "round"
+
+
+def test_a_round_well_is_as_wide_as_its_widest_extent_where_a_glass_hides_its_edge() -> None:
+    """A glass standing at the edge of a plate's well hides that side of the floor; the well
+    is round, so it is as wide as it shows across the other way, centred inside the rim."""
+    grid, r, body = _round_top()
+    ij = np.indices(grid.shape).transpose(1, 2, 0)
+    x = (ij[..., 0] + 0.5) * 0.004 - 0.1
+    y = (ij[..., 1] + 0.5) * 0.004 - 0.1
+    top = np.where(body, 0.03, -np.inf)
+    top[r <= 0.066] = 0.012  # a well 13.2 cm across
+    glass = np.hypot(x - 0.045, y) <= 0.036  # standing at the well's edge, above its top
+    top[glass] = -np.inf  # no point of the plate seen under it
+    visible = body & ~glass
+    lo, hi = np.array([-0.094, -0.094]), np.array([0.094, 0.094])
+    seen = classify_top(grid, top, visible, body, 0.03, "cylinder", lo, hi, over=glass)
+    assert seen.shape == "flat"
+    assert seen.size[0] == seen.size[1] == pytest.approx(0.132, abs=2 * 0.004)
+    assert seen.center[0] == pytest.approx(0.0, abs=0.004)
+
+
+def test_a_trays_well_under_a_board_lying_in_it_is_a_well() -> None:
+    """A board lying in a tray's well, its top no higher than the tray's rim, hides most of
+    the floor: too shallow for a cavity, the tray's top is still a flat well."""
+    cell = 0.004
+    grid = Grid(np.array([-0.2, -0.15]), (100, 75), cell)
+    ij = np.indices(grid.shape).transpose(1, 2, 0)
+    x, y = (ij[..., 0] + 0.5) * cell - 0.2, (ij[..., 1] + 0.5) * cell - 0.15
+    body = (np.abs(x) <= 0.18) & (np.abs(y) <= 0.13)
+    well = (np.abs(x) <= 0.165) & (np.abs(y) <= 0.115)
+    board = (np.abs(x) <= 0.15) & (np.abs(y) <= 0.105)  # 83 % of the well
+    top = np.where(body, 0.022, -np.inf)
+    top[well] = 0.008
+    top[board] = -np.inf  # no point of the tray seen under the board
+    lo, hi = np.array([-0.18, -0.13]), np.array([0.18, 0.13])
+    seen = classify_top(grid, top, body & ~board, body, 0.022, "box", lo, hi)
+    assert seen.shape == "flat" and seen.height == pytest.approx(0.008)

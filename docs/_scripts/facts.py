@@ -214,6 +214,8 @@ CONSTANTS = {
     "liftable_kg": ("utamp_gym.perception.objects", "LIFTABLE", 1),
     "bar_middle": ("utamp_gym.perception.members", "BAR_MIDDLE", 1),
     "dish_flare": ("utamp_gym.perception.tops", "DISH_FLARE", 1),
+    "flared_dish_ratio": ("utamp_gym.perception.tops", "FLARED_DISH_RATIO", 1),
+    "thin_wall_mm": ("utamp_gym.perception.tops", "THIN_WALL", 1000),
     "close_fraction": ("utamp_gym.sim.estimate", "CLOSE_FRACTION", 1),
     "check_margin_mm": ("utamp_gym.sim.relook", "CHECK_MARGIN", 1000),
     "aim_shift_mm": ("utamp_gym.sim.relook", "AIM_SHIFT", 1000),

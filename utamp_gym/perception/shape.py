@@ -60,7 +60,7 @@ from utamp_gym.perception.members import (
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.tops import (
     DISH_FLARE,
-    DISH_RATIO,
+    FLARED_DISH_RATIO,
     FLAT_TOL,
     body_top_below,
     bottom_size,
@@ -309,7 +309,7 @@ def _fit(cloud: Cloud, scene: Scene3D, instance: int, yaw: float) -> tuple[SeenS
         top_shape = box_opening(top_shape, local[in_body], body_lo, body_hi, body_top)
     if top_shape.shape == "open" and flare > DISH_FLARE and top_shape.floor > 0:
         depth = top_shape.height - top_shape.floor
-        if depth < DISH_RATIO * float(np.mean(top_shape.size)):  # a shallow flared cavity
+        if depth < FLARED_DISH_RATIO * float(np.mean(top_shape.size)):  # a flared dish
             top_shape = replace(top_shape, shape="concave")
     if not top_shape.visible:
         shape = "concave" if flare > DISH_FLARE else "flat"

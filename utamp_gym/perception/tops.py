@@ -7,10 +7,17 @@ or lower inside than at a rim running round it: a *flat* well inside a rim when 
 the opening and the outer wall does not flare: a deep plate), *concave* (a dish whose walls
 flare from a smaller floor, or whose outer wall flares by more than `DISH_FLARE`: a pan's
 floor measured in cells came out wider than `FLARE` of its opening, and the pan was read as
-a pot, where nothing rests across its rim) or *open* (a cavity). An opening is measured
+a pot, where nothing rests across its rim; a flared body whose rim is a wall's edge, thinner
+than `THIN_WALL`, is never a flat well: a shallow pan is no plate) or *open* (a cavity; an
+inside mostly unseen within a rim lower than `WELL_RATIO` of its width is a well under what
+lies in it, a tray's under a board). A rim that reaches the top level along too little of
+the outline to run round it still makes a well when the inside lies lower than the outline
+band (a large plate's rim seen to its edge in places); a dome is higher inside. A round
+well one side of which is hidden is as wide as its widest extent. An opening is measured
 finer than cells, from the inner edge of the rim's top; the base (never seen) from the
 lowest slice of the side wall; its flare (`wall_flare`) judges a top hidden under other
-objects (`shape`).
+objects, and a flared cavity shallower than `FLARED_DISH_RATIO` of its opening is a dish
+(`shape`).
 """
 
 from __future__ import annotations
@@ -26,7 +33,18 @@ WELL_RATIO = 0.18  # depth / opening below this: a flat well inside a rim (tray,
 DEEP_WELL_RATIO = 0.25  # ... or below this with a floor spanning the opening (a deep plate)
 DISH_RATIO = 0.30  # ... below this, with a floor smaller than the opening: a dish (pan)
 FLARE = 0.85  # a floor narrower than this fraction of the opening: the walls flare
-DISH_FLARE = 0.12  # ... as do walls whose outer radius grows by more than this, base to top
+#: ... as do walls whose outer radius grows by more than this, base to top. On train, plates
+#: measure 0.009-0.045, bowls, cups and pots below 0.04, frying pans 0.12-0.27; under a board
+#: or a plate that hides their upper wall, pans measured 0.09-0.11 (six-object scenes of the
+#: train families drawn with seeds outside every split), and 0.12 read those tops as flat
+DISH_FLARE = 0.08
+#: a flared cavity shallower than this fraction of its opening is a dish: frying pans are up
+#: to 60 mm deep on 173 mm openings (0.35; `DISH_RATIO` read the deepest as pots)
+FLARED_DISH_RATIO = 0.36
+#: m, a rim narrower than this is a wall's edge (a pan's: 3-5 mm), not a plate's ledge (25-40
+#: mm on train): a flared body with such a rim is a dish however shallow (a frying pan's floor
+#: 16-18 % of its opening deep was read as a plate's well, train/0117)
+THIN_WALL = 0.012
 
 
 def body_top_below(top: np.ndarray, region: np.ndarray) -> float:
@@ -69,7 +87,7 @@ def classify_top(
             rim |= piece
     inside = body & ~rim & ~dilate_disc(outline & ~rim, 0.0)
     inner = components(inside)[0] if inside.any() else inside
-    if not _has_ring(rim, body):  # no rim around a lower inside: a dome
+    if not _has_ring(rim, body) and not _lower_inside(top, visible, body):  # a dome
         return SeenTop("round", full, rim_level, centre)  # type: ignore[arg-type]
     if not inner.any():
         return SeenTop("flat", full, rim_level, centre)  # type: ignore[arg-type]
@@ -99,7 +117,13 @@ def _inside(
     rim_width = float(np.mean((hi - lo) - opening)) / 2
     if len(floor_hs) < 0.3 * inner.sum():  # mostly unseen inside: a deep cavity
         size = tuple(opening.tolist()) if geom == "box" else (width, width)
-        return SeenTop("open", size, rim_level, tuple(((ilo + ihi) / 2).tolist()), rim_width)  # type: ignore[arg-type]
+        mid = tuple(((ilo + ihi) / 2).tolist())
+        if rim_level < WELL_RATIO * width and len(floor_hs) >= 8:
+            # unless too shallow to be one: a well under what stands in it (a tray under a
+            # board lying in it, whose top is no higher than the tray's rim)
+            floor = float(np.percentile(floor_hs, 20))
+            return SeenTop("flat", size, floor, mid, rim_width, floor)  # type: ignore[arg-type]
+        return SeenTop("open", size, rim_level, mid, rim_width)  # type: ignore[arg-type]
     floor = float(np.percentile(floor_hs, 20))
     plateau = seen & (np.abs(top - floor) <= FLAT_TOL)
     depth = rim_level - floor
@@ -112,12 +136,20 @@ def _inside(
         floor_width = 0.0
     level = plateau.sum() >= 0.6 * seen.sum()  # mostly one flat floor
     steep = floor_width >= FLARE * width and not flared  # no flared walls, inside or out
-    if level and (ratio < WELL_RATIO or (ratio < DEEP_WELL_RATIO and steep)):
+    pan = flared and rim_width < THIN_WALL  # a flared wall's edge around it, no ledge
+    if level and not pan and (ratio < WELL_RATIO or (ratio < DEEP_WELL_RATIO and steep)):
+        well, mid = phi - plo, (plo + phi) / 2
+        if geom == "cylinder" and abs(well[0] - well[1]) > 2 * grid.cell:
+            # a round well one of whose sides is hidden (a glass standing at its edge): as
+            # wide as its widest extent, centred on the body across the hidden side
+            well = np.full(2, well.max())
+            short = int(np.argmin(phi - plo))
+            mid[short] = (lo[short] + hi[short]) / 2
         return SeenTop(
             "flat",
-            tuple((phi - plo).tolist()),  # type: ignore[arg-type]
+            tuple(well.tolist()),  # type: ignore[arg-type]
             floor,
-            tuple(((plo + phi) / 2).tolist()),  # type: ignore[arg-type]
+            tuple(mid.tolist()),  # type: ignore[arg-type]
             rim_width,
             floor,
         )
@@ -183,6 +215,19 @@ def _has_ring(rim: np.ndarray, body: np.ndarray) -> bool:
     """True if the top-level cells run around most of the body's outline (a rim)."""
     outline = body & ~erode_disc(body, 1.5)
     return bool(outline.any()) and (rim & dilate_disc(outline, 1.0)).sum() >= 0.5 * outline.sum()
+
+
+def _lower_inside(top: np.ndarray, visible: np.ndarray, body: np.ndarray) -> bool:
+    """True if the body's core (beyond half its radius from the outline) lies lower than its
+    outline band, by more than twice `FLAT_TOL`: a well inside a rim that reaches the top
+    level along too little of the outline to be a ring (a large plate's sloped rim, a third
+    of it or less); a dome is higher inside."""
+    radius = float(np.sqrt(body.sum() / np.pi))  # cells
+    core = visible & erode_disc(body, 0.5 * radius)
+    band = visible & ~erode_disc(body, max(1.5, 0.2 * radius))
+    if core.sum() < 8 or band.sum() < 8:
+        return False
+    return float(np.median(top[core])) < float(np.median(top[band])) - 2 * FLAT_TOL
 
 
 def moved_top(t: SeenTop, centre: np.ndarray) -> SeenTop:
