@@ -10,6 +10,7 @@ import pytest
 
 from utamp_gym.affordances.sources import plan_affordances
 from utamp_gym.contract.perceiver import PerceivedAttributes
+from utamp_gym.methods import perceived as perceived_module
 from utamp_gym.methods.doubt import DOUBT_THRESHOLD, cautious_types, hoped_facts, with_value
 from utamp_gym.methods.perceived import PerceivedScene, build_perceived_scene, plan_seen
 from utamp_gym.perception.confidence import size_readings, surface_readings
@@ -145,6 +146,36 @@ def test_a_fact_between_two_objects_is_hoped_for_under_both_their_readings() -> 
         assert fact not in hoped_facts(ps.planning, ps.types, {alone: report(alone)})
     both = {o: report(o) for o in ("obj3", "obj2")}
     assert fact in hoped_facts(ps.planning, ps.types, both)
+    assert fact not in hoped_facts(ps.planning, ps.types, both, pairs=False)  # one misreading
+
+
+def test_the_open_loop_hopes_for_one_misreading_before_two(monkeypatch: Any) -> None:
+    """Two glasses read a little too wide to stand on each other: the open loop plans first
+    with what one misreading allows, then with what two allow (the order that needed both
+    readings wrong was the one planned, dev-count seeds 100871, 101257, 101630)."""
+    scene = resolve_scene("procedural-v1/train/0129")
+    declared = {o.name: scene.type_of(o.name) for o in scene.objects}
+    seen = {**declared, "obj3": size_readings(declared["obj3"])[1]}
+    seen["obj2"] = size_readings(declared["obj2"])[0]
+    ps = build_perceived_scene(scene, seen)
+    under, over = scene.object("obj2").type, scene.object("obj3").type
+    fact = ("isP2PSupportive", "under", under, "on", over)  # obj3 on obj2, declared names
+    both = {
+        o: PerceivedAttributes(ps.types[o], {}, {"member_size": size_readings(seen[o])})
+        for o in ("obj3", "obj2")
+    }
+    calls: list[frozenset[Any]] = []
+    real = perceived_module.plan_scene
+
+    def recorded(*args: Any, **kwargs: Any) -> Any:
+        calls.append(frozenset(kwargs["affordances"][0]))
+        outcome = real(*args, **kwargs)
+        return outcome if len(calls) == 3 else outcome._replace(solved=False)
+
+    monkeypatch.setattr(perceived_module, "plan_scene", recorded)
+    outcome, planned = plan_seen(scene, dataclasses.replace(ps, reports=both))
+    assert len(calls) == 3 and outcome.solved and planned.doubt.hoped  # likely, one, two
+    assert fact not in calls[0] | calls[1] and fact in calls[2]
 
 
 def test_hopes_when_the_likely_values_leave_the_goal_unsolvable() -> None:

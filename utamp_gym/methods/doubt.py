@@ -143,13 +143,16 @@ def hoped_facts(
     types: Mapping[str, ObjectType],
     reports: Mapping[str, PerceivedAttributes],
     affordances: Callable[[Scene], frozenset[Fact]] = plan_affordances,
+    *,
+    pairs: bool = True,
 ) -> frozenset[Fact]:
     """The facts of `planning` that hold under some alternative the perceiver offers for
     the objects they concern (`types`: object -> its type as in `planning`): under each
     alternative of each attribute, one object at a time (a mass light enough to lift and
-    the heavier one that may be slid), and under the `READINGS` alternatives two objects at
-    a time -- a fact concerns at most two objects, so this is every fact some joint reading
-    of the sizes allows (the facts of the reported values themselves are not included)."""
+    the heavier one that may be slid), and (`pairs`) under the `READINGS` alternatives two
+    objects at a time -- a fact concerns at most two objects, so this is every fact some
+    joint reading of the sizes allows (the facts of the reported values themselves are not
+    included). Without `pairs`: the facts one misreading allows."""
     singles: list[ObjectType] = []
     readings: dict[str, list[ObjectType]] = {}
     for obj, report in reports.items():
@@ -166,7 +169,7 @@ def hoped_facts(
     out: set[Fact] = set()
     for t in singles:
         out |= affordances(_with_type(planning, t))
-    for a, b in itertools.combinations(readings, 2):
+    for a, b in itertools.combinations(readings if pairs else (), 2):
         for ta, tb in itertools.product(readings[a], readings[b]):
             out |= affordances(_with_type(_with_type(planning, ta), tb))
     return frozenset(out)

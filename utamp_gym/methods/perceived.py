@@ -334,15 +334,18 @@ def plan_seen(
         return outcome, fell_back
     hopeful, hopes = cautious_types(ps.planning, ps.types, ps.reports, doubt, hopeful=True)
     planned = _with_types(scene, ps, hopeful) if hopes else ps
-    facts = plan_affordances(planned.planning) | hoped_facts(
-        planned.planning, planned.types, ps.reports
-    )
-    if facts == likely:  # nothing to hope for: the likely values' verdict stands
-        return outcome, fell_back
-    hoped = attempt(planned, facts)
-    if not hoped.solved:
-        return outcome, fell_back
-    return hoped, dataclasses.replace(planned, doubt=DoubtfulPlan(hopes, hoped=True))
+    tried = likely
+    for pairs in (False, True):  # one misreading before two: the likelier hopes first
+        facts = plan_affordances(planned.planning) | hoped_facts(
+            planned.planning, planned.types, ps.reports, pairs=pairs
+        )
+        if facts == tried:  # nothing more to hope for
+            continue
+        tried = facts
+        hoped = attempt(planned, facts)
+        if hoped.solved:
+            return hoped, dataclasses.replace(planned, doubt=DoubtfulPlan(hopes, hoped=True))
+    return outcome, fell_back
 
 
 def _with_types(
