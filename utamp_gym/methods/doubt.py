@@ -144,6 +144,7 @@ def hoped_facts(
     reports: Mapping[str, PerceivedAttributes],
     affordances: Callable[[Scene], frozenset[Fact]] = plan_affordances,
     *,
+    singles: bool = True,
     pairs: bool = True,
 ) -> frozenset[Fact]:
     """The facts of `planning` that hold under some alternative the perceiver offers for
@@ -152,8 +153,9 @@ def hoped_facts(
     the heavier one that may be slid), and (`pairs`) under the `READINGS` alternatives two
     objects at a time -- a fact concerns at most two objects, so this is every fact some
     joint reading of the sizes allows (the facts of the reported values themselves are not
-    included). Without `pairs`: the facts one misreading allows."""
-    singles: list[ObjectType] = []
+    included). Without `pairs`: the facts one misreading allows; without `singles`: those
+    only the two-object readings add to them."""
+    alone: list[ObjectType] = []
     readings: dict[str, list[ObjectType]] = {}
     for obj, report in reports.items():
         if obj not in types:
@@ -163,11 +165,11 @@ def hoped_facts(
                 t = with_value(types[obj], attribute, value)
                 if t is None or t == types[obj]:
                     continue
-                singles.append(t)
+                alone.append(t)
                 if attribute in READINGS:
                     readings.setdefault(obj, []).append(t)
     out: set[Fact] = set()
-    for t in singles:
+    for t in alone if singles else ():
         out |= affordances(_with_type(planning, t))
     for a, b in itertools.combinations(readings if pairs else (), 2):
         for ta, tb in itertools.product(readings[a], readings[b]):

@@ -334,10 +334,10 @@ def plan_seen(
         return outcome, fell_back
     hopeful, hopes = cautious_types(ps.planning, ps.types, ps.reports, doubt, hopeful=True)
     planned = _with_types(scene, ps, hopeful) if hopes else ps
-    tried = likely
+    facts, tried = plan_affordances(planned.planning), likely
     for pairs in (False, True):  # one misreading before two: the likelier hopes first
-        facts = plan_affordances(planned.planning) | hoped_facts(
-            planned.planning, planned.types, ps.reports, pairs=pairs
+        facts = facts | hoped_facts(
+            planned.planning, planned.types, ps.reports, singles=not pairs, pairs=pairs
         )
         if facts == tried:  # nothing more to hope for
             continue
