@@ -7,7 +7,9 @@ folders `utamp eval` writes, so rows already there are reused), then writes
 ``docs/results/perceived-procedural.{md,json}``: per split and method the share of
 achievable scenes whose plan is valid in the declared world (95 % Wilson interval), the
 unachievable scenes reported unsolvable, the affordance F1 against the rules on the declared
-attributes, and the per-attribute accuracy. Symbolic grounding: the perceiver renders each
+attributes, the per-attribute accuracy, and where each invalid plan's false facts came from
+(`utamp_gym.methods.blame`: an alternative the plan hoped for, or the likely reading of one
+object's mass, material or geometry). Symbolic grounding: the perceiver renders each
 scene and fits every object, the plan is checked against the declared scene; nothing is
 executed in physics.
 
@@ -26,7 +28,10 @@ from utamp_gym.eval.intervals import wilson_interval
 from utamp_gym.eval.records import ResultRow
 from utamp_gym.eval.stages import ATTRIBUTES
 from utamp_gym.eval.sweep import SweepConfig, run_sweep
+from utamp_gym.methods.blame import ORIGINS, blame_plan
+from utamp_gym.methods.perceived import perceive_scene
 from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.suites import resolve_scene, scene_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 SPLITS = ("test-instances", "test-families", "test-count")
@@ -39,6 +44,27 @@ def _rows(split: str, shard: tuple[int, int], out: Path, workers: int) -> list[R
         explain=False, shard=shard,
     )  # fmt: skip
     return run_sweep(cfg, out / split, workers=workers, progress=False).rows
+
+
+def blame_rows(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[str, dict[str, int]]:
+    """Where the false facts of the achievable scenes' invalid plans came from
+    (`methods.blame.ORIGINS`): ``plans`` counts each plan by its first false fact's origin,
+    ``facts`` every distinct false fact. Each scene is perceived again with its seed (the
+    perceiver is deterministic: the same readings the plan was made from)."""
+    plans, facts = dict.fromkeys(ORIGINS, 0), dict.fromkeys(ORIGINS, 0)
+    predicates: dict[str, int] = {}
+    for r in rows:
+        if not (achievable[r.scene] and r.solved and r.valid_gt is False):
+            continue
+        scene = resolve_scene(r.scene)
+        blamed = blame_plan(scene, perceive_scene(scene, r.seed), r.plan.split(" ; "))
+        if blamed:
+            plans[blamed[0].origin] += 1
+        for f in blamed:
+            facts[f.origin] += 1
+            pred = f.fact.strip("()").split()[0]
+            predicates[pred] = predicates.get(pred, 0) + 1
+    return {"plans": plans, "facts": facts, "predicates": dict(sorted(predicates.items()))}
 
 
 def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[str, object]:
@@ -125,6 +151,28 @@ def _markdown(table: dict[str, dict[str, dict[str, object]]], shard: tuple[int, 
             for n in range(2, 7)
         ]
         lines.append(f"| {split} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "Where the invalid plans of `utamp2-perceived` went wrong (`utamp_gym.methods.blame`): "
+        "each plan counted by its first false fact (a fact the perceived types grant and the "
+        "declared ones do not), by what grants it: only an *alternative* the plan hoped for, "
+        "or the likely reading of one object's *mass*, *material* (and robustness) or "
+        "*members* (the boxes of body, handles, edges) or *parts* (each side's shape and surface), "
+        "the attribute whose declared value alone takes "
+        "the fact away; *geometry*: members and parts together, neither alone; *combined*: "
+        "no single object's reading does. In brackets, every distinct false "
+        "fact of those plans.",
+        "",
+        "| split | " + " | ".join(ORIGINS) + " | false facts by predicate |",
+        "|---" * (len(ORIGINS) + 2) + "|",
+    ]
+    for split, methods in table.items():
+        blame = methods["utamp2-perceived"].get("blame")
+        if not blame:
+            continue
+        cells = [f"{blame['plans'][o]} ({blame['facts'][o]})" for o in ORIGINS]  # type: ignore[index]
+        preds = ", ".join(f"{p} {n}" for p, n in blame["predicates"].items()) or "–"  # type: ignore[index]
+        lines.append(f"| {split} | " + " | ".join(cells) + f" | {preds} |")
     return "\n".join(lines) + "\n"
 
 
@@ -142,7 +190,6 @@ def main() -> None:
     args = build_parser().parse_args()
     commit()  # the provenance of what this run writes: the code as it is now
     i, n = (int(x) for x in args.shard.split("/"))
-    from utamp_gym.suites import scene_summary
 
     table: dict[str, dict[str, dict[str, object]]] = {}
     for split in SPLITS:
@@ -153,6 +200,8 @@ def main() -> None:
         table[split] = {
             m: _method_stats([r for r in rows if r.method == m], achievable) for m in METHODS
         }
+        perceived = [r for r in rows if r.method == "utamp2-perceived"]
+        table[split]["utamp2-perceived"]["blame"] = blame_rows(perceived, achievable)
     md = _markdown(table, (i, n))
     print(md)
     args.results.mkdir(parents=True, exist_ok=True)
