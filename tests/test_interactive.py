@@ -10,6 +10,7 @@ import pytest
 from utamp_gym.agents import PlannerPolicy
 from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.errors import PlanningError
+from utamp_gym.eval import interactive
 from utamp_gym.eval.closed_loop import NO_ACTIONS, run_closed_loop
 from utamp_gym.eval.interactive import SATURATED_MASS, InteractivePerception
 from utamp_gym.seeding import run_seed
@@ -78,7 +79,32 @@ def test_a_topple_marks_the_support_and_an_unsolvable_goal_triggers_looks(loop) 
     with pytest.raises(PlanningError):
         ip(obs, {**info, "action": "(noop)", "failure_reason": "board tipped over on tray"})
     assert ip.n_looks == 2
+    # (two objects' size readings together allow nothing one alone does not: no second stage)
     assert ip.revisions[-1].split(":")[0] == "look 2 (hopeful)"
+
+
+def test_the_hopeful_look_hopes_for_one_misreading_before_two(
+    loop, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """As the open loop: the facts two objects' size readings allow only once those one
+    object's alternative allows leave no plan, without another survey."""
+    ip, _, _ = loop
+    pair_only = ("canLift", "tray-seen", "body")  # in the perceived types' names
+    calls = []
+
+    def hoped(planning, types, reports, *, pairs=True, **kw):  # type: ignore[no-untyped-def]
+        calls.append(pairs)
+        return frozenset({pair_only}) if pairs else frozenset()
+
+    monkeypatch.setattr(interactive, "hoped_facts", hoped)
+    ip._look("hopeful")
+    assert ip.hoping == 1 and calls[-1] is False
+    singles, looks = _believed(ip), ip.n_looks
+    assert ip._look_at_blockers()
+    assert ip.hoping == 2 and ip.n_looks == looks and calls[-1] is True
+    (added,) = _believed(ip) - singles
+    assert added[:2] == ("canLift", "wooden-tray")
+    assert ip.revisions[-1] == "no plan: hoping for two objects' size readings too"
 
 
 def test_a_pick_of_a_hypothesised_mass_counts_as_weighing(loop) -> None:
