@@ -62,8 +62,8 @@ def blame_rows(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[str, 
             plans[blamed[0].origin] += 1
         for f in blamed:
             facts[f.origin] += 1
-            pred = f.fact.strip("()").split()[0]
-            predicates[pred] = predicates.get(pred, 0) + 1
+            key = f"{f.predicate} ({f.member})" if f.member else f.predicate
+            predicates[key] = predicates.get(key, 0) + 1
     return {"plans": plans, "facts": facts, "predicates": dict(sorted(predicates.items()))}
 
 
@@ -161,9 +161,10 @@ def _markdown(table: dict[str, dict[str, dict[str, object]]], shard: tuple[int, 
         "the attribute whose declared value alone takes "
         "the fact away; *geometry*: members and parts together, neither alone; *combined*: "
         "no single object's reading does. In brackets, every distinct false "
-        "fact of those plans.",
+        "fact of those plans; the last column counts them by predicate, and for grasps and "
+        "lifts by the kind of the declared member they hold.",
         "",
-        "| split | " + " | ".join(ORIGINS) + " | false facts by predicate |",
+        "| split | " + " | ".join(ORIGINS) + " | false facts by predicate (member kind) |",
         "|---" * (len(ORIGINS) + 2) + "|",
     ]
     for split, methods in table.items():

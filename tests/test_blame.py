@@ -24,6 +24,7 @@ def test_a_false_fact_from_a_light_mass_reading_is_blamed_on_the_mass() -> None:
     (false,) = blame_plan(scene, ps, [PICK])
     assert (false.step, false.origin, false.objects) == (0, "mass", ("base",))
     assert false.fact.startswith("(canGraspFrom base base-edge-left")
+    assert (false.predicate, false.member) == ("canGraspFrom", "edge")
 
 
 def test_a_false_fact_the_likely_readings_deny_came_from_an_alternative() -> None:

@@ -44,10 +44,29 @@ class FalseFact:
     fact: str  # the atom as the declared problem spells it
     origin: str  # one of `ORIGINS`
     objects: tuple[str, ...] = ()  # the objects whose reading alone takes it away
+    #: the declared kind of the member a grasp or lift fact is about (body, handle, edge,
+    #: ...); "" for the others
+    member: str = ""
+
+    @property
+    def predicate(self) -> str:
+        return self.fact.strip("()").split()[0]
 
     def __str__(self) -> str:
         who = f" of {', '.join(self.objects)}" if self.objects else ""
         return f"step {self.step + 1}: {self.fact}: {self.origin}{who}"
+
+
+def member_kind(scene: Scene, atom: str) -> str:
+    """The declared kind of the member `atom` (a grasp, lift or pinch fact:
+    ``(pred obj obj-member ...)``) is about; "" if it names none."""
+    words = atom.strip("()").split()
+    if len(words) < 3 or words[1] not in scene.object_names:
+        return ""
+    obj = words[1]
+    member = words[2][len(obj) + 1 :] if words[2].startswith(obj + "-") else ""
+    members = scene.type_of(obj).members
+    return members[member].kind if member in members else ""
 
 
 def with_declared(seen: ObjectType, declared: ObjectType, source: str) -> ObjectType:
@@ -87,8 +106,9 @@ def blame_plan(
         if atom in seen_facts:
             continue
         seen_facts.add(atom)
+        kind = member_kind(scene, literal)
         if atom not in likely:
-            out.append(FalseFact(step, literal, "alternative"))
+            out.append(FalseFact(step, literal, "alternative", member=kind))
             continue
         args = set(atom.strip("()").split()[1:])
         named = [o for o in scene.objects if o.name in args and o.name in ps.types]
@@ -102,11 +122,11 @@ def blame_plan(
                 if atom not in _atoms(scene, build_perceived_scene(scene, types)):
                     found.append((source, o.name))
         if not found:
-            out.append(FalseFact(step, literal, "combined"))
+            out.append(FalseFact(step, literal, "combined", member=kind))
         else:
-            origin = found[0][0]
-            out.append(FalseFact(step, literal, origin, tuple(o for _, o in found)))
+            objs = tuple(o for _, o in found)
+            out.append(FalseFact(step, literal, found[0][0], objs, kind))
     return tuple(out)
 
 
-__all__ = ["ORIGINS", "SOURCES", "FalseFact", "blame_plan", "with_declared"]
+__all__ = ["ORIGINS", "SOURCES", "FalseFact", "blame_plan", "member_kind", "with_declared"]
