@@ -65,13 +65,8 @@ from utamp_gym.perception.learned import (
     packaged_attribute_model,
 )
 from utamp_gym.perception.material import appearance_features, classify_material, estimate_mass
-from utamp_gym.perception.objects import (
-    _shell_area,
-    _solid_volume,
-    instance_pixels,
-    lift_mass,
-    perceive_objects,
-)
+from utamp_gym.perception.objects import instance_pixels, lift_mass, perceive_objects
+from utamp_gym.perception.volumes import shell_area, solid_volume
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.materials import material
 from utamp_gym.seeding import run_seed
@@ -96,7 +91,7 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
         gmm = classify_material(colours, cls)  # the hand-built pipeline's reading
         m = measurements(
             p.shape, appearance_features(colours), gmm.posterior, cls,
-            _solid_volume(p.shape), _shell_area(p.shape),
+            solid_volume(p.shape), shell_area(p.shape),
         )  # fmt: skip
         rows.append({
             "scene": scene.name, "object": name, "n_objects": scene.n_objects,

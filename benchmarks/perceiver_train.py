@@ -35,7 +35,8 @@ from utamp_gym.perception.confidence import (
     mass_class,
     raw_confidences,
 )
-from utamp_gym.perception.objects import _shell_area, _solid_volume, perceive_objects
+from utamp_gym.perception.objects import perceive_objects
+from utamp_gym.perception.volumes import shell_area, solid_volume
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.seeding import run_seed
@@ -57,8 +58,8 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
         seen = p.as_type(name, obj.orientation)
         acc = attribute_accuracy(seen, declared, align_members(seen, declared))
         raw, alts = raw_confidences(
-            p.material.posterior, p.material.name, p.mass, _solid_volume(p.shape),
-            _shell_area(p.shape), p.shape.covered,
+            p.material.posterior, p.material.name, p.mass, solid_volume(p.shape),
+            shell_area(p.shape), p.shape.covered,
         )  # fmt: skip
         right = {
             "material": acc["material"] == 1.0,

@@ -13,15 +13,10 @@ import pytest
 from utamp_gym.perception.grid import Grid
 from utamp_gym.perception.material import MaterialEstimate
 from utamp_gym.perception.members import trim_bar
-from utamp_gym.perception.objects import (
-    RIM_BAND,
-    PerceivedObject,
-    _edges,
-    _mass_area,
-    _shell_area,
-)
+from utamp_gym.perception.objects import RIM_BAND, PerceivedObject, _edges
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.tops import classify_top
+from utamp_gym.perception.volumes import mass_area, shell_area
 from utamp_gym.perception.walls import wall_fit
 from utamp_gym.scene.materials import material
 
@@ -153,10 +148,10 @@ def test_the_face_an_inverted_object_rests_on() -> None:
 
 def test_a_plate_is_weighed_as_one_dish_shaped_sheet() -> None:
     plate = _rimmed("cylinder")
-    assert _mass_area(plate) == pytest.approx(1.2 * math.pi * 0.105**2)
-    assert _mass_area(plate) < 0.6 * _shell_area(plate)
+    assert mass_area(plate) == pytest.approx(1.2 * math.pi * 0.105**2)
+    assert mass_area(plate) < 0.6 * shell_area(plate)
     tray = _rimmed("box")
-    assert _mass_area(tray) == _shell_area(tray)  # a moulded tray keeps its shell
+    assert mass_area(tray) == shell_area(tray)  # a moulded tray keeps its shell
 
 
 def test_a_cavity_under_another_object_is_hidden_but_a_well_still_shows() -> None:

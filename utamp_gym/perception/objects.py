@@ -69,6 +69,7 @@ from utamp_gym.perception.material import (
 )
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.shape import fit_shape
+from utamp_gym.perception.volumes import mass_area, shell_area, solid_volume
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
@@ -318,52 +319,6 @@ def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
     return tuple(out)
 
 
-def _solid_volume(shape: SeenShape) -> float:
-    """Volume (m^3) of the body's envelope less what is seen hollow, plus the members."""
-    b, top = shape.body.box.size, shape.top
-    h = float(b[2])
-    footprint = math.pi * (b[0] / 2) * (b[1] / 2) if shape.body.geom == "cylinder" else b[0] * b[1]
-    hollow = 0.0  # an opening hidden under other objects is judged from the outer wall
-    if top.shape in ("open", "concave") or (top.visible and top.rim > 0):
-        floor = top.floor if top.floor > 0 else min(0.01, h / 4)
-        depth = max(h - floor, 0.0)
-        area = top.size[0] * top.size[1]
-        if shape.body.geom == "cylinder" and top.shape != "flat":
-            area = math.pi * top.size[0] * top.size[1] / 4
-        hollow = min(area, footprint) * depth
-    volume = footprint * h - hollow
-    for m in shape.members:
-        volume += float(np.prod(m.box.size))
-    return max(volume, 0.0)
-
-
-def _shell_area(shape: SeenShape) -> float:
-    """Outer surface (m^2) of the body, open where its top is open, and of its members."""
-    b = shape.body.box.size
-    if shape.body.geom == "cylinder":
-        r = float(np.mean(b[:2])) / 2
-        side, cap = 2 * math.pi * r * b[2], math.pi * r * r
-    else:
-        side, cap = 2 * (b[0] + b[1]) * b[2], b[0] * b[1]
-    opening = shape.top.shape in ("open", "concave")  # seen, or judged from the outer wall
-    area = side + cap + (0.0 if opening else cap)
-    for m in shape.members:
-        a = m.box.size
-        area += 2 * (a[0] * a[1] + a[0] * a[2] + a[1] * a[2])
-    return float(area)
-
-
-def _mass_area(shape: SeenShape) -> float:
-    """The area of material a walled piece's mass is reckoned from (`estimate_mass`): its
-    `_shell_area`, but a round body with a flat well inside a rim (a plate) is one dish-shaped
-    sheet, its well's floor its underside: its footprint, a fifth more for the rim's slope
-    (counting the top and the underside and the outer wall read a 0.45 kg plate as 1.0 kg)."""
-    top, b = shape.top, shape.body.box.size
-    if shape.body.geom == "cylinder" and top.shape == "flat" and top.visible and top.rim > 0:
-        return float(1.2 * math.pi * (b[0] / 2) * (b[1] / 2))
-    return _shell_area(shape)
-
-
 def perceive_objects(bundle: ViewBundle, *, prior_yaw: float = 0.0) -> dict[int, PerceivedObject]:
     """Every object instance seen in `bundle`, perceived (module docstring)."""
     scene = fuse(bundle)
@@ -396,14 +351,14 @@ def perceive_instance(
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     cls = looks.shape_class()
     mat = classify_material(colours, cls)
-    volume, area, mass_area = _solid_volume(shape), _shell_area(shape), _mass_area(shape)
+    volume, area, sheet = solid_volume(shape), shell_area(shape), mass_area(shape)
     model = packaged_attribute_model()
     if model is not None and mat.name != "default":  # the learned model (`learned`)
         pred = model.predict(
             measurements(shape, appearance_features(colours), mat.posterior, cls, volume, area)
         )
         mat = MaterialEstimate(max(pred.material, key=pred.material.__getitem__), pred.material)
-        mass, low, high = mass_range(mat, volume, mass_area)
+        mass, low, high = mass_range(mat, volume, sheet)
         if model.mass_head == "rule":  # volume x density of the learned material
             reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
             conf, alts = raw_confidences(
@@ -414,7 +369,7 @@ def perceive_instance(
             reported, low, high = pred.mass, low * scale, high * scale
             conf, alts = learned_confidences(pred, mat.name, shape.covered)
     else:
-        mass, low, high = mass_range(mat, volume, mass_area)
+        mass, low, high = mass_range(mat, volume, sheet)
         reported = lift_mass(mass, high)
         conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
     calibration = packaged_calibration()
