@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from utamp_gym.affordances.solids import stand_refusal
 from utamp_gym.perception.grid import Grid
 from utamp_gym.perception.material import MaterialEstimate
 from utamp_gym.perception.members import trim_bar
@@ -144,6 +145,22 @@ def test_the_face_an_inverted_object_rests_on() -> None:
     assert glass.shape == "open" and glass.size == pytest.approx((0.072 - 2 * wall,) * 2)
     assert _cup("box", "cardboard").as_type("b", "inverted").parts["on"].shape == "flat"
     assert _cup("cylinder", "glass").as_type("t", "upright").parts["under"].shape == "flat"
+
+
+def test_a_pan_stands_on_its_base_centred_on_its_body_not_on_its_handles_box() -> None:
+    """A 24 cm aluminium frying pan with a 17 cm handle: its base is the body's, centred on
+    the body, and its centre of mass lies over it (the base taken at the centre of the box
+    the handle widens stood 8.5 cm towards the handle: the pan tipped over in the rules)."""
+    body = SeenMember("body", "", SeenBox((-0.12, -0.12, 0.0), (0.12, 0.12, 0.05)), "cylinder")
+    handle = SeenMember("handle", "back", SeenBox((-0.29, -0.012, 0.03), (-0.12, 0.012, 0.045)))
+    top = SeenTop("concave", (0.23, 0.23), 0.05, (0.0, 0.0), 0.005, 0.004)
+    shape = SeenShape(0.0, np.zeros(3), body, (handle,), top, (0.16, 0.16), 0.3, 0.0005, 0.2, 0.0)
+    pan = PerceivedObject(0, shape, MaterialEstimate("aluminium", {"aluminium": 1.0}),
+                          0.6, 0.5, 0.7, ())  # fmt: skip
+    t = pan.as_type("pan", "upright")
+    assert t.surface_center("under") == (0.0, 0.0)
+    assert t.surface_size("under") == pytest.approx((0.16, 0.16))
+    assert stand_refusal(t, "under") is None
 
 
 def test_a_plate_is_weighed_as_one_dish_shaped_sheet() -> None:

@@ -79,6 +79,9 @@ THIN_TOP = 0.0125  # m: a body thinner than this has a thin top where narrower t
 #: FOOD_SURFACE (a spatula's blade, 6-12 mm thick, 55-90 mm wide; chopping boards are 12-40
 #: mm thick, and wider)
 THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
+#: m: a member this low rests on the support with the body (a spatula's grip; a pan's or a
+#: mug's handle starts 1-4 cm up)
+GROUNDED = 0.005
 GRIPPER_OPENING = 0.08  # m (the rules' Franka hand): wider bodies are not grasped whole
 LIFTABLE = 1.5  # kg (the rules' "well below the payload")
 SLAB_EDGE, SLAB_EDGE_INSET = 0.0225, 0.02  # m: a bare slab's end strips (`_slab_edges`)
@@ -182,10 +185,14 @@ class PerceivedObject:
 def _hidden_part(obj: PerceivedObject, bbox: Box, inverted: bool) -> PartAttrs:
     """The face the object rests on (module docstring): flat under an upright object or an
     inverted box (packages are closed); the opening of an inverted round body, inside walls
-    as thick as its material's (`Material.wall`)."""
+    as thick as its material's (`Material.wall`). Either is the body's face, centred on the
+    body, not on the box a raised handle widens (a pan's base 8 cm off towards its handle
+    tipped it over in the rules); a member down on the support (a spatula's grip) rests on
+    it too: the face then spans the bounding box."""
     size = _fit2(obj.shape.bottom_size, bbox, "on")
     if not inverted or obj.shape.body.geom != "cylinder":
-        return PartAttrs("flat", size)
+        grounded = any(m.box.lo[2] <= GROUNDED for m in obj.shape.members)
+        return PartAttrs("flat", size, center=None if grounded else (0.0, 0.0))
     wall = material(obj.material.name).wall or 0.0
     inner = tuple(round(max(v - 2 * wall, 0.0), 4) for v in size)
     return PartAttrs("open", inner, center=(0.0, 0.0))  # type: ignore[arg-type]
