@@ -110,7 +110,7 @@ def blame_plan(
         if atom not in likely:
             out.append(FalseFact(step, literal, "alternative", member=kind))
             continue
-        args = set(atom.strip("()").split()[1:])
+        args = set(literal.strip("()").split()[1:])
         named = [o for o in scene.objects if o.name in args and o.name in ps.types]
         found: list[tuple[str, str]] = []
         for source in SOURCES:
