@@ -7,7 +7,9 @@ drawn by the same generator with test-count's recipe (six objects of the trainin
 the training instance pool) from seeds no split keeps (`FIRST_SEED` on, where every split's
 seeds end below 2400): no scene of any split is read here. Each achievable scene is
 perceived with the survey cameras (seed 0) and planned open loop as `utamp eval --methods
-utamp2-perceived --grounding symbolic` does, and the plan checked in the declared world.
+utamp2-perceived --grounding symbolic` does, and the plan checked in the declared world; an
+invalid plan's false facts are traced to the reading that granted them
+(`utamp_gym.methods.blame`, as on the test splits' page).
 
     python benchmarks/perceived_dev_count.py [--seeds 3200] [--workers 2]
         [--results docs/results]
@@ -21,7 +23,8 @@ from pathlib import Path
 
 from _common import write_results  # benchmarks/ is on sys.path when run as a script
 
-from utamp_gym.methods.perceived import plan_perceived
+from utamp_gym.methods.blame import ORIGINS, blame_plan
+from utamp_gym.methods.perceived import perceive_scene, plan_perceived
 from utamp_gym.planning.crosscheck import check_against_ground_truth
 from utamp_gym.provenance import commit
 from utamp_gym.suites.procedural.layout import generate_scene
@@ -45,6 +48,9 @@ def scene_row(seed: int) -> dict[str, object] | None:
     valid = outcome.solved and check_against_ground_truth(scene, outcome.plan).valid
     row.update(solved=bool(outcome.solved), valid=bool(valid), reason=outcome.reason)
     row["doubt"] = "" if seen is None else seen.doubt.note()
+    if outcome.solved and not valid:  # the likely readings, as `perceived_procedural` blames
+        blamed = blame_plan(scene, perceive_scene(scene, 0), outcome.plan)
+        row["blame"] = [f"{f.origin}: {f.fact}" for f in blamed]
     return row
 
 
@@ -55,6 +61,8 @@ def _markdown(rows: list[dict[str, object]], seeds: range) -> str:
     no_plan = sum(not r["solved"] for r in ach)
     invalid = sum(bool(r["solved"]) and not r["valid"] for r in ach)
     failed = ", ".join(str(r["seed"]) for r in ach if not r["valid"]) or "none"
+    first = [str(r["blame"][0]).split(":")[0] for r in ach if r.get("blame")]
+    origins = ", ".join(f"{o} {first.count(o)}" for o in ORIGINS if o in first) or "none"
     return "\n".join([
         f"`utamp2-perceived` open loop on the six-object development scenes: seeds "
         f"{seeds.start}-{seeds.stop - 1} drawn with {RECIPE}'s recipe "
@@ -68,6 +76,9 @@ def _markdown(rows: list[dict[str, object]], seeds: range) -> str:
         f"{invalid} | {sum(not r['solved'] for r in unach)}/{len(unach)} |",
         "",
         f"Achievable scenes that failed (seeds): {failed}.",
+        "",
+        "Invalid plans by where their first false fact came from (`utamp_gym.methods.blame`: "
+        f"an alternative hoped for, or one object's likely reading): {origins}.",
         "",
     ])  # fmt: skip
 
