@@ -186,7 +186,7 @@ class InteractivePerception:
         if self.hoping == 1:
             before = self._facts()
             self.hoping = 2
-            after = self._facts()
+            after = before | self._facts(singles=False)  # one object's hopes: computed above
             if after != before:  # (no two objects offer size readings: nothing more to hope)
                 self.revisions.append("no plan: hoping for two objects' size readings too")
                 self._believe(after)
@@ -254,16 +254,19 @@ class InteractivePerception:
                     self._believe(facts)
                 return
 
-    def _facts(self) -> frozenset[Fact]:
+    def _facts(self, *, singles: bool = True) -> frozenset[Fact]:
         """The facts believed: the believed types' and, hoping, those some alternative the
         perceiver offers for the objects they concern allows (`hoped_facts`; a mass below
-        what the arm weighed is no longer one), in the declared names."""
+        what the arm weighed is no longer one), in the declared names. Without `singles`,
+        of the hoped facts only those two objects' size readings add (`hoped_facts`)."""
         assert self.seen is not None
         ps = build_perceived_scene(self.seen.declared, self.beliefs)
         facts = plan_affordances(ps.planning)
         if self.hoping:
             reports = {obj: self._hoped(obj, r) for obj, r in self.seen.reports.items()}
-            facts |= hoped_facts(ps.planning, ps.types, reports, pairs=self.hoping > 1)
+            facts |= hoped_facts(
+                ps.planning, ps.types, reports, singles=singles, pairs=self.hoping > 1
+            )
         return ps.usable_facts(facts)
 
     def _hoped(self, obj: str, report: PerceivedAttributes) -> PerceivedAttributes:
