@@ -168,6 +168,7 @@ class ResultRow(RunIdentity):
     acc_food: float | None = None
     acc_material: float | None = None
     acc_mass: float | None = None
+    acc_mass_class: float | None = None
     acc_robustness: float | None = None
     n_weighings: int = 0  # closed loop, interactive perception: weighing lifts
     n_looks: int = 0  # closed loop, interactive perception: extra looks

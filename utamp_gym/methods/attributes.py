@@ -12,6 +12,7 @@ ATTRIBUTES = (
     "food",
     "material",
     "mass",
+    "mass_class",
     "robustness",
 )
 

@@ -38,6 +38,7 @@ from utamp_gym.errors import UtampError
 from utamp_gym.methods.attributes import ATTRIBUTES
 from utamp_gym.methods.doubt import DOUBT_THRESHOLD, DoubtfulPlan, cautious_types, hoped_facts
 from utamp_gym.methods.perceivers import PERCEIVED, BuiltinPerceiver
+from utamp_gym.perception.confidence import mass_class
 from utamp_gym.planning.methods import PlanOutcome, plan_scene
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.scene.geometry import SIDES, Box
@@ -48,7 +49,9 @@ from utamp_gym.seeding import run_seed
 #: body (box or cylinder), members (Dice of the matched members), member_size (matched boxes
 #: within SIZE_TOL in every extent), shape (the six part shapes), surface (usable sizes of
 #: on / under within SIZE_TOL), height (their heights within HEIGHT_TOL), food (food-surface
-#: flags), material, mass (within a factor MASS_FACTOR), robustness
+#: flags), material, mass (within a factor MASS_FACTOR), mass_class (the class between the
+#: rules' mass thresholds, `perception.confidence.MASS_BOUNDS`: how the rules read a mass),
+#: robustness
 SIZE_TOL = 0.01  # m
 HEIGHT_TOL = 0.005  # m
 MASS_FACTOR = 1.5
@@ -171,6 +174,7 @@ def attribute_accuracy(
     out["mass"] = float(
         abs(math.log(max(perceived.mass, 1e-6) / declared.mass)) <= math.log(MASS_FACTOR)
     )
+    out["mass_class"] = float(mass_class(perceived.mass) == mass_class(declared.mass))
     out["robustness"] = float(perceived.robustness == declared.robustness)
     return out
 
