@@ -30,7 +30,8 @@ then need and no camera sees is filled in by stated assumptions:
 * a bare flat slab (no members, lower than `THIN_SIDE`, wider than the hand: a board
   without a handle) has the end strips of its longer axis as **edges**, as the catalogues
   declare them (the rules judge whether a finger fits beside them);
-* the **mass** is volume x the material's nominal density (`material.estimate_mass`),
+* the **mass** is volume x the material's nominal density (`material.estimate_mass`: the
+  material in walls of its typical thickness, but a bare slab's whole volume, `bare_slab`),
   except where that is light enough for the hand to lift (`LIFTABLE`) but the material's
   density range may make it too heavy: then the heaviest plausible mass (`lift_mass`). A
   camera cannot tell those apart, and the cautious reading plans what works either way
@@ -302,14 +303,38 @@ def _inner_face(top: SeenTop, ax: int, high: bool) -> float | None:
     return float(top.center[ax] + half if high else top.center[ax] - half)
 
 
+def bare_slab(shape: SeenShape) -> bool:
+    """A board without a handle: no members, a box body lower than `THIN_SIDE` with a flat
+    top and no rim, wider than the hand. It is cut or moulded solid: its mass is its whole
+    volume's, whatever the material's typical wall (`Material.wall`)."""
+    body, top = shape.body.box, shape.top
+    return (
+        not shape.members
+        and shape.body.geom == "box"
+        and top.shape == "flat"
+        and top.visible
+        and top.rim <= 0
+        and body.size[2] < THIN_SIDE
+        and min(body.size[:2]) > GRIPPER_OPENING
+    )
+
+
+def mass_areas(shape: SeenShape) -> tuple[float, float]:
+    """The areas of material (m^2) a seen piece's mass and its mass classes are reckoned
+    from (`material.estimate_mass`, `confidence.raw_confidences`): `mass_area` and
+    `shell_area`, or inf for a `bare_slab` (solid: its whole volume is material)."""
+    if bare_slab(shape):
+        return math.inf, math.inf
+    return mass_area(shape), shell_area(shape)
+
+
 def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
     """The end strips of a bare flat slab (a board without a handle: no members, a flat
     top, lower than `THIN_SIDE`), `SLAB_EDGE` deep across its longer axis, inset
     `SLAB_EDGE_INSET` from its sides: what the catalogues declare as its edges (the rules
     then judge whether a finger fits beside them)."""
     body = shape.body.box
-    flat = shape.top.shape == "flat" and shape.top.visible
-    if shape.members or shape.body.geom != "box" or not flat or body.size[2] >= THIN_SIDE:
+    if not bare_slab(shape):
         return ()
     ax = 0 if body.size[0] >= body.size[1] else 1
     across = 1 - ax
@@ -358,7 +383,8 @@ def perceive_instance(
     looks = PerceivedObject(instance, shape, provisional, 1.0, 1.0, 1.0, ())
     cls = looks.shape_class()
     mat = classify_material(colours, cls)
-    volume, area, sheet = solid_volume(shape), shell_area(shape), mass_area(shape)
+    volume, area = solid_volume(shape), shell_area(shape)
+    sheet, walls = mass_areas(shape)
     model = packaged_attribute_model()
     if model is not None and mat.name != "default":  # the learned model (`learned`)
         pred = model.predict(
@@ -369,7 +395,7 @@ def perceive_instance(
         if model.mass_head == "rule":  # volume x density of the learned material
             reported = lift_mass(mass, high)  # (material, robustness: the learned posterior)
             conf, alts = raw_confidences(
-                mat.posterior, mat.name, reported, volume, area, shape.covered
+                mat.posterior, mat.name, reported, volume, walls, shape.covered
             )
         else:
             scale = pred.mass / max(mass, 1e-9)  # the material's density range about it
@@ -378,7 +404,9 @@ def perceive_instance(
     else:
         mass, low, high = mass_range(mat, volume, sheet)
         reported = lift_mass(mass, high)
-        conf, alts = raw_confidences(mat.posterior, mat.name, reported, volume, area, shape.covered)
+        conf, alts = raw_confidences(
+            mat.posterior, mat.name, reported, volume, walls, shape.covered
+        )
     calibration = packaged_calibration()
     if calibration is not None:  # the learned heads are calibrated already (temperatures)
         mapped = ("members", "mass") if model and model.mass_head == "rule" else ("members",)
@@ -406,4 +434,11 @@ def lift_mass(mass: float, high: float) -> float:
     return high if mass <= LIFTABLE < high else mass
 
 
-__all__ = ["PerceivedObject", "lift_mass", "mass_range", "perceive_instance", "perceive_objects"]
+__all__ = [
+    "PerceivedObject",
+    "bare_slab",
+    "lift_mass",
+    "mass_range",
+    "perceive_instance",
+    "perceive_objects",
+]
