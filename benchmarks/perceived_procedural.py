@@ -20,7 +20,9 @@ executed in physics.
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
+from typing import Any
 
 from perceived_eval import method_stats  # benchmarks/ is on sys.path when run as a script
 
@@ -98,7 +100,51 @@ def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[st
     }
 
 
-def _markdown(table: dict[str, dict[str, dict[str, object]]], shard: tuple[int, int]) -> str:
+#: attributes the renders leave ambiguous by design (#42): the perceiver's column and the
+#: attribute model's head (`benchmarks/attribute_model.py`) that is its evidence's ceiling
+AMBIGUOUS = (("material", "material"), ("robustness", "robustness"), ("mass_class", "mass"))
+
+
+def _ceiling_lines(
+    table: dict[str, dict[str, dict[str, object]]], ceiling: dict[str, Any] | None
+) -> list[str]:
+    """The attributes a camera cannot always tell, beside the best a classifier trained on
+    train renders with the true labels reaches on the same split, and its calibration."""
+    if ceiling is None:
+        return ["", "(No attribute-model page to compare with: `attribute_model.py report`.)"]
+    lines = [
+        "",
+        "The attributes the renders leave ambiguous by design (materials' palettes overlap; "
+        "no camera sees a density or the contents): `utamp2-perceived` beside the evidence's "
+        "ceiling, the learned classifier trained on procedural-v1/train renders with the "
+        "true labels, on the same split's objects of every few scenes "
+        f"([attribute model](attribute-model.md), commit `{ceiling.get('commit', '?')}`), "
+        "and that classifier's expected calibration error (ECE). Mass is judged as its "
+        "class between the rules' thresholds.",
+        "",
+        "| split | " + " | ".join(f"{a}: perceived / ceiling (ECE)" for a, _ in AMBIGUOUS) + " |",
+        "|---" * (len(AMBIGUOUS) + 1) + "|",
+    ]
+    for split, methods in table.items():
+        acc = methods["utamp2-perceived"]["accuracy"]
+        row = ceiling.get(f"procedural-v1/{split}")
+        cells = []
+        for mine, head in AMBIGUOUS:
+            seen = "–" if acc[mine] is None else f"{acc[mine]:.3f}"  # type: ignore[index]
+            if row is None:
+                cells.append(f"{seen} / –")
+                continue
+            ece = row["reliability"][head][-1].get("ece")
+            cells.append(f"{seen} / {row['learned'][head]:.3f} ({ece:.3f})")
+        lines.append(f"| {split} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _markdown(
+    table: dict[str, dict[str, dict[str, object]]],
+    shard: tuple[int, int],
+    ceiling: dict[str, Any] | None = None,
+) -> str:
     lines = [
         f"`utamp2-perceived` next to the rules on the declared attributes (`utamp2-rules`), "
         f"procedural test splits, symbolic grounding, seed 0, shard {shard[0]}/{shard[1]} of "
@@ -136,6 +182,7 @@ def _markdown(table: dict[str, dict[str, dict[str, object]]], shard: tuple[int, 
         acc = methods["utamp2-perceived"]["accuracy"]
         cells = ["–" if acc[a] is None else f"{acc[a]:.3f}" for a in ATTRIBUTES]  # type: ignore[index]
         lines.append(f"| {split} | " + " | ".join(cells) + " |")
+    lines += _ceiling_lines(table, ceiling)
     lines += [
         "",
         "Achievable scenes planned validly by `utamp2-perceived`, by the number of objects "
@@ -203,7 +250,9 @@ def main() -> None:
         }
         perceived = [r for r in rows if r.method == "utamp2-perceived"]
         table[split]["utamp2-perceived"]["blame"] = blame_rows(perceived, achievable)
-    md = _markdown(table, (i, n))
+    ceiling_file = args.results / "attribute-model.json"
+    ceiling = json.loads(ceiling_file.read_text()) if ceiling_file.exists() else None
+    md = _markdown(table, (i, n), ceiling)
     print(md)
     args.results.mkdir(parents=True, exist_ok=True)
     write_markdown(args.results / "perceived-procedural.md", md)
