@@ -116,11 +116,12 @@ def _ceiling_lines(
         "",
         "The attributes the renders leave ambiguous by design (materials' palettes overlap; "
         "no camera sees a density or the contents): `utamp2-perceived` beside the evidence's "
-        "ceiling, the learned classifier trained on procedural-v1/train renders with the "
-        "true labels, on the same split's objects of every few scenes "
+        "ceiling, the better of two classifiers of the perceiver's measurements (the learned "
+        "one, trained on procedural-v1/train renders with the true labels, and the "
+        "hand-built one) on the same split's objects of every few scenes "
         f"([attribute model](attribute-model.md), commit `{ceiling.get('commit', '?')}`), "
-        "and that classifier's expected calibration error (ECE). Mass is judged as its "
-        "class between the rules' thresholds.",
+        "and the learned confidences' expected calibration error (ECE). Mass is judged as "
+        "its class between the rules' thresholds.",
         "",
         "| split | " + " | ".join(f"{a}: perceived / ceiling (ECE)" for a, _ in AMBIGUOUS) + " |",
         "|---" * (len(AMBIGUOUS) + 1) + "|",
@@ -135,7 +136,8 @@ def _ceiling_lines(
                 cells.append(f"{seen} / –")
                 continue
             ece = row["reliability"][head][-1].get("ece")
-            cells.append(f"{seen} / {row['learned'][head]:.3f} ({ece:.3f})")
+            best = max(row["learned"][head], row["handbuilt"][head])
+            cells.append(f"{seen} / {best:.3f} ({ece:.3f})")
         lines.append(f"| {split} | " + " | ".join(cells) + " |")
     return lines
 
