@@ -192,6 +192,24 @@ def test_a_bare_board_is_weighed_solid_whatever_its_materials_typical_wall() -> 
         assert mass_areas(rimmed) == (mass_area(rimmed), shell_area(rimmed))
 
 
+def test_a_dishs_well_is_a_food_surface_however_narrow_a_flat_box_top_is_not() -> None:
+    """A 14 cm plate's 11 cm well (or a well an object standing in it hides part of) is a
+    food surface, as every well of the train catalogues is (4 of the first 40 plates have a
+    well narrower than `FOOD_SURFACE`); a food box's flat top as narrow is not."""
+    body = SeenMember("body", "", SeenBox((-0.07, -0.07, 0.0), (0.07, 0.07, 0.03)), "cylinder")
+    well = SeenTop("flat", (0.11, 0.11), 0.01, (0.0, 0.0), 0.015, 0.015)
+    plate = SeenShape(0.0, np.zeros(3), body, (), well, (0.14, 0.14), 0.0, 0.0005, 0.2, 0.0)
+    mat = MaterialEstimate("ceramic", {"ceramic": 1.0})
+    top = PerceivedObject(0, plate, mat, 0.3, 0.2, 0.4, ()).as_type("p", "upright").parts["on"]
+    assert top.shape == "flat" and top.height is not None and top.food_surface
+    box_body = SeenMember("body", "", SeenBox((-0.05, -0.03, 0.0), (0.05, 0.03, 0.15)), "box")
+    box = SeenShape(0.0, np.zeros(3), box_body, (), SeenTop("flat", (0.1, 0.06), 0.15),
+                    (0.1, 0.06), 0.0, 0.0005, 0.2, 0.0)  # fmt: skip
+    card = MaterialEstimate("cardboard", {"cardboard": 1.0})
+    lid = PerceivedObject(0, box, card, 0.3, 0.2, 0.4, ()).as_type("b", "upright").parts["on"]
+    assert lid.shape == "flat" and lid.height is None and not lid.food_surface
+
+
 def test_a_cavity_under_another_object_is_hidden_but_a_well_still_shows() -> None:
     """A ring seen around what stands on an inverted mug's base is not an opening; a tray's
     well around a pan standing in it is still a well."""

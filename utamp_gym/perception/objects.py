@@ -15,7 +15,8 @@ then need and no camera sees is filled in by stated assumptions:
   inverted box (packages are closed), and an **open** rim under an inverted round one
   (turned over onto its opening: a mug, a pot), inside walls as thick as its material's;
 * a flat top at least `FOOD_SURFACE` wide both ways is a **food surface** (boards, trays,
-  plates: never put face-down);
+  plates: never put face-down), and so is a flat well inside a rim however narrow (a dish:
+  a small plate, or a well an object standing in it hides part of);
 * a body thinner than `THIN_TOP` has a **thin** top where it is narrower than
   `FOOD_SURFACE` (a spatula's blade: nothing rests on it; a slab as thin and wider is a
   board that carries things); a box body lower than `THIN_SIDE` has **thin** sides, a
@@ -218,7 +219,7 @@ def _top_part(obj: PerceivedObject, body: Box, bbox: Box, inverted: bool) -> Par
         height = float(np.clip(height, bbox.min[2], bbox.max[2]))
     elif shape in ("open", "concave"):
         center = (top.center[0], -top.center[1] if inverted else top.center[1])
-    food = shape == "flat" and not inverted and min(size) >= FOOD_SURFACE
+    food = shape == "flat" and not inverted and (height is not None or min(size) >= FOOD_SURFACE)
     return PartAttrs(shape, size, food, height, center)
 
 
