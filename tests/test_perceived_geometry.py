@@ -14,7 +14,14 @@ from utamp_gym.affordances.solids import stand_refusal
 from utamp_gym.perception.grid import Grid
 from utamp_gym.perception.material import MaterialEstimate, estimate_mass
 from utamp_gym.perception.members import trim_bar
-from utamp_gym.perception.objects import RIM_BAND, PerceivedObject, _edges, bare_slab, mass_areas
+from utamp_gym.perception.objects import (
+    RIM_BAND,
+    PerceivedObject,
+    _edges,
+    bare_slab,
+    mass_areas,
+    slab,
+)
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.tops import classify_top
 from utamp_gym.perception.volumes import mass_area, shell_area, solid_volume
@@ -171,7 +178,7 @@ def test_a_plate_is_weighed_as_one_dish_shaped_sheet() -> None:
     assert mass_area(tray) == shell_area(tray)  # a moulded tray keeps its shell
 
 
-def test_a_bare_board_is_weighed_solid_whatever_its_materials_typical_wall() -> None:
+def test_a_board_is_weighed_solid_whatever_its_materials_typical_wall() -> None:
     """A 30 x 20 x 2 cm plastic cutting board weighs its whole volume (0.0012 m^3, 1.1 kg
     at plastic's 930 kg/m^3): weighed as a moulded shell of plastic's 2 mm walls it read
     0.26 kg, the five plastic boards of every third procedural-v1/train scene, 1.3-2.3 kg,
@@ -187,6 +194,11 @@ def test_a_bare_board_is_weighed_solid_whatever_its_materials_typical_wall() -> 
     assert estimate_mass("plastic", volume, walls)[0] == pytest.approx(volume * 930.0)
     shell = estimate_mass("plastic", volume, shell_area(board))[0]
     assert shell < 0.3 * volume * 930.0  # what the walls rule made of it
+    # a paddle board: its handle lies flat beside the slab; solid too, but not bare
+    grip = SeenMember("handle", "back", SeenBox((-0.23, -0.02, 0.0), (-0.15, 0.02, 0.02)))
+    paddle = replace(board, members=(grip,))
+    assert slab(paddle) and not bare_slab(paddle)
+    assert mass_areas(paddle) == (math.inf, math.inf)
     for rimmed in (_rimmed("box"), _rimmed("cylinder")):  # a tray and a plate keep walls
         assert not bare_slab(rimmed)
         assert mass_areas(rimmed) == (mass_area(rimmed), shell_area(rimmed))

@@ -32,7 +32,7 @@ then need and no camera sees is filled in by stated assumptions:
   without a handle) has the end strips of its longer axis as **edges**, as the catalogues
   declare them (the rules judge whether a finger fits beside them);
 * the **mass** is volume x the material's nominal density (`material.estimate_mass`: the
-  material in walls of its typical thickness, but a bare slab's whole volume, `bare_slab`),
+  material in walls of its typical thickness, but a slab's whole volume, `slab`),
   except where that is light enough for the hand to lift (`LIFTABLE`) but the material's
   density range may make it too heavy: then the heaviest plausible mass (`lift_mass`). A
   camera cannot tell those apart, and the cautious reading plans what works either way
@@ -304,27 +304,30 @@ def _inner_face(top: SeenTop, ax: int, high: bool) -> float | None:
     return float(top.center[ax] + half if high else top.center[ax] - half)
 
 
-def bare_slab(shape: SeenShape) -> bool:
-    """A board without a handle: no members, a box body lower than `THIN_SIDE` with a flat
-    top and no rim, wider than the hand. It is cut or moulded solid: its mass is its whole
-    volume's, whatever the material's typical wall (`Material.wall`)."""
-    body, top = shape.body.box, shape.top
+def slab(shape: SeenShape) -> bool:
+    """A box body lower than `THIN_SIDE` with a flat top seen without a rim: a board, a
+    paddle, a utensil's blade. It is cut or moulded solid: its mass is its whole volume's,
+    handle and all, whatever the material's typical wall (`Material.wall`)."""
+    top = shape.top
     return (
-        not shape.members
-        and shape.body.geom == "box"
+        shape.body.geom == "box"
         and top.shape == "flat"
         and top.visible
         and top.rim <= 0
-        and body.size[2] < THIN_SIDE
-        and min(body.size[:2]) > GRIPPER_OPENING
+        and shape.body.box.size[2] < THIN_SIDE
     )
+
+
+def bare_slab(shape: SeenShape) -> bool:
+    """A board without a handle: a `slab` without members, wider than the hand."""
+    return slab(shape) and not shape.members and min(shape.body.box.size[:2]) > GRIPPER_OPENING
 
 
 def mass_areas(shape: SeenShape) -> tuple[float, float]:
     """The areas of material (m^2) a seen piece's mass and its mass classes are reckoned
     from (`material.estimate_mass`, `confidence.raw_confidences`): `mass_area` and
-    `shell_area`, or inf for a `bare_slab` (solid: its whole volume is material)."""
-    if bare_slab(shape):
+    `shell_area`, or inf for a `slab` (solid: its whole volume is material)."""
+    if slab(shape):
         return math.inf, math.inf
     return mass_area(shape), shell_area(shape)
 
@@ -439,7 +442,9 @@ __all__ = [
     "PerceivedObject",
     "bare_slab",
     "lift_mass",
+    "mass_areas",
     "mass_range",
     "perceive_instance",
     "perceive_objects",
+    "slab",
 ]
