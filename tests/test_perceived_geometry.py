@@ -14,17 +14,10 @@ from utamp_gym.affordances.solids import stand_refusal
 from utamp_gym.perception.grid import Grid
 from utamp_gym.perception.material import MaterialEstimate, estimate_mass
 from utamp_gym.perception.members import trim_bar
-from utamp_gym.perception.objects import (
-    RIM_BAND,
-    PerceivedObject,
-    _edges,
-    bare_slab,
-    mass_areas,
-    slab,
-)
+from utamp_gym.perception.objects import RIM_BAND, PerceivedObject, _edges, bare_slab
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.tops import classify_top
-from utamp_gym.perception.volumes import mass_area, shell_area, solid_volume
+from utamp_gym.perception.volumes import mass_area, mass_areas, shell_area, slab, solid_volume
 from utamp_gym.perception.walls import wall_fit
 from utamp_gym.scene.materials import material
 

@@ -71,7 +71,7 @@ from utamp_gym.perception.material import (
 )
 from utamp_gym.perception.seen import SeenBox, SeenMember, SeenShape, SeenTop
 from utamp_gym.perception.shape import fit_shape
-from utamp_gym.perception.volumes import mass_area, shell_area, solid_volume
+from utamp_gym.perception.volumes import THIN_SIDE, mass_areas, shell_area, slab, solid_volume
 from utamp_gym.scene.catalogue import Member, ObjectType, PartAttrs
 from utamp_gym.scene.geometry import Box
 from utamp_gym.scene.materials import material
@@ -80,7 +80,6 @@ FOOD_SURFACE = 0.12  # m: a flat top at least this wide both ways is a food surf
 THIN_TOP = 0.0125  # m: a body thinner than this has a thin top where narrower than
 #: FOOD_SURFACE (a spatula's blade, 6-12 mm thick, 55-90 mm wide; chopping boards are 12-40
 #: mm thick, and wider)
-THIN_SIDE = 0.055  # m: a box body lower than this has thin sides
 #: m: a member this low rests on the support with the body (a spatula's grip; a pan's or a
 #: mug's handle starts 1-4 cm up)
 GROUNDED = 0.005
@@ -304,32 +303,9 @@ def _inner_face(top: SeenTop, ax: int, high: bool) -> float | None:
     return float(top.center[ax] + half if high else top.center[ax] - half)
 
 
-def slab(shape: SeenShape) -> bool:
-    """A box body lower than `THIN_SIDE` with a flat top seen without a rim: a board, a
-    paddle, a utensil's blade. It is cut or moulded solid: its mass is its whole volume's,
-    handle and all, whatever the material's typical wall (`Material.wall`)."""
-    top = shape.top
-    return (
-        shape.body.geom == "box"
-        and top.shape == "flat"
-        and top.visible
-        and top.rim <= 0
-        and shape.body.box.size[2] < THIN_SIDE
-    )
-
-
 def bare_slab(shape: SeenShape) -> bool:
     """A board without a handle: a `slab` without members, wider than the hand."""
     return slab(shape) and not shape.members and min(shape.body.box.size[:2]) > GRIPPER_OPENING
-
-
-def mass_areas(shape: SeenShape) -> tuple[float, float]:
-    """The areas of material (m^2) a seen piece's mass and its mass classes are reckoned
-    from (`material.estimate_mass`, `confidence.raw_confidences`): `mass_area` and
-    `shell_area`, or inf for a `slab` (solid: its whole volume is material)."""
-    if slab(shape):
-        return math.inf, math.inf
-    return mass_area(shape), shell_area(shape)
 
 
 def _slab_edges(shape: SeenShape) -> tuple[SeenMember, ...]:
@@ -442,9 +418,7 @@ __all__ = [
     "PerceivedObject",
     "bare_slab",
     "lift_mass",
-    "mass_areas",
     "mass_range",
     "perceive_instance",
     "perceive_objects",
-    "slab",
 ]

@@ -1,6 +1,6 @@
-"""How much material a seen object holds: its solid volume, its outer shell and the area a
-walled piece's mass is reckoned from (`utamp_gym.perception.material.estimate_mass`), from
-its seen shape (`seen.SeenShape`) alone."""
+"""How much material a seen object holds: its solid volume, its outer shell, the area a
+walled piece's mass is reckoned from (`utamp_gym.perception.material.estimate_mass`) and
+the pieces that are solid (slabs), from its seen shape (`seen.SeenShape`) alone."""
 
 from __future__ import annotations
 
@@ -9,6 +9,8 @@ import math
 import numpy as np
 
 from utamp_gym.perception.seen import SeenShape
+
+THIN_SIDE = 0.055  # m: a box body lower than this has thin sides (a slab: `slab`)
 
 
 def solid_volume(shape: SeenShape) -> float:
@@ -57,4 +59,27 @@ def mass_area(shape: SeenShape) -> float:
     return shell_area(shape)
 
 
-__all__ = ["mass_area", "shell_area", "solid_volume"]
+def slab(shape: SeenShape) -> bool:
+    """A box body lower than `THIN_SIDE` with a flat top seen without a rim: a board, a
+    paddle, a utensil's blade. It is cut or moulded solid: its mass is its whole volume's,
+    handle and all, whatever the material's typical wall (`Material.wall`)."""
+    top = shape.top
+    return (
+        shape.body.geom == "box"
+        and top.shape == "flat"
+        and top.visible
+        and top.rim <= 0
+        and shape.body.box.size[2] < THIN_SIDE
+    )
+
+
+def mass_areas(shape: SeenShape) -> tuple[float, float]:
+    """The areas of material (m^2) a seen piece's mass and its mass classes are reckoned
+    from (`material.estimate_mass`, `confidence.raw_confidences`): `mass_area` and
+    `shell_area`, or inf for a `slab` (solid: its whole volume is material)."""
+    if slab(shape):
+        return math.inf, math.inf
+    return mass_area(shape), shell_area(shape)
+
+
+__all__ = ["THIN_SIDE", "mass_area", "mass_areas", "shell_area", "slab", "solid_volume"]
