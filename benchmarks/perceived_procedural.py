@@ -119,7 +119,7 @@ def _ceiling_lines(
         "ceiling, the better of two classifiers of the perceiver's measurements (the learned "
         "one, trained on procedural-v1/train renders with the true labels, and the "
         "hand-built one) on the same split's objects of every few scenes "
-        f"([attribute model](attribute-model.md), commit `{ceiling.get('commit', '?')}`), "
+        f"(the attribute model's page, `attribute-model.md`, at `{ceiling.get('commit', '?')}`), "
         "and the learned confidences' expected calibration error (ECE). Mass is judged as "
         "its class between the rules' thresholds.",
         "",
