@@ -25,6 +25,7 @@ import json
 import re
 import time
 from collections import Counter
+from collections.abc import Collection
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -151,6 +152,24 @@ def consistent(env: UTampKitchenEnv) -> bool:
     return True
 
 
+def draw_action(
+    info: dict[str, Any],
+    model: OutcomeModel,
+    rng: np.random.Generator,
+    skip: Collection[int] = (),
+) -> int | None:
+    """An action the env's mask allows (less `skip`), from those the outcome model predicts
+    to succeed with probability 1/2 (always when all do) and otherwise from the others;
+    None when the mask allows none. The walks of this module and `procedural_outcomes`."""
+    allowed = np.flatnonzero(info["action_mask"])
+    allowed = allowed[~np.isin(allowed, sorted(skip))]
+    if not allowed.size:
+        return None
+    ok = model.affordances_hold()[allowed]
+    pool = allowed[ok] if ok.any() and (rng.random() < 0.5 or ok.all()) else allowed[~ok]
+    return int(rng.choice(pool))
+
+
 def sample_suite(suite: str, n_pairs: int, seed: int, max_steps: int) -> list[Pair]:
     """`n_pairs` pairs from episodes of one suite (see the module docstring)."""
     env = UTampKitchenEnv(suite=suite, masks="geometric", record_timings=False)
@@ -164,14 +183,9 @@ def sample_suite(suite: str, n_pairs: int, seed: int, max_steps: int) -> list[Pa
             first = False
             model.reset(env.scene)
             for step in range(max_steps):
-                allowed = np.flatnonzero(info["action_mask"])
-                if not allowed.size:
+                i = draw_action(info, model, rng)
+                if i is None:
                     break
-                ok = model.affordances_hold()[allowed]
-                pool = (
-                    allowed[ok] if ok.any() and (rng.random() < 0.5 or ok.all()) else allowed[~ok]
-                )
-                i = int(rng.choice(pool))
                 predicted_reason = model.affordance_failure(i)
                 start = time.perf_counter()
                 _, _, terminated, _, info = env.step(i)

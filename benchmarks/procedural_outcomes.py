@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from outcome_model import _physics_class, consistent, symbolic_supports
+from outcome_model import _physics_class, consistent, draw_action, symbolic_supports
 
 from utamp_gym.affordances.rules import PALM_PARTS, pick_refusal
 from utamp_gym.provenance import commit, write_json, write_markdown
@@ -140,15 +140,9 @@ def sample_split(
             tainted = False
             failed: set[int] = set()  # actions that failed in the current state
             for step in range(max_steps):
-                allowed = np.flatnonzero(info["action_mask"])
-                allowed = allowed[~np.isin(allowed, sorted(failed))]
-                if not allowed.size:
+                i = draw_action(info, model, rng, skip=failed)
+                if i is None:
                     break
-                ok = model.affordances_hold()[allowed]
-                pool = (
-                    allowed[ok] if ok.any() and (rng.random() < 0.5 or ok.all()) else allowed[~ok]
-                )
-                i = int(rng.choice(pool))
                 reason = model.affordance_failure(i)
                 kind, obj, target = env.universe.roles[i]
                 before = symbolic_supports(env) if reason is not None else None
