@@ -25,7 +25,7 @@ import json
 import re
 import time
 from collections import Counter
-from collections.abc import Collection
+from collections.abc import Collection, Iterator
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -170,18 +170,28 @@ def draw_action(
     return int(rng.choice(pool))
 
 
+def episodes(env: UTampKitchenEnv, model: OutcomeModel, seed: int) -> Iterator[dict[str, Any]]:
+    """Episode after episode of `env` (reset with `seed` the first time, then drawing on),
+    the outcome model reset with it: the reset's info. The walks of this module and
+    `procedural_outcomes`."""
+    first = True
+    while True:
+        _, info = env.reset(seed=seed if first else None)
+        first = False
+        model.reset(env.scene)
+        yield info
+
+
 def sample_suite(suite: str, n_pairs: int, seed: int, max_steps: int) -> list[Pair]:
     """`n_pairs` pairs from episodes of one suite (see the module docstring)."""
     env = UTampKitchenEnv(suite=suite, masks="geometric", record_timings=False)
     model = OutcomeModel(env.universe)
     rng = np.random.default_rng(seed)
     pairs: list[Pair] = []
-    first = True
     try:
-        while len(pairs) < n_pairs:
-            _, info = env.reset(seed=seed if first else None)
-            first = False
-            model.reset(env.scene)
+        for info in episodes(env, model, seed):
+            if len(pairs) >= n_pairs:
+                break
             for step in range(max_steps):
                 i = draw_action(info, model, rng)
                 if i is None:

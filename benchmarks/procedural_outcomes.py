@@ -39,13 +39,14 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from outcome_model import _physics_class, consistent, draw_action, symbolic_supports
+from outcome_model import _physics_class, consistent, draw_action, episodes, symbolic_supports
 
 from utamp_gym.affordances.rules import PALM_PARTS, pick_refusal
+from utamp_gym.env.kitchen import UTampKitchenEnv
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.sim.decode import GraspSymbols, grasp_candidates
 from utamp_gym.suites import procedural, resolve_scene
-from utamp_gym.symbolic.outcome import truth_atoms
+from utamp_gym.symbolic.outcome import OutcomeModel, truth_atoms
 
 TARGET = 0.98  # physics must succeed on this share of the actions the rules allow, per family
 _X = np.array([1.0, 0.0, 0.0])
@@ -118,9 +119,6 @@ def sample_split(
     split: str, n_pairs: int, seed: int, max_steps: int, domain: str = "utamp2"
 ) -> list[Pair]:
     """`n_pairs` pairs from physics episodes on one split (see the module docstring)."""
-    from utamp_gym.env.kitchen import UTampKitchenEnv
-    from utamp_gym.symbolic.outcome import OutcomeModel
-
     env = UTampKitchenEnv(
         split=split,
         objects=procedural.OBJECT_NAMES,
@@ -130,12 +128,10 @@ def sample_split(
     model = OutcomeModel(env.universe, domain)
     rng = np.random.default_rng(seed)
     pairs: list[Pair] = []
-    first = True
     try:
-        while len(pairs) < n_pairs:
-            _, info = env.reset(seed=seed if first else None)
-            first = False
-            model.reset(env.scene)
+        for info in episodes(env, model, seed):
+            if len(pairs) >= n_pairs:
+                break
             families = _families(env.scene.name)
             tainted = False
             failed: set[int] = set()  # actions that failed in the current state
