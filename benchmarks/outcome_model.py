@@ -31,9 +31,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _common import write_results  # benchmarks/ is on sys.path when run as a script
 
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 from utamp_gym.suites import resolve_scene
 from utamp_gym.symbolic.outcome import OutcomeModel, truth_atoms
 
@@ -332,16 +333,14 @@ def main() -> None:
             pairs += sample_suite(suite, share, args.seed + k, args.max_steps)
         wall = time.perf_counter() - start
     summary = summarize(pairs)
-    out.parent.mkdir(parents=True, exist_ok=True)
     data = {
         **summary,
         "args": vars(args),
         "wall_time_s": wall,
         "all_pairs": [{**asdict(p), "kind": p.kind} for p in pairs],
     }
-    prov = write_json(out.with_suffix(".json"), data, indent=1)
     text = to_markdown(summary, args, wall)
-    write_markdown(out.with_suffix(".md"), text, prov)
+    write_results(out.parent, out.name, data, text, indent=1)
     print(text)
 
 

@@ -39,11 +39,12 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
+from _common import write_results
 from outcome_model import _physics_class, consistent, draw_action, episodes, symbolic_supports
 
 from utamp_gym.affordances.rules import PALM_PARTS, pick_refusal
 from utamp_gym.env.kitchen import UTampKitchenEnv
-from utamp_gym.provenance import commit, write_json, write_markdown
+from utamp_gym.provenance import commit
 from utamp_gym.sim.decode import GraspSymbols, grasp_candidates
 from utamp_gym.suites import procedural, resolve_scene
 from utamp_gym.symbolic.outcome import OutcomeModel, truth_atoms
@@ -393,16 +394,14 @@ def main() -> None:
         pairs = [p for part in parts for p in part]
         wall = time.perf_counter() - start
     summary = summarize(pairs, args.domain)
-    out.parent.mkdir(parents=True, exist_ok=True)
     data = {
         **summary,
         "args": vars(args),
         "wall_time_s": wall,
         "all_pairs": [asdict(p) for p in pairs],
     }
-    prov = write_json(out.with_suffix(".json"), data, indent=1)
     text = to_markdown(summary, args, wall)
-    write_markdown(out.with_suffix(".md"), text, prov)
+    write_results(out.parent, out.name, data, text, indent=1)
     print(text)
 
 
