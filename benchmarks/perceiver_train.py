@@ -36,7 +36,7 @@ from utamp_gym.perception.confidence import (
     raw_confidences,
 )
 from utamp_gym.perception.objects import perceive_objects
-from utamp_gym.perception.volumes import shell_area, solid_volume
+from utamp_gym.perception.volumes import mass_areas, solid_volume
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.catalogue import ObjectType
 from utamp_gym.seeding import run_seed
@@ -57,9 +57,9 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
         declared = scene.type_of(name)
         seen = p.as_type(name, obj.orientation)
         acc = attribute_accuracy(seen, declared, align_members(seen, declared))
-        raw, alts = raw_confidences(
+        raw, alts = raw_confidences(  # as `perceive_instance` reckons them (a slab solid)
             p.material.posterior, p.material.name, p.mass, solid_volume(p.shape),
-            shell_area(p.shape), p.shape.covered,
+            mass_areas(p.shape)[1], p.shape.covered,
         )  # fmt: skip
         right = {
             "material": acc["material"] == 1.0,
