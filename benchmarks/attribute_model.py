@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -66,7 +67,7 @@ from utamp_gym.perception.learned import (
 )
 from utamp_gym.perception.material import appearance_features, classify_material, estimate_mass
 from utamp_gym.perception.objects import instance_pixels, lift_mass, perceive_objects
-from utamp_gym.perception.volumes import shell_area, solid_volume
+from utamp_gym.perception.volumes import mass_areas, shell_area, solid_volume
 from utamp_gym.provenance import commit, write_json, write_markdown
 from utamp_gym.scene.materials import material
 from utamp_gym.seeding import run_seed
@@ -96,6 +97,8 @@ def scene_rows(scene, sim) -> list[dict[str, object]]:  # type: ignore[no-untype
         rows.append({
             "scene": scene.name, "object": name, "n_objects": scene.n_objects,
             "measurements": m, "handbuilt": {"material": gmm.name, "mass": p.mass},
+            # as the perceiver reckons a mass (None: a solid slab's inf, which JSON lacks)
+            "mass_areas": [a if math.isfinite(a) else None for a in mass_areas(p.shape)],
             "declared": {"material": declared.material, "mass": declared.mass,
                          "robustness": declared.robustness},
         })  # fmt: skip
@@ -108,8 +111,25 @@ def collect(suite: str, cache: Path, part: tuple[int, int] = (1, 1)) -> list[dic
 
 
 def cached(suite: str, cache: Path) -> list[dict[str, object]]:
+    """The rows collected of `suite` (a cache written before the rows carried their
+    ``mass_areas`` is refused, naming the file: collect it again into a new cache)."""
     folder = cache / suite.replace("/", "_")
-    return [r for p in sorted(folder.glob("*.json")) for r in json.loads(p.read_text())]
+    rows = []
+    for p in sorted(folder.glob("*.json")):
+        for r in json.loads(p.read_text()):
+            if "mass_areas" not in r:
+                raise SystemExit(
+                    f"{p}: row of {r.get('object')} has no 'mass_areas' (collected by an "
+                    "older attribute_model.py): collect into a new --cache"
+                )
+            rows.append(r)
+    return rows
+
+
+def areas(row: dict[str, object]) -> tuple[float, float]:
+    """The (sheet, walls) areas a row's mass is reckoned from (`volumes.mass_areas`)."""
+    sheet, walls = row["mass_areas"]  # type: ignore[misc,index]
+    return (math.inf if sheet is None else sheet), (math.inf if walls is None else walls)
 
 
 def evaluate(model: AttributeModel, rows: list[dict[str, object]]) -> dict[str, object]:
@@ -125,10 +145,10 @@ def evaluate(model: AttributeModel, rows: list[dict[str, object]]) -> dict[str, 
         out["robustness"].append(rob == d["robustness"])
         kg, mass_conf = p.mass, float(p.mass_class[mass_class(p.mass)])
         if model.mass_head == "rule":  # as `objects.perceive_instance` reads it
-            m = r["measurements"]  # type: ignore[index]
-            kg, _, high = estimate_mass(name, m["volume"], m["area"])
+            volume, (sheet, walls) = r["measurements"]["volume"], areas(r)  # type: ignore[index]
+            kg, _, high = estimate_mass(name, volume, sheet)
             kg = lift_mass(kg, high)
-            raw, _ = raw_confidences(p.material, name, kg, m["volume"], m["area"], 0.0)
+            raw, _ = raw_confidences(p.material, name, kg, volume, walls, 0.0)
             cal = packaged_calibration()
             mass_conf = cal("mass", raw["mass"]) if cal else raw["mass"]
         out["mass"].append(mass_class(kg) == mass_class(float(d["mass"])))
@@ -235,10 +255,10 @@ def reliability(ev: dict[str, object]) -> dict[str, list[dict[str, float]]]:
     }
 
 
-def _rule_mass(material_name: str, m: dict[str, float]) -> float:
+def _rule_mass(material_name: str, row: dict[str, object]) -> float:
     """The hand-built mass of a piece (volume x density of `material_name`, `lift_mass`)
     from its measurements (not the stored mass: a later model may have made that)."""
-    kg, _, high = estimate_mass(material_name, m["volume"], m["area"])
+    kg, _, high = estimate_mass(material_name, row["measurements"]["volume"], areas(row)[0])  # type: ignore[index]
     return lift_mass(kg, high)
 
 
@@ -255,7 +275,7 @@ def handbuilt_accuracy(rows: list[dict[str, object]]) -> dict[str, float]:
         "mass": float(
             np.mean(
                 [
-                    mass_class(_rule_mass(h["material"], r["measurements"]))  # type: ignore[arg-type,index]
+                    mass_class(_rule_mass(h["material"], r))  # type: ignore[arg-type]
                     == mass_class(float(r["declared"]["mass"]))
                     for r, (h, _) in zip(rows, pairs, strict=True)  # type: ignore[index]
                 ]
