@@ -239,6 +239,12 @@ def summarize(pairs: list[Pair], domain: str = "utamp2") -> dict[str, Any]:
         "forbidden_physics_ok": sum(p.physics for p in pairs if not p.allowed),
         "forbidden_picks": sum(c["forbidden"] for c in picks.values()),
         "forbidden_picks_physics_ok": sum(c["forbidden_ok"] for c in picks.values()),
+        # the grasps the rules refuse under every name: a pick named in the other finger
+        # order of a grasp they grant is the same grasp (`pick_refusal_kind`)
+        "forbidden_grasps": sum(c["forbidden"] for k, c in picks.items() if k != "finger order"),
+        "forbidden_grasps_physics_ok": sum(
+            c["forbidden_ok"] for k, c in picks.items() if k != "finger order"
+        ),
         "forbidden_picks_by_refusal": {
             k: dict(c) for k, c in sorted(picks.items(), key=lambda kc: -kc[1]["forbidden_ok"])
         },
@@ -266,7 +272,9 @@ def to_markdown(summary: dict[str, Any], args: argparse.Namespace, wall_s: float
         "they forbid; "
         f"of the picks they forbid, physics carried out "
         f"{_rate(s['forbidden_picks_physics_ok'], s['forbidden_picks'])} (target ≤ "
-        f"{FORBIDDEN_PICKS:.0%}).",
+        f"{FORBIDDEN_PICKS:.0%}); of the grasps they refuse under every name (leaving out "
+        "the picks named in the other finger order of a grasp they grant: the same grasp), "
+        f"{_rate(s['forbidden_grasps_physics_ok'], s['forbidden_grasps'])}.",
         "",
         "An episode ends when the simulation no longer matches the symbolic state, after a "
         "failure or after an action physics carried out otherwise than its effects say (an "

@@ -56,6 +56,8 @@ def test_the_report_counts_the_forbidden_picks_physics_carried_out():
     pairs = [pair(mirror, False, True), pair(side, False, False), pair(granted, True, True)]
     summary = outcomes.summarize(pairs, "utamp2x")
     assert (summary["forbidden_picks"], summary["forbidden_picks_physics_ok"]) == (2, 1)
+    # the mirrored pick is the granted grasp under another name: not a refused grasp
+    assert (summary["forbidden_grasps"], summary["forbidden_grasps_physics_ok"]) == (1, 0)
     by = summary["forbidden_picks_by_refusal"]
     assert by["finger order"] == {"forbidden": 1, "forbidden_ok": 1}
     assert by["side grasp"] == {"forbidden": 1, "forbidden_ok": 0}
@@ -64,4 +66,8 @@ def test_the_report_counts_the_forbidden_picks_physics_carried_out():
     )
     text = outcomes.to_markdown(summary, args, 1.0)
     assert "of the picks they forbid, physics carried out 1/2 (50.0%) (target ≤ 5%)" in text
+    assert (
+        "of the grasps they refuse under every name" in text
+        and "grant: the same grasp), 0/1 (0.0%)." in text
+    )
     assert "| side grasp | 1 | 0/1 (0.0%) |" in text
