@@ -380,8 +380,10 @@ def main() -> None:
     out = Path(args.out)
     splits = [s.strip() for s in args.splits.split(",") if s.strip()]
     start = time.perf_counter()
+    sampled: dict[str, str] = {}  # the run that drew the pairs, when re-summarized
     if args.from_json:
         old = json.loads(out.with_suffix(".json").read_text())
+        sampled = old.get("sampled") or {"command": old["command"], "commit": old["commit"]}
         names = {f.name for f in fields(Pair)}
         pairs = [Pair(**{k: v for k, v in p.items() if k in names}) for p in old["all_pairs"]]
         wall = float(old["wall_time_s"])
@@ -404,11 +406,17 @@ def main() -> None:
     summary = summarize(pairs, args.domain)
     data = {
         **summary,
+        **({"sampled": sampled} if sampled else {}),
         "args": vars(args),
         "wall_time_s": wall,
         "all_pairs": [asdict(p) for p in pairs],
     }
     text = to_markdown(summary, args, wall)
+    if sampled:
+        text += (
+            f"\nThe pairs were drawn by `{sampled['command']}` at commit "
+            f"`{sampled['commit']}`; this page summarizes them again (`--from-json`).\n"
+        )
     write_results(out.parent, out.name, data, text, indent=1)
     print(text)
 
