@@ -226,7 +226,7 @@ def train(cache: Path, write: bool, limit: int | None = None) -> dict[str, objec
     if write:
         path = ROOT / "assets" / Path(*MODEL_FILE)
         path.write_text(json.dumps(model.to_json(), separators=(",", ":")) + "\n")
-    return {"l2": l2, "temperatures": temps, "cv_accuracy": _accuracy(held),
+    return {"model": model, "l2": l2, "temperatures": temps, "cv_accuracy": _accuracy(held),
             "objects": len(rows), "mass_cv": mass_cv, "mass_head": mass_head, "cv": held,
             "pool": pool, "handbuilt": handbuilt, "pool_accuracy": pool_acc,
             "later_accuracy": _accuracy(later_ev) if later else None, "later_cv": later_ev,
@@ -391,7 +391,7 @@ def main() -> None:
             print(suite, len(collect(suite, args.cache, (i, n))), "objects")
     elif args.command == "train":
         out = train(args.cache, args.write, args.limit)
-        skip = ("cv", "family_cv", "family_rows", "later_cv", "later_rows")
+        skip = ("model", "cv", "family_cv", "family_rows", "later_cv", "later_rows")
         print({k: v for k, v in out.items() if k not in skip})
         for name, evs in (("even/odd", out["cv"]), ("leave-one-family-out", out["family_cv"]),
                           ("later scenes", out["later_cv"])):  # fmt: skip

@@ -8,12 +8,14 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import attribute_model as am
 
+from utamp_gym.perception.learned import MODEL_FILE
 from utamp_gym.perception.material import estimate_mass
 from utamp_gym.scene.materials import material
 
@@ -47,3 +49,24 @@ def test_a_cache_without_mass_areas_is_refused_naming_the_file(tmp_path: Path) -
         am.cached("procedural-v1/train", tmp_path)
     (folder / "0001.json").write_text(json.dumps([_row([None, None])]))
     assert am.cached("procedural-v1/train", tmp_path)[0]["object"] == "board"
+
+
+@pytest.mark.slow
+def test_the_shipped_model_is_what_train_makes_of_the_current_perceivers_measurements(
+    tmp_path: Path,
+) -> None:
+    """The shipped weights come out of the script (`train --limit 120`) on the measurements
+    the perceiver makes now: a perceiver change that moves them asks for a retrain."""
+    am.collect(am.TRAIN, tmp_path)
+    for suite in am.PAPER:
+        am.collect(suite, tmp_path, (1, 10))
+    made = am.train(tmp_path, write=False, limit=120)["model"].to_json()
+    shipped = json.loads((Path(am.ROOT) / "assets" / Path(*MODEL_FILE)).read_text())
+    assert made.keys() == shipped.keys()
+    for key, value in shipped.items():
+        if isinstance(value, list) and key not in ("materials", "mass_bounds"):
+            np.testing.assert_allclose(np.asarray(made[key]), np.asarray(value), atol=1e-5)
+        elif isinstance(value, float):
+            assert made[key] == pytest.approx(value, rel=1e-6), key
+        else:
+            assert made[key] == value, key
