@@ -33,6 +33,7 @@ from utamp_gym.perception.confidence import (
     SURFACE_COVERAGE,
     Calibration,
     mass_class,
+    packaged_calibration,
     raw_confidences,
 )
 from utamp_gym.perception.objects import perceive_objects
@@ -156,6 +157,23 @@ def accuracy(rows: list[dict[str, object]]) -> dict[str, float]:
     return {k: float(np.mean([r["right"][k] for r in rows])) for k in keys}  # type: ignore[index]
 
 
+def reliability_tables(shipped: str, kept: list[str]) -> list[tuple[str, str]]:
+    """(label, payload key) of the page's reliability tables: the raw confidences; the maps
+    this run fits on the even-numbered scenes (`kept`), said to be shipped only when the
+    package's maps are these (`shipped` "fitted"); and an earlier run's shipped maps
+    ("other"), which the perceiver applies until ``--write-calibration`` replaces them."""
+    maps = ", ".join(kept) or "none"
+    if shipped == "fitted":
+        return [("raw", "reliability_raw"),
+                (f"shipped (maps for {maps}, fitted by this run)", "reliability")]  # fmt: skip
+    tables = [("raw", "reliability_raw"),
+              (f"fitted by this run but not shipped (maps for {maps})", "reliability")]  # fmt: skip
+    if shipped == "other":
+        label = "shipped (an earlier run's maps: `--write-calibration` ships this run's)"
+        tables.append((label, "reliability_shipped"))
+    return tables
+
+
 def _markdown(payload: dict[str, object]) -> str:
     lines = [
         f"The perceiver on {SUITE} (seed 0; development data: no test split is read), "
@@ -183,8 +201,8 @@ def _markdown(payload: dict[str, object]) -> str:
         "shape): per side along x and y, read",
         "SURFACE_ERROR",
     )
-    kept = ", ".join(payload["calibrated_attributes"]) or "none"  # type: ignore[arg-type]
-    for label, key in (("raw", "reliability_raw"), (f"shipped (maps for {kept})", "reliability")):
+    tables = reliability_tables(payload["shipped"], payload["calibrated_attributes"])  # type: ignore[arg-type]
+    for label, key in tables:
         lines += [
             "",
             f"Reliability of the {label} confidences on the odd-numbered scenes (the "
@@ -216,21 +234,32 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
-def main() -> None:
-    args = build_parser().parse_args()
-    commit()
-    rows = collect(args.cache, args.limit)
+def fit_calibration(rows: list[dict[str, object]]) -> tuple[Calibration, list[str]]:
+    """The isotonic maps fitted on the even-numbered scenes' raw confidences, kept only for
+    the attributes whose calibration error on the odd-numbered ones they lower (material's
+    posterior may be temperature-calibrated already: isotonic on half the scenes can
+    overfit it); and those attributes."""
     fit = [r for r in rows if _index(r) % 2 == 0]
     held = [r for r in rows if _index(r) % 2 == 1]
     cal = Calibration.fit(
         {a: ([r["raw"][a] for r in fit], [float(r["right"][a]) for r in fit]) for a in CALIBRATED}  # type: ignore[index]
     )
-    raw_rel = reliability(held, None)
-    fitted = reliability(held, cal)
-    # a map is kept only where it lowers the held-out calibration error (material's
-    # posterior is temperature-calibrated already: isotonic on half the scenes overfits it)
+    raw_rel, fitted = reliability(held, None), reliability(held, cal)
     kept = [a for a in CALIBRATED if fitted[a][-1]["ece"] < raw_rel[a][-1]["ece"]]
-    cal = Calibration({a: cal.knots[a] for a in kept})
+    return Calibration({a: cal.knots[a] for a in kept}), kept
+
+
+def main() -> None:
+    args = build_parser().parse_args()
+    commit()
+    rows = collect(args.cache, args.limit)
+    held = [r for r in rows if _index(r) % 2 == 1]
+    cal, kept = fit_calibration(rows)
+    raw_rel = reliability(held, None)
+    package = packaged_calibration()  # what the perceiver applies (before any --write)
+    written = json.loads(json.dumps(cal.to_json()))
+    same = package is not None and json.loads(json.dumps(package.to_json())) == written
+    shipped = "fitted" if args.write_calibration or same else ("other" if package else "none")
     crowded = max(int(r["n_objects"]) for r in rows)  # type: ignore[call-overload]
     confusions: dict[str, int] = {}
     for r in rows:
@@ -249,6 +278,9 @@ def main() -> None:
         "confusions": dict(sorted(confusions.items(), key=lambda kv: -kv[1])),
         "reliability_raw": raw_rel,
         "reliability": reliability(held, cal),
+        # "fitted": the package ships this run's maps; "other": an earlier run's; "none"
+        "shipped": shipped,
+        **({"reliability_shipped": reliability(held, package)} if shipped == "other" else {}),
         "calibrated_attributes": kept,
         "size_error": size_error(rows),
         "surface_error": size_error(rows, "surface_error", SURFACE_COVERAGE),
