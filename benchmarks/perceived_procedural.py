@@ -85,6 +85,7 @@ def _method_stats(rows: list[ResultRow], achievable: dict[str, bool]) -> dict[st
         cell[1] += 1
     return {
         "runs": len(rows),
+        "scenes": len({r.scene for r in rows}),
         "achievable_runs": len(ach),
         "achievable_solved": ok,
         "achievable_rate": ok / len(ach) if ach else None,
@@ -118,13 +119,16 @@ def _ceiling_lines(
         "no camera sees a density or the contents): `utamp2-perceived` beside the evidence's "
         "ceiling, the better of two classifiers of the perceiver's measurements (the learned "
         "one, trained on procedural-v1/train renders with the true labels, and the "
-        "hand-built one) on the same split's objects of every few scenes "
-        f"(the attribute model's page, `attribute-model.md`, at `{ceiling.get('commit', '?')}`), "
+        "hand-built one) on the objects of the split's scenes that the attribute model's "
+        f"page (`attribute-model.md`, at `{ceiling.get('commit', '?')}`) collected, rendered "
+        "with seed 0 as here (last column: its scenes / the split's), "
         "and the learned confidences' expected calibration error (ECE). Mass is judged as "
         "its class between the rules' thresholds.",
         "",
-        "| split | " + " | ".join(f"{a}: perceived / ceiling (ECE)" for a, _ in AMBIGUOUS) + " |",
-        "|---" * (len(AMBIGUOUS) + 1) + "|",
+        "| split | "
+        + " | ".join(f"{a}: perceived / ceiling (ECE)" for a, _ in AMBIGUOUS)
+        + " | ceiling: scenes |",
+        "|---" * (len(AMBIGUOUS) + 2) + "|",
     ]
     for split, methods in table.items():
         acc = methods["utamp2-perceived"]["accuracy"]
@@ -138,6 +142,10 @@ def _ceiling_lines(
             ece = row["reliability"][head][-1].get("ece")
             best = max(row["learned"][head], row["handbuilt"][head])
             cells.append(f"{seen} / {best:.3f} ({ece:.3f})")
+        scenes = methods["utamp2-perceived"].get("scenes")
+        cells.append(
+            "–" if row is None else f"{row.get('scenes', '?')}/{scenes if scenes else '?'}"
+        )
         lines.append(f"| {split} | " + " | ".join(cells) + " |")
     return lines
 

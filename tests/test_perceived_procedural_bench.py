@@ -20,7 +20,7 @@ def _table(mass_class: float) -> dict:
         "achievable_rate": 1.0, "achievable_ci95": (0.9, 1.0), "achievable_solved": 9,
         "achievable_runs": 9, "achievable_no_plan": 0, "achievable_invalid": 0,
         "unachievable_reported": 1, "unachievable_runs": 1, "affordance_f1": 1.0,
-        "crashed": 0, "accuracy": acc, "achievable_by_objects": {"2": (9, 9)},
+        "crashed": 0, "accuracy": acc, "achievable_by_objects": {"2": (9, 9)}, "scenes": 10,
     }  # fmt: skip
     return {"test-count": {m: dict(stats) for m in bench.METHODS}}
 
@@ -34,15 +34,16 @@ def _ceiling() -> dict:
         "handbuilt": {"material": 0.71, "robustness": 0.92, "mass": 0.731},  # the better mass
         "reliability": {"material": head(0.079), "robustness": head(0.083), "mass": head(0.111)},
     }
-    return {"commit": "abc1234", "procedural-v1/test-count": row}
+    return {"commit": "abc1234", "procedural-v1/test-count": {**row, "scenes": 10}}
 
 
 def test_the_ambiguous_attributes_stand_beside_their_ceiling_and_its_calibration() -> None:
     text = bench._markdown(_table(0.75), (1, 1), _ceiling())
     row = next(line for line in text.splitlines() if line.startswith("| test-count | 0.900 /"))
     assert row == (
-        "| test-count | 0.900 / 0.880 (0.079) | 1.000 / 0.980 (0.083) | 0.750 / 0.731 (0.111) |"
-    )
+        "| test-count | 0.900 / 0.880 (0.079) | 1.000 / 0.980 (0.083) | 0.750 / 0.731 (0.111) "
+        "| 10/10 |"
+    )  # the ceiling measured on the same scenes as the perceiver
     assert "`abc1234`" in text and "class between the rules' thresholds" in text
     # the per-attribute table carries the mass class beside the mass within a factor 1.5
     header = next(line for line in text.splitlines() if line.startswith("| split | body"))
