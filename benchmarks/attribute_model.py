@@ -145,10 +145,9 @@ def evaluate(model: AttributeModel, rows: list[dict[str, object]]) -> dict[str, 
         out["robustness"].append(rob == d["robustness"])
         kg, mass_conf = p.mass, float(p.mass_class[mass_class(p.mass)])
         if model.mass_head == "rule":  # as `objects.perceive_instance` reads it
-            volume, (sheet, walls) = r["measurements"]["volume"], areas(r)  # type: ignore[index]
-            kg, _, high = estimate_mass(name, volume, sheet)
-            kg = lift_mass(kg, high)
-            raw, _ = raw_confidences(p.material, name, kg, volume, walls, 0.0)
+            kg = _rule_mass(name, r)
+            volume = r["measurements"]["volume"]  # type: ignore[index]
+            raw, _ = raw_confidences(p.material, name, kg, volume, areas(r)[1], 0.0)
             cal = packaged_calibration()
             mass_conf = cal("mass", raw["mass"]) if cal else raw["mass"]
         out["mass"].append(mass_class(kg) == mass_class(float(d["mass"])))

@@ -114,9 +114,9 @@ def procedural_outcomes() -> tuple[str, str, str]:
         f"{family}; forbidden picks physics carries out: "
         f"{_short(_pct(forbidden), forbidden > bench.FORBIDDEN_PICKS)}"
     )
-    if "forbidden_grasps" in d:  # the same grasp under its other finger order left out
-        grasps = d["forbidden_grasps_physics_ok"] / d["forbidden_grasps"]
-        figure += f" ({_pct(grasps)} of the grasps refused under every name)"
+    # the same grasp under its other finger order left out
+    grasps = d["forbidden_grasps_physics_ok"] / d["forbidden_grasps"]
+    figure += f" ({_pct(grasps)} of the grasps refused under every name)"
     return "rules against physics on procedural states", figure, "procedural_outcomes.md"
 
 
